@@ -1,0 +1,74 @@
+#include "engine/articulation_functions.h"
+
+#include "engine/dynamics.h"
+#include "engine/error.h"
+
+namespace novaphy {
+
+namespace {
+
+void assign(std::vector<Scalar>& dst, const VecX& src, const char* name) {
+  if (static_cast<size_t>(src.size()) != dst.size())
+    fail(name, " has ", src.size(), " entries, the joints need ", dst.size());
+  for (Eigen::Index k = 0; k < src.size(); ++k) {
+    if (!std::isfinite(src[k])) fail(name, "[", k, "] is not finite: ", src[k]);
+    dst[k] = src[k];
+  }
+}
+
+State articulation_state(const Model& model, const VecX& q, const VecX& qd) {
+  State state = model.state();
+  assign(state.joint_q, q, "q");
+  assign(state.joint_qd, qd, "qd");
+  return state;
+}
+
+}  // namespace
+
+Model articulation_model(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies, const Vec3& gravity) {
+  if (joints.size() != bodies.size())
+    fail("joints and bodies differ in length: ", joints.size(), " joints, ", bodies.size(), " bodies");
+  if (joints.empty()) fail("joints is empty");
+  ModelBuilder builder(gravity);
+  for (size_t i = 0; i < bodies.size(); ++i) builder.add_body(bodies[i]);
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const Joint& joint = joints[i];
+    if (joint.parent >= static_cast<int>(i))
+      fail("joint ", i, ": parent link ", joint.parent, " is not yet defined (parents come before children)");
+    JointOptions options;
+    options.parent_xform = joint.parent_to_joint;
+    options.dof.axis = joint.axis;
+    builder.add_joint(joint.type, joint.parent, static_cast<int>(i), options);
+  }
+  return builder.finalize();
+}
+
+Eigen::Matrix<Scalar, Eigen::Dynamic, 7, Eigen::RowMajor> forward_kinematics(const std::vector<Joint>& joints,
+                                                                             const VecX& q) {
+  const Model model = articulation_model(joints, std::vector<RigidBody>(joints.size()));
+  State state = articulation_state(model, q, VecX::Zero(model.joint_dof_count));
+  eval_fk(model, state);
+  return Eigen::Map<const Eigen::Matrix<Scalar, Eigen::Dynamic, 7, Eigen::RowMajor>>(state.body_q.data(),
+                                                                                    model.body_count, 7);
+}
+
+VecX inverse_dynamics(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies, const VecX& q,
+                      const VecX& qd, const VecX& qdd, const Vec3& gravity) {
+  const Model model = articulation_model(joints, bodies, gravity);
+  return eval_inverse_dynamics(model, articulation_state(model, q, qd), qdd);
+}
+
+MatX mass_matrix_crba(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies, const VecX& q) {
+  const Model model = articulation_model(joints, bodies);
+  return eval_mass_matrix(model, articulation_state(model, q, VecX::Zero(model.joint_dof_count)));
+}
+
+VecX forward_dynamics(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies, const VecX& q,
+                      const VecX& qd, const VecX& tau, const Vec3& gravity) {
+  const Model model = articulation_model(joints, bodies, gravity);
+  Control control = model.control();
+  assign(control.joint_f, tau, "tau");
+  return eval_forward_dynamics(model, articulation_state(model, q, qd), control);
+}
+
+}  // namespace novaphy

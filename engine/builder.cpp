@@ -1,0 +1,340 @@
+#include "engine/builder.h"
+
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "engine/dynamics.h"
+#include "engine/error.h"
+
+namespace novaphy {
+
+namespace {
+
+std::string label(const char* kind, int index, const std::string& name) {
+  std::string s = std::string(kind) + " " + std::to_string(index);
+  if (!name.empty()) s += " ('" + name + "')";
+  return s;
+}
+
+void check_finite(const std::string& item, const char* what, Scalar x) {
+  if (!std::isfinite(x)) fail(item, ": ", what, " is not finite: ", x);
+}
+
+void check_finite(const std::string& item, const char* what, const Vec3& x) {
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(x[k])) fail(item, ": ", what, "[", k, "] is not finite: ", x[k]);
+}
+
+Transform checked_transform(const std::string& item, const char* what, const Transform& T) {
+  check_finite(item, what, T.p);
+  const Eigen::Vector4d q = T.q.coeffs();
+  for (int k = 0; k < 4; ++k)
+    if (!std::isfinite(q[k])) fail(item, ": ", what, " rotation[", k, "] is not finite: ", q[k]);
+  if (q.norm() < 1e-9) fail(item, ": ", what, " rotation quaternion has zero length");
+  Transform out = T;
+  out.q.normalize();
+  return out;
+}
+
+void check_nonnegative(const std::string& item, const char* what, Scalar x) {
+  if (!(x >= 0) || !std::isfinite(x)) fail(item, ": ", what, " must be finite and >= 0, got ", x);
+}
+
+void check_positive(const std::string& item, const char* what, Scalar x) {
+  if (!(x > 0) || !std::isfinite(x)) fail(item, ": ", what, " must be finite and > 0, got ", x);
+}
+
+void check_rigid_body(const std::string& item, const RigidBody& body, bool allow_massless) {
+  check_finite(item, "mass", body.mass);
+  check_finite(item, "com", body.com);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(body.inertia(r, c))) fail(item, ": inertia(", r, ", ", c, ") is not finite: ", body.inertia(r, c));
+  if (allow_massless && body.mass == 0) {
+    if (body.inertia.norm() != 0) fail(item, ": a massless link must have zero inertia");
+    return;
+  }
+  if (!(body.mass > 0)) fail(item, ": mass must be > 0, got ", body.mass);
+  const Scalar scale = body.inertia.cwiseAbs().maxCoeff();
+  if ((body.inertia - body.inertia.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
+    fail(item, ": inertia is not symmetric");
+  const Vec3 eig = Eigen::SelfAdjointEigenSolver<Mat3>(body.inertia, Eigen::EigenvaluesOnly).eigenvalues();
+  if (!(eig[0] > 0)) fail(item, ": inertia is not positive definite (smallest principal moment ", eig[0], ")");
+  // principal moments of a real body: each at most the sum of the other two
+  if (eig[2] > eig[0] + eig[1] + 1e-9 * eig[2])
+    fail(item, ": inertia violates the triangle inequality (principal moments ", eig[0], ", ", eig[1], ", ", eig[2], ")");
+}
+
+}  // namespace
+
+RigidBody RigidBody::from_box(Scalar mass, const Vec3& half_extents) {
+  const Vec3 s = 4 * half_extents.cwiseProduct(half_extents);  // full extents squared
+  RigidBody b;
+  b.mass = mass;
+  b.inertia = (mass / 12 * Vec3(s.y() + s.z(), s.x() + s.z(), s.x() + s.y())).asDiagonal();
+  return b;
+}
+
+RigidBody RigidBody::from_sphere(Scalar mass, Scalar radius) {
+  RigidBody b;
+  b.mass = mass;
+  b.inertia = Mat3::Identity() * (0.4 * mass * radius * radius);
+  return b;
+}
+
+RigidBody RigidBody::from_capsule(Scalar mass, Scalar radius, Scalar half_height) {
+  // cylinder of length 2 h plus two hemispheres, uniform density, axis along local Y
+  const Scalar r2 = radius * radius, h = half_height;
+  const Scalar v_cyl = M_PI * r2 * 2 * h, v_sph = 4.0 / 3.0 * M_PI * r2 * radius;
+  const Scalar m_cyl = mass * v_cyl / (v_cyl + v_sph), m_sph = mass - m_cyl;
+  const Scalar I_axis = m_cyl * r2 / 2 + m_sph * 0.4 * r2;
+  const Scalar I_perp = m_cyl * (r2 / 4 + h * h / 3) + m_sph * (0.4 * r2 + h * h + 0.75 * h * radius);
+  RigidBody b;
+  b.mass = mass;
+  b.inertia = Vec3(I_perp, I_axis, I_perp).asDiagonal();
+  return b;
+}
+
+ModelBuilder::ModelBuilder(const Vec3& gravity) { set_gravity(gravity); }
+
+void ModelBuilder::set_gravity(const Vec3& gravity) {
+  check_finite("builder", "gravity", gravity);
+  gravity_ = gravity;
+}
+
+int ModelBuilder::add_body(const RigidBody& body, const Transform& xform, const std::string& name) {
+  return add_body_checked(body, xform, name, false);
+}
+
+int ModelBuilder::add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name,
+                                   bool allow_massless) {
+  const std::string item = label("body", body_count(), name);
+  check_rigid_body(item, body, allow_massless);
+  body_xform_.push_back(checked_transform(item, "xform", xform));
+  body_mass_.push_back(body.mass);
+  body_com_.push_back(body.com);
+  body_inertia_.push_back(0.5 * (body.inertia + body.inertia.transpose()));
+  body_name_.push_back(name);
+  body_joint_.push_back(-1);
+  return body_count() - 1;
+}
+
+int ModelBuilder::add_joint_revolute(int parent, int child, const JointOptions& options) {
+  return add_joint(JointType::Revolute, parent, child, options);
+}
+int ModelBuilder::add_joint_prismatic(int parent, int child, const JointOptions& options) {
+  return add_joint(JointType::Prismatic, parent, child, options);
+}
+int ModelBuilder::add_joint_ball(int parent, int child, const JointOptions& options) {
+  return add_joint(JointType::Ball, parent, child, options);
+}
+int ModelBuilder::add_joint_fixed(int parent, int child, const JointOptions& options) {
+  return add_joint(JointType::Fixed, parent, child, options);
+}
+int ModelBuilder::add_joint_free(int parent, int child, const JointOptions& options) {
+  return add_joint(JointType::Free, parent, child, options);
+}
+
+int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOptions& options) {
+  const std::string item = label("joint", joint_count(), options.name) + " (" + joint_type_name(type) + ")";
+  if (parent < -1 || parent >= body_count())
+    fail(item, ": parent body index ", parent, " out of range [-1, ", body_count(), ")");
+  if (child < 0 || child >= body_count()) fail(item, ": child body index ", child, " out of range [0, ", body_count(), ")");
+  if (child == parent) fail(item, ": child body ", child, " is its own parent");
+  if (parent >= 0 && body_joint_[parent] < 0)
+    fail(item, ": parent body ", parent, " is not yet defined: no joint attaches it yet (add its joint first)");
+  if (body_joint_[child] >= 0)
+    fail(item, ": body ", child, " is already the child of joint ", body_joint_[child]);
+  if (type == JointType::Free && parent != -1)
+    fail(item, ": a Free joint must be a root (parent -1), got parent ", parent);
+
+  JointRecord joint{type, parent, child, options};
+  joint.options.parent_xform = checked_transform(item, "parent_xform", options.parent_xform);
+  joint.options.child_xform = checked_transform(item, "child_xform", options.child_xform);
+  JointDofConfig& dof = joint.options.dof;
+  if (type == JointType::Revolute || type == JointType::Prismatic) {
+    check_finite(item, "axis", dof.axis);
+    if (dof.axis.norm() < 1e-9) fail(item, ": axis has zero length");
+    dof.axis.normalize();
+  }
+  if (std::isnan(dof.limit_lower) || std::isnan(dof.limit_upper) || dof.limit_lower > dof.limit_upper)
+    fail(item, ": limits must satisfy limit_lower <= limit_upper, got [", dof.limit_lower, ", ", dof.limit_upper, "]");
+  check_nonnegative(item, "armature", dof.armature);
+  check_nonnegative(item, "damping", dof.damping);
+  check_nonnegative(item, "stiffness", dof.stiffness);
+  check_finite(item, "q_ref", dof.q_ref);
+
+  joints_.push_back(joint);
+  body_joint_[child] = joint_count() - 1;
+  return joint_count() - 1;
+}
+
+int ModelBuilder::add_articulation(const std::vector<int>& joints) {
+  const std::string item = "articulation " + std::to_string(articulation_count_);
+  if (joints.empty()) fail(item, ": no joints");
+  for (size_t k = 0; k < joints.size(); ++k) {
+    const int j = joints[k];
+    if (j < 0 || j >= joint_count()) fail(item, ": joint index ", j, " out of range [0, ", joint_count(), ")");
+    if (j != joints[0] + static_cast<int>(k))
+      fail(item, ": joints must be contiguous and ascending, got ", j, " after ", joints[k - 1]);
+    JointRecord& joint = joints_[j];
+    if (joint.articulation >= 0) fail(item, ": joint ", j, " already belongs to articulation ", joint.articulation);
+    if (joint.parent >= 0) {
+      const int parent_joint = body_joint_[joint.parent];
+      if (parent_joint < joints[0])
+        fail(item, ": joint ", j, " hangs from body ", joint.parent, " which is not in this articulation");
+    }
+  }
+  for (const int j : joints) joints_[j].articulation = articulation_count_;
+  return articulation_count_++;
+}
+
+int ModelBuilder::add_shape(ShapeType type, int body, const Transform& xform, const Vec3& scale, Scalar mu,
+                            Scalar restitution) {
+  const std::string item = label("shape", shape_count(), "") + " (" + shape_type_name(type) + ")";
+  if (body < -1 || body >= body_count()) fail(item, ": body index ", body, " out of range [-1, ", body_count(), ")");
+  if (type != ShapeType::Plane)
+    for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
+  check_nonnegative(item, "mu", mu);
+  if (!(restitution >= 0 && restitution <= 1)) fail(item, ": restitution must be in [0, 1], got ", restitution);
+  shapes_.push_back({type, body, checked_transform(item, "xform", xform), scale, mu, restitution});
+  return shape_count() - 1;
+}
+
+int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, const std::string&) {
+  check_finite("plane", "normal", normal);
+  check_finite("plane", "offset", offset);
+  if (normal.norm() < 1e-9) fail("plane: normal has zero length");
+  const Vec3 n = normal.normalized();
+  // plane shapes are the local XZ plane, normal +Y
+  Transform xform;
+  xform.q = Quat::FromTwoVectors(Vec3::UnitY(), n);
+  xform.p = offset * n;
+  return add_shape(ShapeType::Plane, -1, xform, Vec3::Ones(), mu, restitution);
+}
+
+int ModelBuilder::add_ground_plane(Scalar y, Scalar mu, Scalar restitution) {
+  return add_plane(Vec3::UnitY(), y, mu, restitution);
+}
+
+int ModelBuilder::add_shape_box(int body, const Vec3& half_extents, const Transform& xform, Scalar mu,
+                                Scalar restitution) {
+  return add_shape(ShapeType::Box, body, xform, half_extents, mu, restitution);
+}
+
+int ModelBuilder::add_shape_sphere(int body, Scalar radius, const Transform& xform, Scalar mu, Scalar restitution) {
+  return add_shape(ShapeType::Sphere, body, xform, Vec3::Constant(radius), mu, restitution);
+}
+
+int ModelBuilder::add_shape_capsule(int body, Scalar radius, Scalar half_height, const Transform& xform, Scalar mu,
+                                    Scalar restitution) {
+  return add_shape(ShapeType::Capsule, body, xform, Vec3(radius, half_height, radius), mu, restitution);
+}
+
+Model ModelBuilder::finalize() const {
+  // articulations: explicit ones keep their joints; the others follow their parent's
+  // articulation or start a new one at a root; bodies without a joint get a Free joint each
+  std::vector<JointRecord> joints = joints_;
+  int articulation_count = articulation_count_;
+  for (JointRecord& joint : joints) {
+    if (joint.articulation >= 0) continue;
+    joint.articulation = joint.parent < 0 ? articulation_count++ : joints[body_joint_[joint.parent]].articulation;
+  }
+  for (int b = 0; b < body_count(); ++b) {
+    if (body_joint_[b] >= 0) continue;
+    JointRecord joint{JointType::Free, -1, b, {}, articulation_count++};
+    joint.options.name = body_name_[b].empty() ? "" : body_name_[b] + "_free";
+    joints.push_back(joint);
+  }
+
+  // articulations must be contiguous runs of joints; number them in joint order
+  std::vector<int> articulation_id(articulation_count, -1);
+  Model model;
+  model.body_count = body_count();
+  model.joint_count = static_cast<int>(joints.size());
+  model.shape_count = shape_count();
+  model.articulation_count = articulation_count;
+  for (const JointRecord& joint : joints) {
+    model.joint_coord_count += joint_coord_count(joint.type);
+    model.joint_dof_count += joint_dof_count(joint.type);
+  }
+  model.gravity = gravity_;
+  model.allocate();
+
+  std::vector<int> child_joint(body_count(), -1);
+  int q = 0, qd = 0, next_articulation = 0;
+  for (int j = 0; j < model.joint_count; ++j) {
+    const JointRecord& joint = joints[j];
+    int& id = articulation_id[joint.articulation];
+    if (id < 0) {
+      id = next_articulation++;
+      model.articulation_start[id] = j;
+    } else if (model.joint_articulation[j - 1] != id) {
+      fail(label("joint", j, joint.options.name), ": its articulation's joints are not contiguous "
+           "(add each articulation's joints one after another)");
+    }
+    child_joint[joint.child] = j;
+    model.joint_type[j] = static_cast<int>(joint.type);
+    model.joint_parent[j] = joint.parent;
+    model.joint_child[j] = joint.child;
+    model.joint_ancestor[j] = joint.parent < 0 ? -1 : child_joint[joint.parent];
+    model.joint_articulation[j] = id;
+    model.joint_q_start[j] = q;
+    model.joint_qd_start[j] = qd;
+    joint.options.parent_xform.to_array(&model.joint_X_p[7 * j]);
+    joint.options.child_xform.to_array(&model.joint_X_c[7 * j]);
+    Eigen::Map<Vec3>(&model.joint_axis[3 * j]) = joint.options.dof.axis;
+    model.joint_name.push_back(joint.options.name);
+
+    const JointDofConfig& dof = joint.options.dof;
+    for (int k = 0; k < joint_dof_count(joint.type); ++k) {
+      model.joint_armature[qd + k] = dof.armature;
+      model.joint_damping[qd + k] = dof.damping;
+      model.joint_stiffness[qd + k] = dof.stiffness;
+      model.joint_limit_lower[qd + k] = dof.limit_lower;
+      model.joint_limit_upper[qd + k] = dof.limit_upper;
+    }
+    Scalar* q0 = &model.joint_q0[q];
+    switch (joint.type) {
+      case JointType::Revolute:
+      case JointType::Prismatic: model.joint_q_ref[q] = dof.q_ref; break;
+      case JointType::Ball: q0[3] = model.joint_q_ref[q + 3] = 1; break;
+      case JointType::Free: {
+        // start at the body's pose: J = X_p^-1 * body_xform * X_c
+        const Transform J = joint.options.parent_xform.inverse() * body_xform_[joint.child] * joint.options.child_xform;
+        J.to_array(q0);
+        J.to_array(&model.joint_q_ref[q]);
+        break;
+      }
+      case JointType::Fixed: break;
+    }
+    q += joint_coord_count(joint.type);
+    qd += joint_dof_count(joint.type);
+  }
+  model.joint_q_start[model.joint_count] = q;
+  model.joint_qd_start[model.joint_count] = qd;
+  model.articulation_start[model.articulation_count] = model.joint_count;
+
+  for (int b = 0; b < body_count(); ++b) {
+    model.body_mass[b] = body_mass_[b];
+    Eigen::Map<Vec3>(&model.body_com[3 * b]) = body_com_[b];
+    Eigen::Map<Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&model.body_inertia[9 * b]) = body_inertia_[b];
+  }
+  model.body_name = body_name_;
+
+  for (int s = 0; s < shape_count(); ++s) {
+    const ShapeRecord& shape = shapes_[s];
+    model.shape_type[s] = static_cast<int>(shape.type);
+    model.shape_body[s] = shape.body;
+    shape.xform.to_array(&model.shape_transform[7 * s]);
+    Eigen::Map<Vec3>(&model.shape_scale[3 * s]) = shape.scale;
+    model.shape_mu[s] = shape.mu;
+    model.shape_restitution[s] = shape.restitution;
+  }
+
+  model.check_sizes();
+  return model;
+}
+
+}  // namespace novaphy

@@ -1,0 +1,119 @@
+// ModelBuilder: the seed's scene-construction API. Every call checks its arguments and throws
+// Error naming the item; finalize() lays the scene out as a Model.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "engine/model.h"
+
+namespace novaphy {
+
+struct RigidBody {
+  Scalar mass = 1;
+  Vec3 com = Vec3::Zero();
+  Mat3 inertia = Mat3::Identity();  // about the centre of mass, body frame
+
+  static RigidBody from_box(Scalar mass, const Vec3& half_extents);
+  static RigidBody from_sphere(Scalar mass, Scalar radius);
+  // capsule along the body's local Y axis: radius and half height of the cylinder part
+  static RigidBody from_capsule(Scalar mass, Scalar radius, Scalar half_height);
+};
+
+struct JointDofConfig {
+  Vec3 axis = Vec3(1, 0, 0);
+  Scalar limit_lower = -std::numeric_limits<Scalar>::infinity();
+  Scalar limit_upper = std::numeric_limits<Scalar>::infinity();
+  Scalar armature = 0;
+  Scalar damping = 0;
+  Scalar stiffness = 0;  // spring towards q_ref, Revolute and Prismatic joints
+  Scalar q_ref = 0;
+};
+
+struct JointOptions {
+  Transform parent_xform;  // parent link frame -> parent joint frame
+  Transform child_xform;   // child link frame -> child joint frame
+  JointDofConfig dof;
+  std::string name;
+};
+
+class ModelBuilder {
+ public:
+  explicit ModelBuilder(const Vec3& gravity = Vec3(0, -9.81, 0));
+
+  void set_gravity(const Vec3& gravity);
+  const Vec3& gravity() const { return gravity_; }
+
+  // xform: the body's initial pose in the world; used for free bodies and Free joints
+  int add_body(const RigidBody& body, const Transform& xform = Transform::identity(), const std::string& name = "");
+
+  int add_joint_revolute(int parent, int child, const JointOptions& options = {});
+  int add_joint_prismatic(int parent, int child, const JointOptions& options = {});
+  int add_joint_slide(int parent, int child, const JointOptions& options = {}) {
+    return add_joint_prismatic(parent, child, options);
+  }
+  int add_joint_ball(int parent, int child, const JointOptions& options = {});
+  int add_joint_fixed(int parent, int child, const JointOptions& options = {});
+  // a Free joint must be a root (parent -1): its q is the child's pose in the world
+  int add_joint_free(int parent, int child, const JointOptions& options = {});
+  int add_joint(JointType type, int parent, int child, const JointOptions& options);
+
+  // joints: contiguous, ascending, each parent inside the articulation or the world
+  int add_articulation(const std::vector<int>& joints);
+
+  // plane through `offset * normal` with the given normal, static (body -1)
+  int add_plane(const Vec3& normal, Scalar offset, Scalar mu = 0.5, Scalar restitution = 0, const std::string& name = "");
+  int add_ground_plane(Scalar y = 0, Scalar mu = 0.5, Scalar restitution = 0);
+  int add_shape_box(int body, const Vec3& half_extents, const Transform& xform = {}, Scalar mu = 0.5,
+                    Scalar restitution = 0);
+  int add_shape_sphere(int body, Scalar radius, const Transform& xform = {}, Scalar mu = 0.5, Scalar restitution = 0);
+  // capsule along the shape frame's local Y axis
+  int add_shape_capsule(int body, Scalar radius, Scalar half_height, const Transform& xform = {}, Scalar mu = 0.5,
+                        Scalar restitution = 0);
+
+  // MJCF / URDF import through MuJoCo's parser (engine/mjcf_import.cpp): returns the warnings
+  // for everything in the file the engine does not model, by name
+  std::vector<std::string> add_mjcf(const std::string& path);
+  std::vector<std::string> add_urdf(const std::string& path) { return add_mjcf(path); }
+
+  int body_count() const { return static_cast<int>(body_mass_.size()); }
+  int joint_count() const { return static_cast<int>(joints_.size()); }
+  int shape_count() const { return static_cast<int>(shapes_.size()); }
+
+  // bodies no joint names as their child get an implicit Free joint in an articulation of their own
+  Model finalize() const;
+
+ private:
+  friend class MjcfImporter;
+  struct JointRecord {
+    JointType type;
+    int parent, child;
+    JointOptions options;
+    int articulation = -1;
+  };
+  struct ShapeRecord {
+    ShapeType type;
+    int body;
+    Transform xform;
+    Vec3 scale;
+    Scalar mu, restitution;
+  };
+
+  // massless links are allowed for imported bodies that carry several MuJoCo joints
+  int add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name, bool allow_massless);
+  int add_shape(ShapeType type, int body, const Transform& xform, const Vec3& scale, Scalar mu, Scalar restitution);
+
+  Vec3 gravity_;
+  std::vector<Scalar> body_mass_;
+  std::vector<Vec3> body_com_;
+  std::vector<Mat3> body_inertia_;
+  std::vector<Transform> body_xform_;
+  std::vector<std::string> body_name_;
+  std::vector<int> body_joint_;  // joint whose child the body is, -1
+  std::vector<JointRecord> joints_;
+  std::vector<ShapeRecord> shapes_;
+  int articulation_count_ = 0;
+};
+
+}  // namespace novaphy

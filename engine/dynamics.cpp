@@ -1,0 +1,141 @@
+#include "engine/dynamics.h"
+
+#include <cmath>
+
+#include "engine/error.h"
+#include "kernels/aba.h"
+#include "kernels/cholesky.h"
+#include "kernels/crba.h"
+#include "kernels/fk.h"
+#include "kernels/rnea.h"
+
+namespace novaphy {
+
+namespace {
+
+void check_finite(const std::vector<Scalar>& x, const char* name) {
+  for (size_t k = 0; k < x.size(); ++k)
+    if (!std::isfinite(x[k])) fail(name, "[", k, "] is not finite: ", x[k]);
+}
+
+// FK and link velocities of articulation a at the state's coordinates
+ArticulationView kinematics(const Model& model, const State& state, int a, ArticulationScratch& s) {
+  const ArticulationView art = model.articulation(a);
+  s.resize(art);
+  forward_kinematics(art, state.joint_q.data() + art.q_begin(), s);
+  forward_velocity(art, state.joint_qd.data() + art.qd_begin(), s);
+  return art;
+}
+
+// RNEA at qdd minus the passive joint forces: tau = H qdd + bias for one articulation
+void articulation_inverse_dynamics(const Model& model, const State& state, const ArticulationView& art,
+                                   ArticulationScratch& s, const Scalar* qdd, Scalar* tau) {
+  rnea(art, qdd, model.gravity, state.body_f.data(), s, tau);
+  VecX passive(art.dof_count());
+  passive_force(art, state.joint_q.data() + art.q_begin(), state.joint_qd.data() + art.qd_begin(), passive.data());
+  Eigen::Map<VecX>(tau, art.dof_count()) -= passive;
+}
+
+[[noreturn]] void fail_not_positive_definite(const Model& model, const ArticulationView& art, int dof) {
+  int j = art.joint_begin;
+  while (model.joint_qd_start[j + 1] <= art.qd_begin() + dof) ++j;
+  fail("articulation ", model.joint_articulation[art.joint_begin], ": mass matrix is not positive definite at dof ",
+       art.qd_begin() + dof, " (joint ", j, " '", model.joint_name[j], "'; a massless link without children?)");
+}
+
+}  // namespace
+
+void check_finite_state(const State& state) {
+  check_finite(state.joint_q, "joint_q");
+  check_finite(state.joint_qd, "joint_qd");
+  check_finite(state.body_f, "body_f");
+}
+
+void eval_fk(const Model& model, State& state) {
+  model.check(state);
+  check_finite(state.joint_q, "joint_q");
+  check_finite(state.joint_qd, "joint_qd");
+  ArticulationScratch s;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = kinematics(model, state, a, s);
+    for (int i = 0; i < art.link_count(); ++i) {
+      const int b = art.body(i);
+      const Transform& X = s.X_world[i];
+      X.to_array(state.body_q.data() + 7 * b);
+      // body_qd = [velocity of the centre of mass; angular velocity], world frame
+      const Mat3 R = X.rotation();
+      const Vec3 w = s.v[i].head<3>();
+      const Vec3 v_com = s.v[i].tail<3>() + w.cross(art.com(i));
+      Eigen::Map<Vec6> qd(state.body_qd.data() + 6 * b);
+      qd << R * v_com, R * w;
+    }
+  }
+}
+
+MatX eval_mass_matrix(const Model& model, const State& state) {
+  model.check(state);
+  check_finite_state(state);
+  MatX H = MatX::Zero(model.joint_dof_count, model.joint_dof_count);
+  ArticulationScratch s;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = kinematics(model, state, a, s);
+    crba(art, s);
+    H.block(art.qd_begin(), art.qd_begin(), art.dof_count(), art.dof_count()) = s.H;
+  }
+  return H;
+}
+
+VecX eval_bias_forces(const Model& model, const State& state) {
+  return eval_inverse_dynamics(model, state, VecX::Zero(model.joint_dof_count));
+}
+
+VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd) {
+  model.check(state);
+  check_finite_state(state);
+  if (qdd.size() != model.joint_dof_count)
+    fail("qdd has ", qdd.size(), " entries, the model has ", model.joint_dof_count, " dofs");
+  for (Eigen::Index k = 0; k < qdd.size(); ++k)
+    if (!std::isfinite(qdd[k])) fail("qdd[", k, "] is not finite: ", qdd[k]);
+  VecX tau(model.joint_dof_count);
+  ArticulationScratch s;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = kinematics(model, state, a, s);
+    articulation_inverse_dynamics(model, state, art, s, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
+  }
+  return tau;
+}
+
+VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
+                           ForwardDynamicsMethod method) {
+  model.check(state);
+  model.check(control);
+  check_finite_state(state);
+  check_finite(control.joint_f, "joint_f");
+  VecX qdd(model.joint_dof_count);
+  ArticulationScratch s;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = kinematics(model, state, a, s);
+    const int nv = art.dof_count();
+    Scalar* qdd_a = qdd.data() + art.qd_begin();
+    const Eigen::Map<const VecX> tau(control.joint_f.data() + art.qd_begin(), nv);
+    if (method == ForwardDynamicsMethod::Crba) {
+      const VecX zero = VecX::Zero(nv);
+      articulation_inverse_dynamics(model, state, art, s, zero.data(), qdd_a);
+      Eigen::Map<VecX>(qdd_a, nv) = tau - Eigen::Map<VecX>(qdd_a, nv);
+      crba(art, s);
+      const int bad = cholesky_factor(s.H);
+      if (bad >= 0) fail_not_positive_definite(model, art, bad);
+      cholesky_solve(s.H, qdd_a);
+    } else {
+      VecX tau_total(nv);
+      passive_force(art, state.joint_q.data() + art.q_begin(), state.joint_qd.data() + art.qd_begin(),
+                    tau_total.data());
+      tau_total += tau;
+      const int bad = aba(art, tau_total.data(), model.gravity, state.body_f.data(), s, qdd_a);
+      if (bad >= 0) fail_not_positive_definite(model, art, art.qd_start(bad));
+    }
+  }
+  return qdd;
+}
+
+}  // namespace novaphy

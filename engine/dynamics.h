@@ -1,0 +1,31 @@
+// Whole-model evaluations over every articulation (contacts and limits off): forward kinematics,
+// mass matrix, bias forces, inverse and forward dynamics. The equations of motion are
+//   H(q) qdd = tau - bias(q, qd),   bias = C(q, qd) qd + g(q) - tau_passive - J^T f_ext
+// with f_ext the applied body wrenches state.body_f and tau_passive the joint damping and springs.
+#pragma once
+
+#include "engine/model.h"
+
+namespace novaphy {
+
+enum class ForwardDynamicsMethod { Crba, Aba };
+
+// state.body_q and state.body_qd from state.joint_q and state.joint_qd
+void eval_fk(const Model& model, State& state);
+
+// dense joint_dof_count x joint_dof_count matrix, block diagonal over articulations
+MatX eval_mass_matrix(const Model& model, const State& state);
+
+VecX eval_bias_forces(const Model& model, const State& state);
+
+// tau = H qdd + bias
+VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd);
+
+// qdd from tau = control.joint_f; CRBA + Cholesky or ABA
+VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
+                           ForwardDynamicsMethod method = ForwardDynamicsMethod::Crba);
+
+// throws Error naming the first non-finite entry of state.joint_q / joint_qd / body_f
+void check_finite_state(const State& state);
+
+}  // namespace novaphy

@@ -1,0 +1,246 @@
+#include "engine/mjcf_import.h"
+
+#include <filesystem>
+#include <memory>
+
+#include "engine/error.h"
+
+namespace novaphy {
+
+namespace {
+
+std::string mj_name(const mjModel* m, mjtObj type, int id) {
+  const char* name = mj_id2name(m, type, id);
+  if (name && *name) return name;
+  std::string fallback = "#";
+  fallback += std::to_string(id);
+  return fallback;
+}
+
+Vec3 vec3(const mjtNum* x) { return Vec3(x[0], x[1], x[2]); }
+Quat quat_wxyz(const mjtNum* x) { return Quat(x[0], x[1], x[2], x[3]); }
+Transform pose(const mjtNum* pos, const mjtNum* quat_wxyz_) {
+  Transform T;
+  T.p = vec3(pos);
+  T.q = quat_wxyz(quat_wxyz_).normalized();
+  return T;
+}
+Transform translation(const Vec3& p) {
+  Transform T;
+  T.p = p;
+  return T;
+}
+
+// MuJoCo capsules and plane normals run along local Z, NovaPhy's along local Y: rotate Y onto Z
+Transform y_to_z() {
+  Transform T;
+  T.q = Quat(Eigen::AngleAxis<Scalar>(M_PI / 2, Vec3::UnitX()));
+  return T;
+}
+
+}  // namespace
+
+class MjcfImporter {
+ public:
+  MjcfImporter(ModelBuilder& builder, const mjModel* m) : builder_(builder), m_(m) {}
+
+  MujocoImport run() {
+    out_.body_map.assign(m_->nbody, -1);
+    for (const auto& joint : builder_.joints_) {
+      out_.q_begin += joint_coord_count(joint.type);
+      out_.qd_begin += joint_dof_count(joint.type);
+    }
+    static_pose_.assign(m_->nbody, Transform::identity());
+    builder_.set_gravity(vec3(m_->opt.gravity));
+    for (int b = 1; b < m_->nbody; ++b) add_body(b);
+    for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
+    report_unmodelled();
+    return out_;
+  }
+
+ private:
+  bool is_static(int b) const { return b == 0 || out_.body_map[b] < 0; }
+
+  void add_body(int b) {
+    const int p = m_->body_parentid[b];
+    const Transform B = pose(m_->body_pos + 3 * b, m_->body_quat + 4 * b);
+    const std::string name = mj_name(m_, mjOBJ_BODY, b);
+    RigidBody body;
+    body.mass = m_->body_mass[b];
+    body.com = vec3(m_->body_ipos + 3 * b);
+    const Mat3 R = quat_wxyz(m_->body_iquat + 4 * b).normalized().toRotationMatrix();
+    body.inertia = R * vec3(m_->body_inertia + 3 * b).asDiagonal() * R.transpose();
+    const int jnt_count = m_->body_jntnum[b];
+
+    if (jnt_count == 0) {
+      if (is_static(p)) {
+        static_pose_[b] = static_pose_[p] * B;
+        return;
+      }
+      const int child = builder_.add_body_checked(body, Transform::identity(), name, true);
+      JointOptions options;
+      options.parent_xform = B;
+      options.name = name + "_weld";
+      builder_.add_joint(JointType::Fixed, out_.body_map[p], child, options);
+      out_.body_map[b] = child;
+      return;
+    }
+
+    // one link per joint; the body frame moves through them (MuJoCo's mj_kinematics order)
+    int parent = out_.body_map[p];
+    const Transform P = is_static(p) ? static_pose_[p] * B : B;
+    for (int k = 0; k < jnt_count; ++k) {
+      const int j = m_->body_jntadr[b] + k;
+      const bool last = k == jnt_count - 1;
+      const std::string joint_name = mj_name(m_, mjOBJ_JOINT, j);
+      const Vec3 anchor = vec3(m_->jnt_pos + 3 * j);
+      const int qa = m_->jnt_qposadr[j];
+      const int da = m_->jnt_dofadr[j];
+
+      JointOptions options;
+      options.name = joint_name;
+      JointDofConfig& dof = options.dof;
+      dof.axis = vec3(m_->jnt_axis + 3 * j);
+      dof.armature = m_->dof_armature[da];
+      dof.damping = m_->dof_damping[da];
+      if (m_->jnt_limited[j] && (m_->jnt_type[j] == mjJNT_HINGE || m_->jnt_type[j] == mjJNT_SLIDE)) {
+        dof.limit_lower = m_->jnt_range[2 * j];
+        dof.limit_upper = m_->jnt_range[2 * j + 1];
+      }
+
+      Transform body_xform = Transform::identity();
+      JointType type = JointType::Fixed;
+      switch (m_->jnt_type[j]) {
+        case mjJNT_HINGE:
+        case mjJNT_SLIDE: {
+          const bool hinge = m_->jnt_type[j] == mjJNT_HINGE;
+          type = hinge ? JointType::Revolute : JointType::Prismatic;
+          dof.stiffness = m_->jnt_stiffness[j];
+          dof.q_ref = m_->qpos_spring[qa];
+          // MuJoCo moves the joint by qpos - qpos0: fold -qpos0 into the parent joint frame
+          Transform ref;
+          const Vec3 axis = dof.axis.normalized();
+          if (hinge) ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_->qpos0[qa], axis));
+          else ref.p = -m_->qpos0[qa] * axis;
+          options.parent_xform = (k == 0 ? P : Transform::identity()) * translation(anchor) * ref;
+          options.child_xform = translation(anchor);
+          break;
+        }
+        case mjJNT_BALL:
+          type = JointType::Ball;
+          options.parent_xform = (k == 0 ? P : Transform::identity()) * translation(anchor);
+          options.child_xform = translation(anchor);
+          if (m_->jnt_limited[j]) warn("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
+          if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': ball joint stiffness is not modelled");
+          break;
+        case mjJNT_FREE:
+          // a free joint places the body frame directly at qpos (MuJoCo ignores its pos)
+          type = JointType::Free;
+          body_xform = pose(m_->qpos0 + qa, m_->qpos0 + qa + 3);
+          if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': free joint stiffness is not modelled");
+          break;
+      }
+      for (int d = 0; d < joint_dof_count(type); ++d)
+        if (m_->dof_frictionloss[da + d] != 0)
+          warn("joint '" + joint_name + "': frictionloss is not modelled");
+
+      RigidBody link = body;
+      if (!last) link = RigidBody{0, Vec3::Zero(), Mat3::Zero()};
+      const std::string link_name = last ? name : name + "/" + joint_name;
+      const int child = builder_.add_body_checked(link, body_xform, link_name, true);
+      builder_.add_joint(type, parent, child, options);
+      parent = child;
+    }
+    out_.body_map[b] = parent;
+  }
+
+  void add_geom(int g) {
+    const int b = m_->geom_bodyid[g];
+    const int body = out_.body_map[b];
+    Transform G = pose(m_->geom_pos + 3 * g, m_->geom_quat + 4 * g);
+    if (body < 0) G = static_pose_[b] * G;
+    const mjtNum* size = m_->geom_size + 3 * g;
+    const Scalar mu = m_->geom_friction[3 * g];
+    switch (m_->geom_type[g]) {
+      case mjGEOM_PLANE: builder_.add_shape(ShapeType::Plane, body, G * y_to_z(), Vec3::Ones(), mu, 0); break;
+      case mjGEOM_SPHERE: builder_.add_shape_sphere(body, size[0], G, mu); break;
+      case mjGEOM_CAPSULE: builder_.add_shape_capsule(body, size[0], size[1], G * y_to_z(), mu); break;
+      case mjGEOM_BOX: builder_.add_shape_box(body, vec3(size), G, mu); break;
+      default:
+        warn("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
+             " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");
+    }
+  }
+
+  void report_unmodelled() {
+    for (int t = 0; t < m_->ntendon; ++t) warn("tendon '" + mj_name(m_, mjOBJ_TENDON, t) + "' is not modelled");
+    for (int e = 0; e < m_->neq; ++e)
+      warn("equality constraint '" + mj_name(m_, mjOBJ_EQUALITY, e) + "' is not modelled");
+    for (int u = 0; u < m_->nu; ++u)
+      warn("actuator '" + mj_name(m_, mjOBJ_ACTUATOR, u) +
+           "' is not imported: apply its force through control.joint_f");
+    for (int s = 0; s < m_->nsensor; ++s) warn("sensor '" + mj_name(m_, mjOBJ_SENSOR, s) + "' is not modelled");
+    if (m_->npair > 0) warn(std::to_string(m_->npair) + " explicit contact pair(s) are not modelled");
+    if (m_->nexclude > 0) warn(std::to_string(m_->nexclude) + " contact exclusion(s) are not modelled");
+    if (m_->opt.density != 0 || m_->opt.viscosity != 0) warn("fluid forces (density, viscosity) are not modelled");
+  }
+
+  void warn(const std::string& message) { out_.warnings.push_back(message); }
+
+  ModelBuilder& builder_;
+  const mjModel* m_;
+  MujocoImport out_;
+  std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
+};
+
+mjModel* load_mujoco_model(const std::string& path) {
+  if (!std::filesystem::exists(path)) fail("cannot load '", path, "': file does not exist");
+  char error[1024] = "";
+  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  if (m == nullptr) fail("cannot load '", path, "': ", error);
+  return m;
+}
+
+MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m) { return MjcfImporter(builder, m).run(); }
+
+MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  return import_mujoco_model(builder, m.get());
+}
+
+std::vector<std::string> ModelBuilder::add_mjcf(const std::string& path) { return import_mjcf(*this, path).warnings; }
+
+void MujocoImport::to_joint_q(const mjModel* m, const mjtNum* qpos, Scalar* joint_q) const {
+  Scalar* q = joint_q + q_begin;
+  for (int j = 0; j < m->njnt; ++j) {
+    const int a = m->jnt_qposadr[j];
+    switch (m->jnt_type[j]) {
+      case mjJNT_HINGE:
+      case mjJNT_SLIDE: q[a] = qpos[a]; break;
+      case mjJNT_BALL: q[a] = qpos[a + 1], q[a + 1] = qpos[a + 2], q[a + 2] = qpos[a + 3], q[a + 3] = qpos[a]; break;
+      case mjJNT_FREE:
+        pose(qpos + a, qpos + a + 3).to_array(q + a);
+        break;
+    }
+  }
+}
+
+void MujocoImport::to_joint_qd(const mjModel* m, const mjtNum* qpos, const mjtNum* qvel, Scalar* joint_qd) const {
+  Eigen::Map<VecX>(joint_qd + qd_begin, m->nv) = velocity_map(m, qpos) * Eigen::Map<const VecX>(qvel, m->nv);
+}
+
+MatX MujocoImport::velocity_map(const mjModel* m, const mjtNum* qpos) const {
+  MatX T = MatX::Identity(m->nv, m->nv);
+  for (int j = 0; j < m->njnt; ++j) {
+    if (m->jnt_type[j] != mjJNT_FREE) continue;
+    const int d = m->jnt_dofadr[j];
+    const Mat3 R = quat_wxyz(qpos + m->jnt_qposadr[j] + 3).normalized().toRotationMatrix();
+    // [w_world; v] = [0 R; I 0] [v; w_body]
+    T.block(d, d, 6, 6).setZero();
+    T.block(d, d + 3, 3, 3) = R;
+    T.block(d + 3, d, 3, 3).setIdentity();
+  }
+  return T;
+}
+
+}  // namespace novaphy

@@ -1,0 +1,37 @@
+// MJCF and URDF import through MuJoCo's own parser (mj_loadXML), and the maps between the
+// coordinates of an imported mjModel and the NovaPhy model built from it.
+//   MuJoCo body with k joints -> a chain of k links, the first k-1 massless, the last with the mass
+//   body with no joint        -> a Fixed joint to its parent (static geometry when welded to the world)
+//   hinge / slide / ball / free -> Revolute / Prismatic / Ball / Free, q identical except quaternion
+//   order ([w x y z] -> [x y z w]) and the Free velocity ([v; w_body] -> [w_world; v])
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <string>
+#include <vector>
+
+#include "engine/builder.h"
+
+namespace novaphy {
+
+struct MujocoImport {
+  std::vector<std::string> warnings;  // everything in the file the engine does not model, by name
+  std::vector<int> body_map;          // MuJoCo body id -> NovaPhy body (-1: the world or welded to it)
+  int q_begin = 0;                    // first NovaPhy coordinate / dof of the imported joints
+  int qd_begin = 0;
+
+  // NovaPhy joint_q / joint_qd (entries q_begin.. / qd_begin..) from MuJoCo's qpos / qvel
+  void to_joint_q(const mjModel* m, const mjtNum* qpos, Scalar* joint_q) const;
+  void to_joint_qd(const mjModel* m, const mjtNum* qpos, const mjtNum* qvel, Scalar* joint_qd) const;
+  // T (nv x nv) with qd = T qvel and qdd = T qacc; H_mujoco = T^T H T, bias_mujoco = T^T bias
+  MatX velocity_map(const mjModel* m, const mjtNum* qpos) const;
+};
+
+// loads an MJCF or URDF file; throws Error with MuJoCo's message when it does not exist or parse
+mjModel* load_mujoco_model(const std::string& path);
+
+MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m);
+MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path);
+
+}  // namespace novaphy

@@ -1,0 +1,83 @@
+#include "engine/model.h"
+
+#include "engine/dynamics.h"
+#include "engine/error.h"
+
+namespace novaphy {
+
+const char* shape_type_name(ShapeType type) {
+  switch (type) {
+    case ShapeType::Plane: return "Plane";
+    case ShapeType::Sphere: return "Sphere";
+    case ShapeType::Box: return "Box";
+    case ShapeType::Capsule: return "Capsule";
+  }
+  return "Unknown";
+}
+
+void Model::allocate() {
+#define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_ALLOCATE)
+}
+
+void Model::check_sizes() const {
+#define NOVAPHY_CHECK_SIZE(T, name, count, width)                                                   \
+  if (name.size() != static_cast<size_t>(count) * (width))                                          \
+    fail("model field " #name " has ", name.size(), " entries, expected ", static_cast<size_t>(count) * (width));
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_CHECK_SIZE)
+}
+
+ArticulationView Model::articulation(int a) const {
+  if (a < 0 || a >= articulation_count) fail("articulation index ", a, " out of range [0, ", articulation_count, ")");
+  ArticulationView art;
+  art.joint_begin = articulation_start[a];
+  art.joint_end = articulation_start[a + 1];
+  art.joint_type = joint_type.data();
+  art.joint_ancestor = joint_ancestor.data();
+  art.joint_child = joint_child.data();
+  art.joint_q_start = joint_q_start.data();
+  art.joint_qd_start = joint_qd_start.data();
+  art.joint_X_p = joint_X_p.data();
+  art.joint_X_c = joint_X_c.data();
+  art.joint_axis = joint_axis.data();
+  art.joint_armature = joint_armature.data();
+  art.joint_damping = joint_damping.data();
+  art.joint_stiffness = joint_stiffness.data();
+  art.joint_q_ref = joint_q_ref.data();
+  art.body_mass = body_mass.data();
+  art.body_com = body_com.data();
+  art.body_inertia = body_inertia.data();
+  return art;
+}
+
+State Model::state() const {
+  State s;
+  static_cast<ModelCounts&>(s) = *this;
+#define NOVAPHY_ALLOCATE_MEMBER(T, name, count, width) s.name.assign(static_cast<size_t>(count) * (width), T{});
+  NOVAPHY_STATE_FIELDS(NOVAPHY_ALLOCATE_MEMBER)
+  s.joint_q = joint_q0;
+  eval_fk(*this, s);
+  return s;
+}
+
+Control Model::control() const {
+  Control s;
+  static_cast<ModelCounts&>(s) = *this;
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_ALLOCATE_MEMBER)
+  return s;
+}
+
+void Model::check(const State& state) const {
+#define NOVAPHY_CHECK_ARRAY(T, name, count, width)                                                      \
+  if (state.name.size() != static_cast<size_t>(count) * (width))                                        \
+    fail(#name " has ", state.name.size(), " entries, the model needs ", static_cast<size_t>(count) * (width), \
+         " (state or control from another model?)");
+  NOVAPHY_STATE_FIELDS(NOVAPHY_CHECK_ARRAY)
+}
+
+void Model::check(const Control& control) const {
+  const auto& state = control;
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_ARRAY)
+}
+
+}  // namespace novaphy

@@ -1,0 +1,97 @@
+// Model (read-only after finalize), State and Control: flat structure-of-arrays buffers.
+// One field table per entity (the X-macros below) drives allocation, size checks and the
+// numpy views of the binding: adding a field is one line.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kernels/articulation.h"
+
+namespace novaphy {
+
+enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
+const char* shape_type_name(ShapeType type);
+
+// X(type, name, count, width): `count` is an expression over the Model's counts
+#define NOVAPHY_MODEL_FIELDS(X)                                                         \
+  X(Scalar, body_mass, body_count, 1)                                                   \
+  X(Scalar, body_com, body_count, 3)                                                    \
+  X(Scalar, body_inertia, body_count, 9)                                                \
+  X(int, joint_type, joint_count, 1)                                                    \
+  X(int, joint_parent, joint_count, 1)                                                  \
+  X(int, joint_child, joint_count, 1)                                                   \
+  X(int, joint_ancestor, joint_count, 1)                                                \
+  X(int, joint_articulation, joint_count, 1)                                            \
+  X(int, joint_q_start, joint_count + 1, 1)                                             \
+  X(int, joint_qd_start, joint_count + 1, 1)                                            \
+  X(Scalar, joint_X_p, joint_count, 7)                                                  \
+  X(Scalar, joint_X_c, joint_count, 7)                                                  \
+  X(Scalar, joint_axis, joint_count, 3)                                                 \
+  X(Scalar, joint_q0, joint_coord_count, 1)                                             \
+  X(Scalar, joint_q_ref, joint_coord_count, 1)                                          \
+  X(Scalar, joint_armature, joint_dof_count, 1)                                         \
+  X(Scalar, joint_damping, joint_dof_count, 1)                                          \
+  X(Scalar, joint_stiffness, joint_dof_count, 1)                                        \
+  X(Scalar, joint_limit_lower, joint_dof_count, 1)                                      \
+  X(Scalar, joint_limit_upper, joint_dof_count, 1)                                      \
+  X(int, articulation_start, articulation_count + 1, 1)                                 \
+  X(int, shape_type, shape_count, 1)                                                    \
+  X(int, shape_body, shape_count, 1)                                                    \
+  X(Scalar, shape_transform, shape_count, 7)                                            \
+  X(Scalar, shape_scale, shape_count, 3)                                                \
+  X(Scalar, shape_mu, shape_count, 1)                                                   \
+  X(Scalar, shape_restitution, shape_count, 1)
+
+#define NOVAPHY_STATE_FIELDS(X)               \
+  X(Scalar, joint_q, joint_coord_count, 1)    \
+  X(Scalar, joint_qd, joint_dof_count, 1)     \
+  X(Scalar, body_q, body_count, 7)            \
+  X(Scalar, body_qd, body_count, 6)           \
+  X(Scalar, body_f, body_count, 6)
+
+#define NOVAPHY_CONTROL_FIELDS(X) X(Scalar, joint_f, joint_dof_count, 1)
+
+// the counts every field's size is written in
+struct ModelCounts {
+  int world_count = 1;
+  int body_count = 0;
+  int joint_count = 0;
+  int joint_coord_count = 0;
+  int joint_dof_count = 0;
+  int articulation_count = 0;
+  int shape_count = 0;
+};
+
+struct State : ModelCounts {
+#define NOVAPHY_DECLARE(T, name, count, width) std::vector<T> name;
+  NOVAPHY_STATE_FIELDS(NOVAPHY_DECLARE)
+};
+
+struct Control : ModelCounts {
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_DECLARE)
+};
+
+struct Model : ModelCounts {
+  Vec3 gravity = Vec3(0, -9.81, 0);
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
+#undef NOVAPHY_DECLARE
+  std::vector<std::string> body_name;
+  std::vector<std::string> joint_name;
+
+  // sizes every field from the counts (fields are zero-filled)
+  void allocate();
+  // throws Error naming the first field whose size does not match the counts
+  void check_sizes() const;
+
+  ArticulationView articulation(int a) const;
+  // a state at the initial coordinates joint_q0, with body_q/body_qd from forward kinematics
+  State state() const;
+  Control control() const;
+
+  // throws Error naming the array unless `state` / `control` was made for this model
+  void check(const State& state) const;
+  void check(const Control& control) const;
+};
+
+}  // namespace novaphy

@@ -1,0 +1,12 @@
+// Composite-rigid-body algorithm for the joint-space inertia matrix (Featherstone RBDA, section 6.2).
+#pragma once
+
+#include "kernels/articulation.h"
+
+namespace novaphy {
+
+// inputs:  s after forward_kinematics
+// outputs: s.H (dof x dof, armature on the diagonal), s.IC
+void crba(const ArticulationView& art, ArticulationScratch& s);
+
+}  // namespace novaphy

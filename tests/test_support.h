@@ -1,0 +1,28 @@
+// Shared helpers of the C++ tests: random models and states, relative errors.
+#pragma once
+
+#include <random>
+#include <string>
+
+#include "engine/builder.h"
+
+namespace novaphy::test {
+
+// max |a - b| / max(1, max |b|)
+Scalar relative_error(const MatX& a, const MatX& b);
+
+// random joint_q (unit quaternions), joint_qd in [-2, 2], and applied wrenches body_f when asked
+void randomize_state(const Model& model, State& state, std::mt19937& rng, bool wrenches);
+
+// a random tree built directly with ModelBuilder: every joint type, rotated parent and child joint
+// frames, offset centres of mass, full inertias; `roots` articulations of `links` links each
+Model random_builder_tree(std::mt19937& rng, int links, int roots = 1);
+
+// a random tree written as MJCF text: hinge/slide/ball joints (several on one body, and refs),
+// rotated body frames, offset joint anchors and centres of mass, full inertias; a free root if `floating`
+std::string random_tree_mjcf(std::mt19937& rng, int bodies, bool floating);
+
+// writes text to a fresh file in the temporary directory and returns its path
+std::string write_temp_file(const std::string& name, const std::string& text);
+
+}  // namespace novaphy::test
