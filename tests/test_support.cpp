@@ -110,9 +110,10 @@ std::string random_tree_mjcf(std::mt19937& rng, int bodies, bool floating) {
     if (floating && parent[b] < 0) {
       xml << ind << "  <freejoint name=\"j" << b << "_free\"/>\n";
     } else {
+      // MuJoCo allows a ball joint only as the last rotation of a body
       const int joints = uniform_int(rng, parent[b] < 0 ? 1 : 0, 3);
-      for (int k = 0; k < joints; ++k) {
-        const int type = uniform_int(rng, 0, 2);
+      for (int k = 0, type = -1; k < joints && type != 2; ++k) {
+        type = uniform_int(rng, 0, 2);
         xml << ind << "  <joint name=\"j" << b << "_" << k << "\" type=\"" << (type == 0 ? "hinge" : type == 1 ? "slide" : "ball")
             << "\" pos=\"" << fmt(random_vec(rng, 0.3)) << "\" armature=\"" << uniform(rng, 0, 0.1) << "\" damping=\""
             << uniform(rng, 0, 0.5) << "\"";

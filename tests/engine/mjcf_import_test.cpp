@@ -1,0 +1,154 @@
+#include "engine/mjcf_import.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "engine/error.h"
+#include "test_support.h"
+#include "tools/mujoco_oracle.h"
+
+namespace novaphy {
+namespace {
+
+constexpr Scalar kTolerance = 1e-9;
+constexpr int kStates = 50;
+
+void expect_matches_mujoco(const std::string& path, unsigned seed) {
+  MujocoOracle oracle(path);
+  std::mt19937 rng(seed);
+  OracleErrors worst;
+  for (int k = 0; k < kStates; ++k) worst.accumulate(oracle.compare_random_state(rng));
+  EXPECT_LT(worst.body_pose, kTolerance) << path;
+  EXPECT_LT(worst.body_velocity, kTolerance) << path;
+  EXPECT_LT(worst.mass_matrix, kTolerance) << path;
+  EXPECT_LT(worst.bias, kTolerance) << path;
+  EXPECT_LT(worst.qdd_crba, kTolerance) << path;
+  EXPECT_LT(worst.qdd_aba, kTolerance) << path;
+}
+
+class SceneMatchesMujoco : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(SceneMatchesMujoco, PosesMassMatrixBiasAndAccelerations) {
+  const std::string path = GetParam();
+  ASSERT_TRUE(std::filesystem::exists(path)) << path << " is missing (Debian package libmujoco-samples)";
+  expect_matches_mujoco(path, 7);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, SceneMatchesMujoco,
+                         ::testing::Values(NOVAPHY_SCENE_DIR "/pendulum.xml", NOVAPHY_SCENE_DIR "/chain15.xml",
+                                           NOVAPHY_SCENE_DIR "/ball_chain30.xml", NOVAPHY_SCENE_DIR "/quadruped.xml",
+                                           NOVAPHY_HUMANOID_XML),
+                         [](const auto& info) { return std::filesystem::path(info.param).stem().string(); });
+
+class RandomTreeMatchesMujoco : public ::testing::TestWithParam<int> {};
+
+TEST_P(RandomTreeMatchesMujoco, PosesMassMatrixBiasAndAccelerations) {
+  const int seed = GetParam();
+  std::mt19937 rng(seed);
+  const bool floating = seed % 2 == 0;
+  const std::string xml = test::random_tree_mjcf(rng, 3 + seed % 10, floating);
+  const std::string path = test::write_temp_file("random_tree_" + std::to_string(seed) + ".xml", xml);
+  expect_matches_mujoco(path, seed);
+  std::filesystem::remove(path);
+}
+
+INSTANTIATE_TEST_SUITE_P(Trees, RandomTreeMatchesMujoco, ::testing::Range(0, 24));
+
+TEST(MjcfImport, HumanoidStructureAndWarnings) {
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, NOVAPHY_HUMANOID_XML);
+  const Model model = builder.finalize();
+  // 1 free joint + 21 hinges; bodies with several hinges become chains of massless links
+  EXPECT_EQ(model.joint_dof_count, 27);
+  EXPECT_EQ(model.joint_coord_count, 28);
+  EXPECT_EQ(model.articulation_count, 1);
+  EXPECT_EQ(model.body_name[import.body_map[1]], "torso");
+  // the floor plane is static geometry
+  EXPECT_EQ(model.shape_type[0], static_cast<int>(ShapeType::Plane));
+  EXPECT_EQ(model.shape_body[0], -1);
+  // every motor is reported by name
+  auto reported = [&](const std::string& text) {
+    return std::any_of(import.warnings.begin(), import.warnings.end(),
+                       [&](const std::string& w) { return w.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(reported("actuator 'abdomen_y'"));
+  EXPECT_TRUE(reported("actuator 'left_elbow'"));
+  EXPECT_EQ(builder.add_mjcf(NOVAPHY_HUMANOID_XML).size(), import.warnings.size());
+}
+
+TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
+  const std::string path = test::write_temp_file("unmodelled.xml", R"(
+<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0" frictionloss="0.1"/>
+      <geom name="can" type="cylinder" size="0.1 0.2"/>
+      <body name="b" pos="0 0 -0.5">
+        <joint name="jb" type="ball" limited="true" range="0 0.5"/>
+        <geom name="ball" type="ellipsoid" size="0.1 0.2 0.3"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon><fixed name="coupling"><joint joint="ja" coef="1"/></fixed></tendon>
+  <equality><joint name="lock" joint1="ja"/></equality>
+</mujoco>)");
+  ModelBuilder builder;
+  const std::vector<std::string> warnings = builder.add_mjcf(path);
+  std::string all;
+  for (const auto& w : warnings) all += w + "\n";
+  EXPECT_NE(all.find("tendon 'coupling'"), std::string::npos) << all;
+  EXPECT_NE(all.find("equality constraint 'lock'"), std::string::npos) << all;
+  EXPECT_NE(all.find("geom 'can'"), std::string::npos) << all;
+  EXPECT_NE(all.find("geom 'ball'"), std::string::npos) << all;
+  EXPECT_NE(all.find("joint 'ja': frictionloss"), std::string::npos) << all;
+  EXPECT_NE(all.find("joint 'jb': ball joint limit"), std::string::npos) << all;
+  std::filesystem::remove(path);
+}
+
+TEST(MjcfImport, MissingFileIsAClearError) {
+  ModelBuilder builder;
+  try {
+    builder.add_mjcf("/nonexistent/robot.xml");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'/nonexistent/robot.xml': file does not exist"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MjcfImport, ParseErrorPassesMujocosMessageOn) {
+  const std::string path = test::write_temp_file("broken.xml", "<mujoco><worldbody><body></worldbody></mujoco>");
+  ModelBuilder builder;
+  try {
+    builder.add_mjcf(path);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("cannot load '" + path + "'"), std::string::npos) << what;
+    EXPECT_NE(what.find("XML parse error"), std::string::npos) << what;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(MjcfImport, UrdfGoesThroughTheSameParser) {
+  const std::string path = test::write_temp_file("arm.urdf", R"(
+<robot name="arm">
+  <link name="base"><inertial><mass value="2"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="upper"><inertial><origin xyz="0 0 0.25"/><mass value="1"/><inertia ixx="0.02" iyy="0.02" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="shoulder" type="revolute">
+    <parent link="base"/><child link="upper"/><origin xyz="0 0 0.1" rpy="0 0 0.3"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1"/>
+  </joint>
+</robot>)");
+  ModelBuilder builder;
+  builder.add_urdf(path);
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.joint_dof_count, 1);
+  EXPECT_EQ(model.joint_limit_lower[0], -1);
+  EXPECT_EQ(model.joint_limit_upper[0], 1);
+  expect_matches_mujoco(path, 11);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace novaphy
