@@ -1,0 +1,197 @@
+#include "engine/builder.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/dynamics.h"
+#include "test_support_errors.h"
+
+namespace novaphy {
+namespace {
+
+const Scalar kNaN = std::nan("");
+
+JointOptions axis_z() {
+  JointOptions options;
+  options.dof.axis = Vec3(0, 0, 1);
+  return options;
+}
+
+// the seed's pendulum example: a box on a revolute joint about z through its centre of mass
+TEST(ModelBuilder, SeedPendulumMassMatrixIsAnalytic) {
+  ModelBuilder builder;
+  builder.add_ground_plane(0.0);
+  const int body = builder.add_body(RigidBody::from_box(1.0, Vec3(0.1, 0.5, 0.1)));
+  const int joint = builder.add_joint_revolute(-1, body, axis_z());
+  builder.add_articulation({joint});
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.articulation_count, 1);
+  EXPECT_EQ(model.joint_dof_count, 1);
+  const MatX H = eval_mass_matrix(model, model.state());
+  EXPECT_NEAR(H(0, 0), 1.0 / 12 * (0.2 * 0.2 + 1.0 * 1.0), 1e-15);
+}
+
+// hinge at the top of a rod: I about the hinge = I_com + m d^2 (parallel axis), plus armature
+TEST(ModelBuilder, OffsetPendulumMassMatrixIsAnalytic) {
+  ModelBuilder builder;
+  const int body = builder.add_body(RigidBody::from_box(2.0, Vec3(0.05, 0.5, 0.05)));
+  JointOptions options = axis_z();
+  options.child_xform.p = Vec3(0, 0.5, 0);
+  options.dof.armature = 0.01;
+  builder.add_joint_revolute(-1, body, options);
+  const Model model = builder.finalize();
+  State state = model.state();
+  state.joint_q[0] = 0.7;
+  const Scalar I_com = 2.0 / 12 * (0.1 * 0.1 + 1.0);
+  EXPECT_NEAR(eval_mass_matrix(model, state)(0, 0), I_com + 2.0 * 0.25 + 0.01, 1e-14);
+  // gravity torque: m g d sin(q) about the hinge
+  EXPECT_NEAR(eval_bias_forces(model, state)[0], 2.0 * 9.81 * 0.5 * std::sin(0.7), 1e-13);
+}
+
+TEST(ModelBuilder, BodiesWithoutJointsBecomeFreeBodies) {
+  ModelBuilder builder;
+  Transform xform;
+  xform.p = Vec3(1, 2, 3);
+  xform.q = Quat(Eigen::AngleAxis<Scalar>(0.3, Vec3::UnitX()));
+  builder.add_body(RigidBody::from_sphere(1, 0.1), xform);
+  const Model model = builder.finalize();
+  ASSERT_EQ(model.joint_count, 1);
+  EXPECT_EQ(model.joint_type[0], static_cast<int>(JointType::Free));
+  EXPECT_EQ(model.articulation_count, 1);
+  const State state = model.state();
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(state.body_q[k], model.joint_q0[k], 1e-15);
+  EXPECT_NEAR(state.body_q[1], 2, 1e-15);
+  // falls freely: qdd = [0; g]
+  const VecX qdd = eval_forward_dynamics(model, state, model.control());
+  EXPECT_LT((qdd - (VecX(6) << 0, 0, 0, 0, -9.81, 0).finished()).cwiseAbs().maxCoeff(), 1e-14);
+}
+
+TEST(ModelBuilder, JointsWithoutArticulationAreGroupedByTree) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int c = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  builder.add_joint_revolute(-1, a, axis_z());
+  builder.add_joint_ball(a, b);
+  builder.add_joint_prismatic(-1, c, axis_z());
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.articulation_count, 2);
+  EXPECT_EQ(model.articulation_start, (std::vector<int>{0, 2, 3}));
+  EXPECT_EQ(model.joint_ancestor, (std::vector<int>{-1, 0, -1}));
+  EXPECT_EQ(model.joint_q_start, (std::vector<int>{0, 1, 5, 6}));
+  EXPECT_EQ(model.joint_qd_start, (std::vector<int>{0, 1, 4, 5}));
+}
+
+TEST(ModelBuilderErrors, ParentOutOfRangeOrNotYetDefined) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(7, a), "joint 0 (Revolute): parent body index 7 out of range [-1, 2)");
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-2, a), "parent body index -2 out of range");
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-1, 5), "child body index 5 out of range [0, 2)");
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(b, a), "parent body 1 is not yet defined");
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_free(a, b), "parent body 0 is not yet defined");
+  builder.add_joint_revolute(-1, a);
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_free(a, b), "a Free joint must be a root (parent -1), got parent 0");
+}
+
+TEST(ModelBuilderErrors, BodyClaimedByTwoJoints) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  builder.add_joint_revolute(-1, a);
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_prismatic(-1, a), "joint 1 (Prismatic): body 0 is already the child of joint 0");
+}
+
+TEST(ModelBuilderErrors, BadMass) {
+  ModelBuilder builder;
+  RigidBody body;
+  body.mass = 0;
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body, {}, "arm"), "body 0 ('arm'): mass must be > 0, got 0");
+  body.mass = -1;
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: mass must be > 0, got -1");
+  body.mass = kNaN;
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: mass is not finite: nan");
+  EXPECT_EQ(builder.body_count(), 0);
+}
+
+TEST(ModelBuilderErrors, BadInertia) {
+  ModelBuilder builder;
+  RigidBody body;
+  body.inertia(0, 1) = 0.5;
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: inertia is not symmetric");
+  body.inertia = Vec3(1, 1, -1).asDiagonal();
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: inertia is not positive definite");
+  body.inertia = Vec3(1, 1, 3).asDiagonal();
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: inertia violates the triangle inequality");
+  body.inertia = Mat3::Identity();
+  body.inertia(2, 2) = kNaN;
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: inertia(2, 2) is not finite: nan");
+  body.inertia = Mat3::Identity();
+  body.com = Vec3(0, kNaN, 0);
+  EXPECT_NOVAPHY_ERROR(builder.add_body(body), "body 0: com[1] is not finite: nan");
+}
+
+TEST(ModelBuilderErrors, BadAxisTransformsAndLimits) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  JointOptions options;
+  options.dof.axis = Vec3::Zero();
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-1, a, options), "joint 0 (Revolute): axis has zero length");
+  options.dof.axis = Vec3(0, kNaN, 1);
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_prismatic(-1, a, options), "joint 0 (Prismatic): axis[1] is not finite: nan");
+  options = {};
+  options.parent_xform.p = Vec3(kNaN, 0, 0);
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_ball(-1, a, options), "joint 0 (Ball): parent_xform[0] is not finite: nan");
+  options = {};
+  options.child_xform.q = Quat(kNaN, 0, 0, 0);
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_ball(-1, a, options), "joint 0 (Ball): child_xform rotation[3] is not finite");
+  options = {};
+  options.child_xform.q = Quat(0, 0, 0, 0);
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_ball(-1, a, options), "child_xform rotation quaternion has zero length");
+  options = {};
+  options.dof.limit_lower = 1;
+  options.dof.limit_upper = -1;
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-1, a, options), "limits must satisfy limit_lower <= limit_upper");
+  options = {};
+  options.dof.damping = -0.1;
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-1, a, options), "damping must be finite and >= 0, got -0.1");
+  Transform bad;
+  bad.p = Vec3(0, 0, kNaN);
+  EXPECT_NOVAPHY_ERROR(builder.add_body(RigidBody(), bad), "body 1: xform[2] is not finite: nan");
+  EXPECT_EQ(builder.joint_count(), 0);
+}
+
+TEST(ModelBuilderErrors, BadArticulationsAndShapes) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int ja = builder.add_joint_revolute(-1, a);
+  const int jb = builder.add_joint_revolute(a, b);
+  EXPECT_NOVAPHY_ERROR(builder.add_articulation({}), "articulation 0: no joints");
+  EXPECT_NOVAPHY_ERROR(builder.add_articulation({ja, 9}), "articulation 0: joint index 9 out of range [0, 2)");
+  EXPECT_NOVAPHY_ERROR(builder.add_articulation({jb}), "joint 1 hangs from body 0 which is not in this articulation");
+  builder.add_articulation({ja, jb});
+  EXPECT_NOVAPHY_ERROR(builder.add_articulation({jb}), "joint 1 already belongs to articulation 0");
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(3, 0.1), "shape 0 (Sphere): body index 3 out of range [-1, 2)");
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_box(a, Vec3(0.1, 0, 0.1)), "shape 0 (Box): size must be finite and > 0, got 0");
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(a, 0.1, {}, 0.5, 2), "restitution must be in [0, 1], got 2");
+  EXPECT_NOVAPHY_ERROR(builder.add_plane(Vec3::Zero(), 0), "plane: normal has zero length");
+}
+
+TEST(ModelBuilderErrors, StateFromAnotherModelAndNonFiniteCoordinates) {
+  ModelBuilder one, two;
+  one.add_body(RigidBody::from_sphere(1, 0.1));
+  two.add_joint_revolute(-1, two.add_body(RigidBody::from_sphere(1, 0.1)));
+  const Model model_one = one.finalize(), model_two = two.finalize();
+  State state = model_two.state();
+  EXPECT_NOVAPHY_ERROR(eval_fk(model_one, state), "joint_q has 1 entries, the model needs 7");
+  State nan_state = model_one.state();
+  nan_state.joint_qd[4] = kNaN;
+  EXPECT_NOVAPHY_ERROR(eval_mass_matrix(model_one, nan_state), "joint_qd[4] is not finite: nan");
+  EXPECT_NOVAPHY_ERROR(eval_inverse_dynamics(model_one, model_one.state(), VecX::Zero(2)),
+                       "qdd has 2 entries, the model has 6 dofs");
+}
+
+}  // namespace
+}  // namespace novaphy
