@@ -1,0 +1,27 @@
+// Shared declarations of the pybind11 module: one bind_* per engine file.
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+namespace novaphy::python {
+
+namespace py = pybind11;
+
+void bind_model(py::module_& m);
+void bind_builder(py::module_& m);
+void bind_dynamics(py::module_& m);
+
+// a numpy view of `count` rows of `width` values owned by `owner` (no copy); width 1 gives a 1-D array
+template <typename T>
+py::array view(T* data, int count, int width, py::handle owner, bool writeable) {
+  std::vector<py::ssize_t> shape{count}, strides{static_cast<py::ssize_t>(width * sizeof(T))};
+  if (width > 1) shape.push_back(width), strides.push_back(sizeof(T));
+  py::array array(py::dtype::of<T>(), shape, strides, data, owner);
+  if (!writeable) array.attr("setflags")(py::arg("write") = false);
+  return array;
+}
+
+}  // namespace novaphy::python

@@ -1,0 +1,138 @@
+// RigidBody, JointDofConfig and ModelBuilder with the seed's keyword arguments.
+#include <optional>
+
+#include "bindings/bindings.h"
+#include "engine/builder.h"
+
+namespace novaphy::python {
+
+namespace {
+
+JointDofConfig dof_config(py::object axis) {
+  if (axis.is_none()) return {};
+  if (py::isinstance<JointDofConfig>(axis)) return axis.cast<JointDofConfig>();
+  try {
+    JointDofConfig dof;
+    dof.axis = axis.cast<Vec3>();
+    return dof;
+  } catch (const py::cast_error&) {
+    throw py::type_error("axis must be a JointDofConfig or a sequence of 3 numbers, got " +
+                         py::str(py::type::of(axis)).cast<std::string>());
+  }
+}
+
+auto joint_adder(JointType type) {
+  return [type](ModelBuilder& builder, int parent, int child, std::optional<Transform> parent_xform,
+                std::optional<Transform> child_xform, py::object axis, std::optional<Scalar> armature,
+                std::optional<Scalar> damping, std::optional<Scalar> stiffness, std::optional<Scalar> limit_lower,
+                std::optional<Scalar> limit_upper, const std::string& name) {
+    JointOptions options;
+    options.parent_xform = parent_xform.value_or(Transform::identity());
+    options.child_xform = child_xform.value_or(Transform::identity());
+    options.dof = dof_config(axis);
+    if (armature) options.dof.armature = *armature;
+    if (damping) options.dof.damping = *damping;
+    if (stiffness) options.dof.stiffness = *stiffness;
+    if (limit_lower) options.dof.limit_lower = *limit_lower;
+    if (limit_upper) options.dof.limit_upper = *limit_upper;
+    options.name = name;
+    return builder.add_joint(type, parent, child, options);
+  };
+}
+
+template <typename Class>
+void def_joint(Class& c, const char* method, JointType type, const char* doc) {
+  c.def(method, joint_adder(type), py::arg("parent"), py::arg("child"), py::kw_only(),
+        py::arg("parent_xform") = py::none(), py::arg("child_xform") = py::none(), py::arg("axis") = py::none(),
+        py::arg("armature") = py::none(), py::arg("damping") = py::none(), py::arg("stiffness") = py::none(),
+        py::arg("limit_lower") = py::none(), py::arg("limit_upper") = py::none(), py::arg("name") = "", doc);
+}
+
+// runs an importer and passes each of its warnings to Python's warnings module
+template <std::vector<std::string> (ModelBuilder::*importer)(const std::string&)>
+std::vector<std::string> import_file(ModelBuilder& builder, const std::string& path) {
+  const std::vector<std::string> warnings = (builder.*importer)(path);
+  const py::object warn = py::module_::import("warnings").attr("warn");
+  for (const std::string& w : warnings) warn("novaphy: " + w, py::handle(PyExc_UserWarning), 2);
+  return warnings;
+}
+
+}  // namespace
+
+void bind_builder(py::module_& m) {
+  py::class_<RigidBody>(m, "RigidBody", "Mass, centre of mass and 3x3 inertia about the centre of mass (body frame).")
+      .def(py::init([](Scalar mass, const Vec3& com, const Mat3& inertia) { return RigidBody{mass, com, inertia}; }),
+           py::arg("mass") = 1.0, py::arg("com") = Vec3::Zero(), py::arg("inertia") = Mat3::Identity())
+      .def_readwrite("mass", &RigidBody::mass)
+      .def_readwrite("com", &RigidBody::com)
+      .def_readwrite("inertia", &RigidBody::inertia)
+      .def_static("from_box", &RigidBody::from_box, py::arg("mass"), py::arg("half_extents"), "Solid box.")
+      .def_static("from_sphere", &RigidBody::from_sphere, py::arg("mass"), py::arg("radius"), "Solid sphere.")
+      .def_static("from_capsule", &RigidBody::from_capsule, py::arg("mass"), py::arg("radius"), py::arg("half_height"),
+                  "Solid capsule along local Y: radius and half height of the cylinder part.");
+
+  py::class_<JointDofConfig>(m, "JointDofConfig", "Axis, limits, armature, damping and spring of a joint's dofs.")
+      .def(py::init<>())
+      .def_readwrite("axis", &JointDofConfig::axis)
+      .def_readwrite("limit_lower", &JointDofConfig::limit_lower)
+      .def_readwrite("limit_upper", &JointDofConfig::limit_upper)
+      .def_readwrite("armature", &JointDofConfig::armature)
+      .def_readwrite("damping", &JointDofConfig::damping)
+      .def_readwrite("stiffness", &JointDofConfig::stiffness)
+      .def_readwrite("q_ref", &JointDofConfig::q_ref);
+
+  auto builder = py::class_<ModelBuilder>(m, "ModelBuilder", "Builds a Model; every call checks its arguments.");
+  builder.def(py::init<const Vec3&>(), py::arg("gravity") = Vec3(0, -9.81, 0))
+      .def_property("gravity", &ModelBuilder::gravity, &ModelBuilder::set_gravity)
+      .def_property_readonly("body_count", &ModelBuilder::body_count)
+      .def_property_readonly("joint_count", &ModelBuilder::joint_count)
+      .def_property_readonly("shape_count", &ModelBuilder::shape_count)
+      .def(
+          "add_body",
+          [](ModelBuilder& self, const RigidBody& body, std::optional<Transform> xform, const std::string& name) {
+            return self.add_body(body, xform.value_or(Transform::identity()), name);
+          },
+          py::arg("body"), py::kw_only(), py::arg("xform") = py::none(), py::arg("name") = "",
+          "Adds a body and returns its index; xform is its initial pose (free bodies, Free joints).")
+      .def("add_articulation", &ModelBuilder::add_articulation, py::arg("joints"))
+      .def("add_ground_plane", &ModelBuilder::add_ground_plane, py::arg("y") = 0.0, py::kw_only(), py::arg("mu") = 0.5,
+           py::arg("restitution") = 0.0, "Static plane y = const with normal +Y.")
+      .def("add_plane", &ModelBuilder::add_plane, py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(),
+           py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("name") = "",
+           "Static plane {x : normal . x = offset}.")
+      .def(
+          "add_shape_box",
+          [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, Scalar mu,
+             Scalar restitution) { return self.add_shape_box(body, half_extents, xform.value_or(Transform{}), mu, restitution); },
+          py::arg("body"), py::arg("half_extents"), py::kw_only(), py::arg("xform") = py::none(), py::arg("mu") = 0.5,
+          py::arg("restitution") = 0.0)
+      .def(
+          "add_shape_sphere",
+          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu, Scalar restitution) {
+            return self.add_shape_sphere(body, radius, xform.value_or(Transform{}), mu, restitution);
+          },
+          py::arg("body"), py::arg("radius"), py::kw_only(), py::arg("xform") = py::none(), py::arg("mu") = 0.5,
+          py::arg("restitution") = 0.0)
+      .def(
+          "add_shape_capsule",
+          [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
+             Scalar restitution) {
+            return self.add_shape_capsule(body, radius, half_height, xform.value_or(Transform{}), mu, restitution);
+          },
+          py::arg("body"), py::arg("radius"), py::arg("half_height"), py::kw_only(), py::arg("xform") = py::none(),
+          py::arg("mu") = 0.5, py::arg("restitution") = 0.0, "Capsule along the shape frame's local Y axis.")
+      .def("add_mjcf", &import_file<&ModelBuilder::add_mjcf>, py::arg("path"),
+           "Imports an MJCF file through MuJoCo's parser; warns (UserWarning) about what is not modelled and "
+           "returns those warnings.")
+      .def("add_urdf", &import_file<&ModelBuilder::add_urdf>, py::arg("path"),
+           "Imports a URDF file through MuJoCo's parser; warns like add_mjcf.")
+      .def("finalize", &ModelBuilder::finalize, "Lays the scene out as a Model.");
+  def_joint(builder, "add_joint_revolute", JointType::Revolute, "Revolute joint: rotation by q about axis.");
+  def_joint(builder, "add_joint_prismatic", JointType::Prismatic, "Prismatic joint: translation by q along axis.");
+  def_joint(builder, "add_joint_slide", JointType::Prismatic, "Alias of add_joint_prismatic.");
+  def_joint(builder, "add_joint_ball", JointType::Ball, "Ball joint: quaternion q, angular velocity in the child frame.");
+  def_joint(builder, "add_joint_fixed", JointType::Fixed, "Fixed joint: rigid attachment.");
+  def_joint(builder, "add_joint_free", JointType::Free, "Free joint (root only): q = pose, qd = [w; v] in the world.");
+}
+
+}  // namespace novaphy::python

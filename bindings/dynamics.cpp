@@ -1,0 +1,57 @@
+// The seed's free functions on lists of Joint/RigidBody, and the same on a Model and State.
+// The GIL is released while the engine computes.
+#include "bindings/bindings.h"
+#include "engine/articulation_functions.h"
+#include "engine/dynamics.h"
+
+namespace novaphy::python {
+
+namespace {
+
+ForwardDynamicsMethod method_from_name(const std::string& name) {
+  if (name == "crba") return ForwardDynamicsMethod::Crba;
+  if (name == "aba") return ForwardDynamicsMethod::Aba;
+  throw py::value_error("method must be 'crba' or 'aba', got '" + name + "'");
+}
+
+}  // namespace
+
+void bind_dynamics(py::module_& m) {
+  const auto release = py::call_guard<py::gil_scoped_release>();
+
+  py::class_<Joint>(m, "Joint", "Joint of the free functions: joints[i] attaches link i to link parent (-1: world).")
+      .def(py::init<>())
+      .def_readwrite("type", &Joint::type)
+      .def_readwrite("axis", &Joint::axis)
+      .def_readwrite("parent", &Joint::parent)
+      .def_readwrite("parent_to_joint", &Joint::parent_to_joint);
+
+  m.def("forward_kinematics", &forward_kinematics, py::arg("joints"), py::arg("q"), release,
+        "World transforms [px, py, pz, qx, qy, qz, qw] of every link, shape (n_links, 7).");
+  m.def("inverse_dynamics", &inverse_dynamics, py::arg("joints"), py::arg("bodies"), py::arg("q"), py::arg("qd"),
+        py::arg("qdd"), py::arg("gravity"), release, "Joint forces tau = H qdd + C qd + g (RNEA).");
+  m.def("mass_matrix_crba", &mass_matrix_crba, py::arg("joints"), py::arg("bodies"), py::arg("q"), release,
+        "Joint-space mass matrix H(q) (CRBA).");
+  m.def("forward_dynamics", &forward_dynamics, py::arg("joints"), py::arg("bodies"), py::arg("q"), py::arg("qd"),
+        py::arg("tau"), py::arg("gravity"), release, "Joint accelerations from H qdd = tau - C qd - g.");
+
+  m.def("eval_fk", &eval_fk, py::arg("model"), py::arg("state"), release,
+        "Fills state.body_q and state.body_qd from state.joint_q and state.joint_qd.");
+  m.def("eval_mass_matrix", &eval_mass_matrix, py::arg("model"), py::arg("state"), release,
+        "Dense (joint_dof_count, joint_dof_count) mass matrix, block diagonal over articulations.");
+  m.def("eval_bias_forces", &eval_bias_forces, py::arg("model"), py::arg("state"), release,
+        "bias = C qd + g - tau_passive - J^T body_f, so that H qdd = tau - bias.");
+  m.def("eval_inverse_dynamics", &eval_inverse_dynamics, py::arg("model"), py::arg("state"), py::arg("qdd"), release,
+        "tau = H qdd + bias (RNEA).");
+  m.def(
+      "eval_forward_dynamics",
+      [](const Model& model, const State& state, const Control& control, const std::string& method) {
+        const ForwardDynamicsMethod chosen = method_from_name(method);
+        py::gil_scoped_release unlocked;
+        return eval_forward_dynamics(model, state, control, chosen);
+      },
+      py::arg("model"), py::arg("state"), py::arg("control"), py::kw_only(), py::arg("method") = "crba",
+      "qdd from tau = control.joint_f: 'crba' (CRBA + Cholesky) or 'aba' (articulated-body algorithm).");
+}
+
+}  // namespace novaphy::python
