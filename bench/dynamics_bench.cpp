@@ -1,0 +1,101 @@
+// Forward dynamics of one robot, NovaPhy's reference kernels beside MuJoCo 2.2.2 on the same MJCF
+// (contacts and limits off): the single-world baseline the batched kernels are measured against.
+//   novaphy_bench_dynamics --benchmark_format=json
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "engine/mjcf_import.h"
+#include "kernels/aba.h"
+#include "kernels/cholesky.h"
+#include "kernels/crba.h"
+#include "kernels/fk.h"
+#include "kernels/rnea.h"
+
+namespace novaphy {
+namespace {
+
+const char* const kScenes[] = {NOVAPHY_SCENE_DIR "/chain15.xml", NOVAPHY_SCENE_DIR "/quadruped.xml",
+                               "/usr/share/mujoco/model/humanoid/humanoid.xml"};
+
+// one scene loaded once into both engines, at a fixed state with joint forces
+struct Scene {
+  explicit Scene(const char* path) : m(load_mujoco_model(path), mj_deleteModel), d(mj_makeData(m.get()), mj_deleteData) {
+    m->opt.disableflags |= mjDSBL_CONSTRAINT;
+    for (int k = 0; k < m->nv; ++k) d->qvel[k] = 0.1 * (k % 5) - 0.2, d->qfrc_applied[k] = 0.5 * (k % 3) - 0.5;
+    ModelBuilder builder;
+    import = import_mujoco_model(builder, m.get());
+    model = builder.finalize();
+    state = model.state();
+    import.to_joint_q(m.get(), d->qpos, state.joint_q.data());
+    import.to_joint_qd(m.get(), d->qpos, d->qvel, state.joint_qd.data());
+    tau.setConstant(model.joint_dof_count, 0.3);
+    qdd.setZero(model.joint_dof_count);
+    zero.setZero(model.joint_dof_count);
+    art = model.articulation(0);
+    scratch.resize(art);
+  }
+  std::unique_ptr<mjModel, void (*)(mjModel*)> m;
+  std::unique_ptr<mjData, void (*)(mjData*)> d;
+  MujocoImport import;
+  Model model;
+  State state;
+  VecX tau, qdd, zero;
+  ArticulationView art;
+  ArticulationScratch scratch;
+};
+
+Scene& scene(int index) {
+  static std::unique_ptr<Scene> scenes[std::size(kScenes)];
+  if (!scenes[index]) scenes[index] = std::make_unique<Scene>(kScenes[index]);
+  return *scenes[index];
+}
+
+void label(benchmark::State& bm, const Scene& s) {
+  bm.SetItemsProcessed(bm.iterations());
+  bm.SetLabel(std::string(s.m->names) + " nv=" + std::to_string(s.model.joint_dof_count));
+}
+
+void BM_NovaPhyCrbaCholesky(benchmark::State& bm) {
+  Scene& s = scene(bm.range(0));
+  for (auto _ : bm) {
+    forward_kinematics(s.art, s.state.joint_q.data(), s.scratch);
+    forward_velocity(s.art, s.state.joint_qd.data(), s.scratch);
+    rnea(s.art, s.zero.data(), s.model.gravity, nullptr, s.scratch, s.qdd.data());
+    s.qdd = s.tau - s.qdd;
+    crba(s.art, s.scratch);
+    cholesky_factor(s.scratch.H);
+    cholesky_solve(s.scratch.H, s.qdd.data());
+    benchmark::DoNotOptimize(s.qdd.data());
+  }
+  label(bm, s);
+}
+
+void BM_NovaPhyAba(benchmark::State& bm) {
+  Scene& s = scene(bm.range(0));
+  for (auto _ : bm) {
+    forward_kinematics(s.art, s.state.joint_q.data(), s.scratch);
+    forward_velocity(s.art, s.state.joint_qd.data(), s.scratch);
+    aba(s.art, s.tau.data(), s.model.gravity, nullptr, s.scratch, s.qdd.data());
+    benchmark::DoNotOptimize(s.qdd.data());
+  }
+  label(bm, s);
+}
+
+void BM_MujocoForward(benchmark::State& bm) {
+  Scene& s = scene(bm.range(0));
+  for (auto _ : bm) {
+    mj_forward(s.m.get(), s.d.get());
+    benchmark::DoNotOptimize(s.d->qacc);
+  }
+  label(bm, s);
+}
+
+BENCHMARK(BM_NovaPhyCrbaCholesky)->DenseRange(0, std::size(kScenes) - 1);
+BENCHMARK(BM_NovaPhyAba)->DenseRange(0, std::size(kScenes) - 1);
+BENCHMARK(BM_MujocoForward)->DenseRange(0, std::size(kScenes) - 1);
+
+}  // namespace
+}  // namespace novaphy
+
+BENCHMARK_MAIN();
