@@ -1,4 +1,5 @@
 // RigidBody, JointDofConfig and ModelBuilder with the seed's keyword arguments.
+#include <cmath>
 #include <optional>
 
 #include "bindings/bindings.h"
@@ -95,6 +96,11 @@ void bind_builder(py::module_& m) {
           py::arg("body"), py::kw_only(), py::arg("xform") = py::none(), py::arg("name") = "",
           "Adds a body and returns its index; xform is its initial pose (free bodies, Free joints).")
       .def("add_articulation", &ModelBuilder::add_articulation, py::arg("joints"))
+      .def("add_motor", &ModelBuilder::add_motor, py::arg("joint"), py::kw_only(), py::arg("gear") = 1.0,
+           py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY,
+           py::arg("force_upper") = INFINITY, py::arg("name") = "",
+           "Motor on a Revolute/Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range).")
+      .def_property_readonly("actuator_count", &ModelBuilder::actuator_count)
       .def("add_ground_plane", &ModelBuilder::add_ground_plane, py::arg("y") = 0.0, py::kw_only(), py::arg("mu") = 0.5,
            py::arg("restitution") = 0.0, "Static plane y = const with normal +Y.")
       .def("add_plane", &ModelBuilder::add_plane, py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(),

@@ -43,6 +43,8 @@ void bind_dynamics(py::module_& m) {
         "bias = C qd + g - tau_passive - J^T body_f, so that H qdd = tau - bias.");
   m.def("eval_inverse_dynamics", &eval_inverse_dynamics, py::arg("model"), py::arg("state"), py::arg("qdd"), release,
         "tau = H qdd + bias (RNEA).");
+  m.def("eval_control_force", &eval_control_force, py::arg("model"), py::arg("control"), release,
+        "tau = control.joint_f plus every motor's clamped force through its gear.");
   m.def(
       "eval_forward_dynamics",
       [](const Model& model, const State& state, const Control& control, const std::string& method) {
@@ -51,7 +53,7 @@ void bind_dynamics(py::module_& m) {
         return eval_forward_dynamics(model, state, control, chosen);
       },
       py::arg("model"), py::arg("state"), py::arg("control"), py::kw_only(), py::arg("method") = "crba",
-      "qdd from tau = control.joint_f: 'crba' (CRBA + Cholesky) or 'aba' (articulated-body algorithm).");
+      "qdd from tau = eval_control_force(model, control): 'crba' (CRBA + Cholesky) or 'aba' (articulated-body algorithm).");
 }
 
 }  // namespace novaphy::python

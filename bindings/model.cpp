@@ -23,7 +23,8 @@ void bind_counts(Class& c) {
       .def_readonly("joint_coord_count", &ModelCounts::joint_coord_count)
       .def_readonly("joint_dof_count", &ModelCounts::joint_dof_count)
       .def_readonly("articulation_count", &ModelCounts::articulation_count)
-      .def_readonly("shape_count", &ModelCounts::shape_count);
+      .def_readonly("shape_count", &ModelCounts::shape_count)
+      .def_readonly("actuator_count", &ModelCounts::actuator_count);
 }
 
 }  // namespace
@@ -68,6 +69,7 @@ void bind_model(py::module_& m) {
   model.def_property_readonly("gravity", [](const Model& self) { return self.gravity; })
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("joint_name", &Model::joint_name)
+      .def_readonly("actuator_name", &Model::actuator_name)
       .def("state", &Model::state, "A state at the initial coordinates joint_q0, with body_q/body_qd from FK.")
       .def("control", &Model::control, "A zeroed control.");
 #define NOVAPHY_BIND_FIELD(Owner, T, name, width, writeable) \
@@ -80,7 +82,7 @@ void bind_model(py::module_& m) {
 #define NOVAPHY_BIND_STATE_FIELD(T, name, count, width) state NOVAPHY_BIND_FIELD(State, T, name, width, true);
   NOVAPHY_STATE_FIELDS(NOVAPHY_BIND_STATE_FIELD)
 
-  auto control = py::class_<Control>(m, "Control", "Control inputs: joint_f generalised forces.");
+  auto control = py::class_<Control>(m, "Control", "Control inputs: joint_f generalised forces, actuator_ctrl motor commands.");
   bind_counts(control);
 #define NOVAPHY_BIND_CONTROL_FIELD(T, name, count, width) control NOVAPHY_BIND_FIELD(Control, T, name, width, true);
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_BIND_CONTROL_FIELD)

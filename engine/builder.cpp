@@ -202,6 +202,22 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Transform& xform, co
   return shape_count() - 1;
 }
 
+int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
+                            Scalar force_upper, const std::string& name) {
+  const std::string item = label("actuator", actuator_count(), name);
+  if (joint < 0 || joint >= joint_count()) fail(item, ": joint index ", joint, " out of range [0, ", joint_count(), ")");
+  const JointType type = joints_[joint].type;
+  if (type != JointType::Revolute && type != JointType::Prismatic)
+    fail(item, ": a motor drives a Revolute or Prismatic joint, joint ", joint, " is ", joint_type_name(type));
+  check_finite(item, "gear", gear);
+  if (std::isnan(ctrl_lower) || std::isnan(ctrl_upper) || ctrl_lower > ctrl_upper)
+    fail(item, ": control range must satisfy lower <= upper, got [", ctrl_lower, ", ", ctrl_upper, "]");
+  if (std::isnan(force_lower) || std::isnan(force_upper) || force_lower > force_upper)
+    fail(item, ": force range must satisfy lower <= upper, got [", force_lower, ", ", force_upper, "]");
+  motors_.push_back({joint, gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name});
+  return actuator_count() - 1;
+}
+
 int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, const std::string&) {
   check_finite("plane", "normal", normal);
   check_finite("plane", "offset", offset);
@@ -255,6 +271,7 @@ Model ModelBuilder::finalize() const {
   model.joint_count = static_cast<int>(joints.size());
   model.shape_count = shape_count();
   model.articulation_count = articulation_count;
+  model.actuator_count = actuator_count();
   for (const JointRecord& joint : joints) {
     model.joint_coord_count += joint_coord_count(joint.type);
     model.joint_dof_count += joint_dof_count(joint.type);
@@ -331,6 +348,17 @@ Model ModelBuilder::finalize() const {
     Eigen::Map<Vec3>(&model.shape_scale[3 * s]) = shape.scale;
     model.shape_mu[s] = shape.mu;
     model.shape_restitution[s] = shape.restitution;
+  }
+
+  for (int u = 0; u < actuator_count(); ++u) {
+    const MotorRecord& motor = motors_[u];
+    model.actuator_joint[u] = motor.joint;
+    model.actuator_gear[u] = motor.gear;
+    model.actuator_ctrl_lower[u] = motor.ctrl_lower;
+    model.actuator_ctrl_upper[u] = motor.ctrl_upper;
+    model.actuator_force_lower[u] = motor.force_lower;
+    model.actuator_force_upper[u] = motor.force_upper;
+    model.actuator_name.push_back(motor.name);
   }
 
   model.check_sizes();

@@ -72,6 +72,12 @@ class ModelBuilder {
   int add_shape_capsule(int body, Scalar radius, Scalar half_height, const Transform& xform = {}, Scalar mu = 0.5,
                         Scalar restitution = 0);
 
+  // a motor on a Revolute or Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range)
+  int add_motor(int joint, Scalar gear = 1, Scalar ctrl_lower = -std::numeric_limits<Scalar>::infinity(),
+                Scalar ctrl_upper = std::numeric_limits<Scalar>::infinity(),
+                Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
+                Scalar force_upper = std::numeric_limits<Scalar>::infinity(), const std::string& name = "");
+
   // MJCF / URDF import through MuJoCo's parser (engine/mjcf_import.cpp): returns the warnings
   // for everything in the file the engine does not model, by name
   std::vector<std::string> add_mjcf(const std::string& path);
@@ -80,6 +86,7 @@ class ModelBuilder {
   int body_count() const { return static_cast<int>(body_mass_.size()); }
   int joint_count() const { return static_cast<int>(joints_.size()); }
   int shape_count() const { return static_cast<int>(shapes_.size()); }
+  int actuator_count() const { return static_cast<int>(motors_.size()); }
 
   // bodies no joint names as their child get an implicit Free joint in an articulation of their own
   Model finalize() const;
@@ -113,6 +120,12 @@ class ModelBuilder {
   std::vector<int> body_joint_;  // joint whose child the body is, -1
   std::vector<JointRecord> joints_;
   std::vector<ShapeRecord> shapes_;
+  struct MotorRecord {
+    int joint;
+    Scalar gear, ctrl_lower, ctrl_upper, force_lower, force_upper;
+    std::string name;
+  };
+  std::vector<MotorRecord> motors_;
   int articulation_count_ = 0;
 };
 

@@ -1,5 +1,6 @@
 #include "engine/dynamics.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "engine/error.h"
@@ -105,19 +106,31 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
   return tau;
 }
 
+VecX eval_control_force(const Model& model, const Control& control) {
+  model.check(control);
+  check_finite(control.joint_f, "joint_f");
+  check_finite(control.actuator_ctrl, "actuator_ctrl");
+  VecX tau = Eigen::Map<const VecX>(control.joint_f.data(), model.joint_dof_count);
+  for (int u = 0; u < model.actuator_count; ++u) {
+    const Scalar ctrl = std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
+    const Scalar force = std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
+    tau[model.joint_qd_start[model.actuator_joint[u]]] += model.actuator_gear[u] * force;
+  }
+  return tau;
+}
+
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
                            ForwardDynamicsMethod method) {
   model.check(state);
-  model.check(control);
   check_finite_state(state);
-  check_finite(control.joint_f, "joint_f");
+  const VecX tau_control = eval_control_force(model, control);
   VecX qdd(model.joint_dof_count);
   ArticulationScratch s;
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     const int nv = art.dof_count();
     Scalar* qdd_a = qdd.data() + art.qd_begin();
-    const Eigen::Map<const VecX> tau(control.joint_f.data() + art.qd_begin(), nv);
+    const auto tau = tau_control.segment(art.qd_begin(), nv);
     if (method == ForwardDynamicsMethod::Crba) {
       const VecX zero = VecX::Zero(nv);
       articulation_inverse_dynamics(model, state, art, s, zero.data(), qdd_a);

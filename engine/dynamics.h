@@ -21,7 +21,10 @@ VecX eval_bias_forces(const Model& model, const State& state);
 // tau = H qdd + bias
 VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd);
 
-// qdd from tau = control.joint_f; CRBA + Cholesky or ABA
+// tau = control.joint_f plus every motor's gear * clamp(clamp(actuator_ctrl, ctrl range), force range)
+VecX eval_control_force(const Model& model, const Control& control);
+
+// qdd from tau = eval_control_force(model, control); CRBA + Cholesky or ABA
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
                            ForwardDynamicsMethod method = ForwardDynamicsMethod::Crba);
 

@@ -1,6 +1,7 @@
 #include "engine/mjcf_import.h"
 
 #include <filesystem>
+#include <limits>
 #include <memory>
 
 #include "engine/error.h"
@@ -51,9 +52,12 @@ class MjcfImporter {
       out_.qd_begin += joint_dof_count(joint.type);
     }
     static_pose_.assign(m_->nbody, Transform::identity());
+    joint_index_.assign(m_->njnt, -1);
     builder_.set_gravity(vec3(m_->opt.gravity));
     for (int b = 1; b < m_->nbody; ++b) add_body(b);
     for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
+    out_.actuator_map.assign(m_->nu, -1);
+    for (int u = 0; u < m_->nu; ++u) add_actuator(u);
     report_unmodelled();
     return out_;
   }
@@ -148,7 +152,7 @@ class MjcfImporter {
       if (!last) link = RigidBody{0, Vec3::Zero(), Mat3::Zero()};
       const std::string link_name = last ? name : name + "/" + joint_name;
       const int child = builder_.add_body_checked(link, body_xform, link_name, true);
-      builder_.add_joint(type, parent, child, options);
+      joint_index_[j] = builder_.add_joint(type, parent, child, options);
       parent = child;
     }
     out_.body_map[b] = parent;
@@ -172,13 +176,30 @@ class MjcfImporter {
     }
   }
 
+  // a motor: joint transmission, no activation dynamics, unit fixed gain, no bias
+  void add_actuator(int u) {
+    const std::string name = mj_name(m_, mjOBJ_ACTUATOR, u);
+    const int j = m_->actuator_trnid[2 * u];
+    const bool motor = m_->actuator_trntype[u] == mjTRN_JOINT && m_->actuator_dyntype[u] == mjDYN_NONE &&
+                       m_->actuator_gaintype[u] == mjGAIN_FIXED && m_->actuator_gainprm[mjNGAIN * u] == 1 &&
+                       m_->actuator_biastype[u] == mjBIAS_NONE;
+    if (!motor || (m_->jnt_type[j] != mjJNT_HINGE && m_->jnt_type[j] != mjJNT_SLIDE)) {
+      warn("actuator '" + name + "' is not a motor on a hinge or slide joint: not modelled");
+      return;
+    }
+    constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
+    const bool ctrl_limited = m_->actuator_ctrllimited[u] && !(m_->opt.disableflags & mjDSBL_CLAMPCTRL);
+    const bool force_limited = m_->actuator_forcelimited[u];
+    out_.actuator_map[u] = builder_.add_motor(
+        joint_index_[j], m_->actuator_gear[6 * u], ctrl_limited ? m_->actuator_ctrlrange[2 * u] : -inf,
+        ctrl_limited ? m_->actuator_ctrlrange[2 * u + 1] : inf, force_limited ? m_->actuator_forcerange[2 * u] : -inf,
+        force_limited ? m_->actuator_forcerange[2 * u + 1] : inf, name);
+  }
+
   void report_unmodelled() {
     for (int t = 0; t < m_->ntendon; ++t) warn("tendon '" + mj_name(m_, mjOBJ_TENDON, t) + "' is not modelled");
     for (int e = 0; e < m_->neq; ++e)
       warn("equality constraint '" + mj_name(m_, mjOBJ_EQUALITY, e) + "' is not modelled");
-    for (int u = 0; u < m_->nu; ++u)
-      warn("actuator '" + mj_name(m_, mjOBJ_ACTUATOR, u) +
-           "' is not imported: apply its force through control.joint_f");
     for (int s = 0; s < m_->nsensor; ++s) warn("sensor '" + mj_name(m_, mjOBJ_SENSOR, s) + "' is not modelled");
     if (m_->npair > 0) warn(std::to_string(m_->npair) + " explicit contact pair(s) are not modelled");
     if (m_->nexclude > 0) warn(std::to_string(m_->nexclude) + " contact exclusion(s) are not modelled");
@@ -191,6 +212,7 @@ class MjcfImporter {
   const mjModel* m_;
   MujocoImport out_;
   std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
+  std::vector<int> joint_index_;        // MuJoCo joint -> NovaPhy joint
 };
 
 mjModel* load_mujoco_model(const std::string& path) {

@@ -4,6 +4,7 @@
 //   body with no joint        -> a Fixed joint to its parent (static geometry when welded to the world)
 //   hinge / slide / ball / free -> Revolute / Prismatic / Ball / Free, q identical except quaternion
 //   order ([w x y z] -> [x y z w]) and the Free velocity ([v; w_body] -> [w_world; v])
+//   motor on a hinge or slide    -> add_motor with its gear, ctrlrange and forcerange
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -18,6 +19,7 @@ namespace novaphy {
 struct MujocoImport {
   std::vector<std::string> warnings;  // everything in the file the engine does not model, by name
   std::vector<int> body_map;          // MuJoCo body id -> NovaPhy body (-1: the world or welded to it)
+  std::vector<int> actuator_map;      // MuJoCo actuator id -> NovaPhy motor (-1: not imported)
   int q_begin = 0;                    // first NovaPhy coordinate / dof of the imported joints
   int qd_begin = 0;
 

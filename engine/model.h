@@ -41,7 +41,13 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, shape_transform, shape_count, 7)                                            \
   X(Scalar, shape_scale, shape_count, 3)                                                \
   X(Scalar, shape_mu, shape_count, 1)                                                   \
-  X(Scalar, shape_restitution, shape_count, 1)
+  X(Scalar, shape_restitution, shape_count, 1)                                          \
+  X(int, actuator_joint, actuator_count, 1)                                             \
+  X(Scalar, actuator_gear, actuator_count, 1)                                           \
+  X(Scalar, actuator_ctrl_lower, actuator_count, 1)                                     \
+  X(Scalar, actuator_ctrl_upper, actuator_count, 1)                                     \
+  X(Scalar, actuator_force_lower, actuator_count, 1)                                    \
+  X(Scalar, actuator_force_upper, actuator_count, 1)
 
 #define NOVAPHY_STATE_FIELDS(X)               \
   X(Scalar, joint_q, joint_coord_count, 1)    \
@@ -50,7 +56,10 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, body_qd, body_count, 6)           \
   X(Scalar, body_f, body_count, 6)
 
-#define NOVAPHY_CONTROL_FIELDS(X) X(Scalar, joint_f, joint_dof_count, 1)
+// joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped)
+#define NOVAPHY_CONTROL_FIELDS(X)          \
+  X(Scalar, joint_f, joint_dof_count, 1)   \
+  X(Scalar, actuator_ctrl, actuator_count, 1)
 
 // the counts every field's size is written in
 struct ModelCounts {
@@ -61,6 +70,7 @@ struct ModelCounts {
   int joint_dof_count = 0;
   int articulation_count = 0;
   int shape_count = 0;
+  int actuator_count = 0;
 };
 
 struct State : ModelCounts {
@@ -78,6 +88,7 @@ struct Model : ModelCounts {
 #undef NOVAPHY_DECLARE
   std::vector<std::string> body_name;
   std::vector<std::string> joint_name;
+  std::vector<std::string> actuator_name;
 
   // sizes every field from the counts (fields are zero-filled)
   void allocate();

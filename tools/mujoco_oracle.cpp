@@ -38,7 +38,7 @@ void OracleErrors::accumulate(const OracleErrors& o) {
 
 MujocoOracle::MujocoOracle(const std::string& path) {
   m_ = load_mujoco_model(path);
-  m_->opt.disableflags |= mjDSBL_CONSTRAINT | mjDSBL_ACTUATION;
+  m_->opt.disableflags |= mjDSBL_CONSTRAINT;
   d_ = mj_makeData(m_);
   ModelBuilder builder;
   import_ = import_mujoco_model(builder, m_);
@@ -66,6 +66,7 @@ OracleErrors MujocoOracle::compare_random_state(std::mt19937& rng) {
   }
   for (int k = 0; k < nv; ++k) d_->qvel[k] = uniform(rng, -2, 2);
   mju_zero(d_->qfrc_applied, nv);
+  mju_zero(d_->ctrl, m_->nu);
   mju_zero(d_->xfrc_applied, 6 * m_->nbody);
   mj_forward(m_, d_);
 
@@ -116,8 +117,14 @@ OracleErrors MujocoOracle::compare_random_state(std::mt19937& rng) {
       state.body_f[6 * import_.body_map[b] + k] = d_->xfrc_applied[6 * b + k];
     }
   }
-  mj_forward(m_, d_);
   Control control = model_.control();
+  // motor commands, partly beyond their control range to exercise the clamp
+  for (int u = 0; u < m_->nu; ++u) {
+    if (import_.actuator_map[u] < 0) continue;
+    d_->ctrl[u] = uniform(rng, -1.5, 1.5);
+    control.actuator_ctrl[import_.actuator_map[u]] = d_->ctrl[u];
+  }
+  mj_forward(m_, d_);
   Eigen::Map<VecX>(control.joint_f.data(), nv) = T * Eigen::Map<const VecX>(d_->qfrc_applied, nv);
   const VecX qdd_mj = T * Eigen::Map<const VecX>(d_->qacc, nv);
   e.qdd_crba = relative(eval_forward_dynamics(model_, state, control, ForwardDynamicsMethod::Crba), qdd_mj);

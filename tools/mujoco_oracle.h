@@ -1,6 +1,7 @@
 // MuJoCo as the oracle: one MJCF loaded into both engines, compared at random states (contacts
 // and limits off) on body poses and velocities, the mass matrix, the bias forces and the
-// forward-dynamics accelerations, each converted to NovaPhy's coordinates first.
+// forward-dynamics accelerations under joint forces, body wrenches and motor commands, each
+// converted to NovaPhy's coordinates first.
 #pragma once
 
 #include <random>

@@ -83,6 +83,43 @@ TEST(ModelBuilder, JointsWithoutArticulationAreGroupedByTree) {
   EXPECT_EQ(model.joint_qd_start, (std::vector<int>{0, 1, 4, 5}));
 }
 
+TEST(ModelBuilder, MotorsAddClampedForcesThroughTheirGear) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  builder.add_joint_ball(-1, a);
+  const int hinge = builder.add_joint_revolute(a, b, axis_z());
+  builder.add_motor(hinge, 40, -1, 1);
+  builder.add_motor(hinge, 2, -10, 10, -3, 3, "weak");
+  const Model model = builder.finalize();
+  Control control = model.control();
+  control.joint_f[3] = 0.5;
+  control.actuator_ctrl = {1.5, 5.0};  // first clamped to 1 by its control range, second to 3 by its force range
+  const VecX tau = eval_control_force(model, control);
+  EXPECT_EQ(tau, (VecX(4) << 0, 0, 0, 0.5 + 40 * 1 + 2 * 3).finished());
+  EXPECT_EQ(model.actuator_name[1], "weak");
+}
+
+TEST(ModelBuilderErrors, BadMotors) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int ball = builder.add_joint_ball(-1, a);
+  EXPECT_NOVAPHY_ERROR(builder.add_motor(3), "actuator 0: joint index 3 out of range [0, 1)");
+  EXPECT_NOVAPHY_ERROR(builder.add_motor(ball), "a motor drives a Revolute or Prismatic joint, joint 0 is Ball");
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int hinge = builder.add_joint_revolute(a, b);
+  EXPECT_NOVAPHY_ERROR(builder.add_motor(hinge, 1, 2, 1), "control range must satisfy lower <= upper, got [2, 1]");
+  EXPECT_NOVAPHY_ERROR(builder.add_motor(hinge, kNaN), "actuator 0: gear is not finite: nan");
+  builder.add_motor(hinge);
+  const Model model = builder.finalize();
+  Control control = model.control();
+  control.actuator_ctrl.clear();
+  EXPECT_NOVAPHY_ERROR(eval_control_force(model, control), "actuator_ctrl has 0 entries, the model needs 1");
+  control = model.control();
+  control.actuator_ctrl[0] = kNaN;
+  EXPECT_NOVAPHY_ERROR(eval_control_force(model, control), "actuator_ctrl[0] is not finite: nan");
+}
+
 TEST(ModelBuilderErrors, ParentOutOfRangeOrNotYetDefined) {
   ModelBuilder builder;
   const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));

@@ -67,14 +67,14 @@ TEST(MjcfImport, HumanoidStructureAndWarnings) {
   // the floor plane is static geometry
   EXPECT_EQ(model.shape_type[0], static_cast<int>(ShapeType::Plane));
   EXPECT_EQ(model.shape_body[0], -1);
-  // every motor is reported by name
-  auto reported = [&](const std::string& text) {
-    return std::any_of(import.warnings.begin(), import.warnings.end(),
-                       [&](const std::string& w) { return w.find(text) != std::string::npos; });
-  };
-  EXPECT_TRUE(reported("actuator 'abdomen_y'"));
-  EXPECT_TRUE(reported("actuator 'left_elbow'"));
-  EXPECT_EQ(builder.add_mjcf(NOVAPHY_HUMANOID_XML).size(), import.warnings.size());
+  // its 21 motors are imported with their gear and control range, in MuJoCo's order
+  ASSERT_EQ(model.actuator_count, 21);
+  EXPECT_EQ(model.actuator_name[0], "abdomen_y");
+  EXPECT_EQ(model.joint_name[model.actuator_joint[0]], "abdomen_y");
+  EXPECT_EQ(model.actuator_gear[5], 120);  // right_hip_y
+  EXPECT_EQ(model.actuator_ctrl_lower[0], -1);
+  EXPECT_EQ(model.actuator_ctrl_upper[0], 1);
+  for (const std::string& w : import.warnings) EXPECT_EQ(w.find("actuator"), std::string::npos) << w;
 }
 
 TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
@@ -92,6 +92,7 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
   </worldbody>
   <tendon><fixed name="coupling"><joint joint="ja" coef="1"/></fixed></tendon>
   <equality><joint name="lock" joint1="ja"/></equality>
+  <actuator><position name="servo" joint="ja" kp="10"/><motor name="spin" joint="jb" gear="1 0 0"/></actuator>
 </mujoco>)");
   ModelBuilder builder;
   const std::vector<std::string> warnings = builder.add_mjcf(path);
@@ -103,6 +104,9 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
   EXPECT_NE(all.find("geom 'ball'"), std::string::npos) << all;
   EXPECT_NE(all.find("joint 'ja': frictionloss"), std::string::npos) << all;
   EXPECT_NE(all.find("joint 'jb': ball joint limit"), std::string::npos) << all;
+  EXPECT_NE(all.find("actuator 'servo' is not a motor on a hinge or slide joint"), std::string::npos) << all;
+  EXPECT_NE(all.find("actuator 'spin' is not a motor on a hinge or slide joint"), std::string::npos) << all;
+  EXPECT_EQ(builder.actuator_count(), 0);
   std::filesystem::remove(path);
 }
 
