@@ -20,7 +20,8 @@ const char* const kScenes[] = {NOVAPHY_SCENE_DIR "/chain15.xml", NOVAPHY_SCENE_D
 
 // one scene loaded once into both engines, at a fixed state with joint forces
 struct Scene {
-  explicit Scene(const char* path) : m(load_mujoco_model(path), mj_deleteModel), d(mj_makeData(m.get()), mj_deleteData) {
+  explicit Scene(const char* path)
+      : m(load_mujoco_model(path), mj_deleteModel), d(mj_makeData(m.get()), mj_deleteData) {
     m->opt.disableflags |= mjDSBL_CONSTRAINT;
     for (int k = 0; k < m->nv; ++k) d->qvel[k] = 0.1 * (k % 5) - 0.2, d->qfrc_applied[k] = 0.5 * (k % 3) - 0.5;
     ModelBuilder builder;

@@ -1,9 +1,10 @@
 // RigidBody, JointDofConfig and ModelBuilder with the seed's keyword arguments.
+#include "engine/builder.h"
+
 #include <cmath>
 #include <optional>
 
 #include "bindings/bindings.h"
-#include "engine/builder.h"
 
 namespace novaphy::python {
 
@@ -62,7 +63,9 @@ std::vector<std::string> import_file(ModelBuilder& builder, const std::string& p
 
 void bind_builder(py::module_& m) {
   py::class_<RigidBody>(m, "RigidBody", "Mass, centre of mass and 3x3 inertia about the centre of mass (body frame).")
-      .def(py::init([](Scalar mass, const Vec3& com, const Mat3& inertia) { return RigidBody{mass, com, inertia}; }),
+      .def(py::init([](Scalar mass, const Vec3& com, const Mat3& inertia) {
+             return RigidBody{mass, com, inertia};
+           }),
            py::arg("mass") = 1.0, py::arg("com") = Vec3::Zero(), py::arg("inertia") = Mat3::Identity())
       .def_readwrite("mass", &RigidBody::mass)
       .def_readwrite("com", &RigidBody::com)
@@ -109,12 +112,15 @@ void bind_builder(py::module_& m) {
       .def(
           "add_shape_box",
           [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution) { return self.add_shape_box(body, half_extents, xform.value_or(Transform{}), mu, restitution); },
+             Scalar restitution) {
+            return self.add_shape_box(body, half_extents, xform.value_or(Transform{}), mu, restitution);
+          },
           py::arg("body"), py::arg("half_extents"), py::kw_only(), py::arg("xform") = py::none(), py::arg("mu") = 0.5,
           py::arg("restitution") = 0.0)
       .def(
           "add_shape_sphere",
-          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu, Scalar restitution) {
+          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu,
+             Scalar restitution) {
             return self.add_shape_sphere(body, radius, xform.value_or(Transform{}), mu, restitution);
           },
           py::arg("body"), py::arg("radius"), py::kw_only(), py::arg("xform") = py::none(), py::arg("mu") = 0.5,
@@ -136,7 +142,8 @@ void bind_builder(py::module_& m) {
   def_joint(builder, "add_joint_revolute", JointType::Revolute, "Revolute joint: rotation by q about axis.");
   def_joint(builder, "add_joint_prismatic", JointType::Prismatic, "Prismatic joint: translation by q along axis.");
   def_joint(builder, "add_joint_slide", JointType::Prismatic, "Alias of add_joint_prismatic.");
-  def_joint(builder, "add_joint_ball", JointType::Ball, "Ball joint: quaternion q, angular velocity in the child frame.");
+  def_joint(builder, "add_joint_ball", JointType::Ball,
+            "Ball joint: quaternion q, angular velocity in the child frame.");
   def_joint(builder, "add_joint_fixed", JointType::Fixed, "Fixed joint: rigid attachment.");
   def_joint(builder, "add_joint_free", JointType::Free, "Free joint (root only): q = pose, qd = [w; v] in the world.");
 }

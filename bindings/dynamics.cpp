@@ -1,8 +1,9 @@
 // The seed's free functions on lists of Joint/RigidBody, and the same on a Model and State.
 // The GIL is released while the engine computes.
+#include "engine/dynamics.h"
+
 #include "bindings/bindings.h"
 #include "engine/articulation_functions.h"
-#include "engine/dynamics.h"
 
 namespace novaphy::python {
 
@@ -53,7 +54,8 @@ void bind_dynamics(py::module_& m) {
         return eval_forward_dynamics(model, state, control, chosen);
       },
       py::arg("model"), py::arg("state"), py::arg("control"), py::kw_only(), py::arg("method") = "crba",
-      "qdd from tau = eval_control_force(model, control): 'crba' (CRBA + Cholesky) or 'aba' (articulated-body algorithm).");
+      "qdd from tau = eval_control_force(model, control): 'crba' (CRBA + Cholesky) or 'aba' (articulated-body "
+      "algorithm).");
 }
 
 }  // namespace novaphy::python

@@ -1,8 +1,8 @@
 // Model, State and Control: every field of the engine's field tables as a numpy view over the
 // engine's buffer (no copy). Model views are read-only; State and Control views are writable.
-#include "bindings/bindings.h"
-
 #include "engine/model.h"
+
+#include "bindings/bindings.h"
 
 namespace novaphy::python {
 
@@ -77,12 +77,14 @@ void bind_model(py::module_& m) {
 #define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
   NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
 
-  auto state = py::class_<State>(m, "State", "Mutable state: joint and body arrays, numpy views over the engine's buffers.");
+  auto state =
+      py::class_<State>(m, "State", "Mutable state: joint and body arrays, numpy views over the engine's buffers.");
   bind_counts(state);
 #define NOVAPHY_BIND_STATE_FIELD(T, name, count, width) state NOVAPHY_BIND_FIELD(State, T, name, width, true);
   NOVAPHY_STATE_FIELDS(NOVAPHY_BIND_STATE_FIELD)
 
-  auto control = py::class_<Control>(m, "Control", "Control inputs: joint_f generalised forces, actuator_ctrl motor commands.");
+  auto control =
+      py::class_<Control>(m, "Control", "Control inputs: joint_f generalised forces, actuator_ctrl motor commands.");
   bind_counts(control);
 #define NOVAPHY_BIND_CONTROL_FIELD(T, name, count, width) control NOVAPHY_BIND_FIELD(Control, T, name, width, true);
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_BIND_CONTROL_FIELD)

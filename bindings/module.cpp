@@ -1,6 +1,5 @@
 // The pybind11 module novaphy._novaphy: thin wrappers over the engine; novaphy.Error -> ValueError.
 #include "bindings/bindings.h"
-
 #include "engine/error.h"
 
 PYBIND11_MODULE(_novaphy, m) {

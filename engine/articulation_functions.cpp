@@ -49,7 +49,7 @@ Eigen::Matrix<Scalar, Eigen::Dynamic, 7, Eigen::RowMajor> forward_kinematics(con
   State state = articulation_state(model, q, VecX::Zero(model.joint_dof_count));
   eval_fk(model, state);
   return Eigen::Map<const Eigen::Matrix<Scalar, Eigen::Dynamic, 7, Eigen::RowMajor>>(state.body_q.data(),
-                                                                                    model.body_count, 7);
+                                                                                     model.body_count, 7);
 }
 
 VecX inverse_dynamics(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies, const VecX& q,

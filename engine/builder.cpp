@@ -1,8 +1,7 @@
 #include "engine/builder.h"
 
-#include <cmath>
-
 #include <Eigen/Eigenvalues>
+#include <cmath>
 
 #include "engine/dynamics.h"
 #include "engine/error.h"
@@ -50,7 +49,8 @@ void check_rigid_body(const std::string& item, const RigidBody& body, bool allow
   check_finite(item, "com", body.com);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
-      if (!std::isfinite(body.inertia(r, c))) fail(item, ": inertia(", r, ", ", c, ") is not finite: ", body.inertia(r, c));
+      if (!std::isfinite(body.inertia(r, c)))
+        fail(item, ": inertia(", r, ", ", c, ") is not finite: ", body.inertia(r, c));
   if (allow_massless && body.mass == 0) {
     if (body.inertia.norm() != 0) fail(item, ": a massless link must have zero inertia");
     return;
@@ -63,7 +63,8 @@ void check_rigid_body(const std::string& item, const RigidBody& body, bool allow
   if (!(eig[0] > 0)) fail(item, ": inertia is not positive definite (smallest principal moment ", eig[0], ")");
   // principal moments of a real body: each at most the sum of the other two
   if (eig[2] > eig[0] + eig[1] + 1e-9 * eig[2])
-    fail(item, ": inertia violates the triangle inequality (principal moments ", eig[0], ", ", eig[1], ", ", eig[2], ")");
+    fail(item, ": inertia violates the triangle inequality (principal moments ", eig[0], ", ", eig[1], ", ", eig[2],
+         ")");
 }
 
 }  // namespace
@@ -140,12 +141,12 @@ int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOp
   const std::string item = label("joint", joint_count(), options.name) + " (" + joint_type_name(type) + ")";
   if (parent < -1 || parent >= body_count())
     fail(item, ": parent body index ", parent, " out of range [-1, ", body_count(), ")");
-  if (child < 0 || child >= body_count()) fail(item, ": child body index ", child, " out of range [0, ", body_count(), ")");
+  if (child < 0 || child >= body_count())
+    fail(item, ": child body index ", child, " out of range [0, ", body_count(), ")");
   if (child == parent) fail(item, ": child body ", child, " is its own parent");
   if (parent >= 0 && body_joint_[parent] < 0)
     fail(item, ": parent body ", parent, " is not yet defined: no joint attaches it yet (add its joint first)");
-  if (body_joint_[child] >= 0)
-    fail(item, ": body ", child, " is already the child of joint ", body_joint_[child]);
+  if (body_joint_[child] >= 0) fail(item, ": body ", child, " is already the child of joint ", body_joint_[child]);
   if (type == JointType::Free && parent != -1)
     fail(item, ": a Free joint must be a root (parent -1), got parent ", parent);
 
@@ -205,7 +206,8 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Transform& xform, co
 int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
                             Scalar force_upper, const std::string& name) {
   const std::string item = label("actuator", actuator_count(), name);
-  if (joint < 0 || joint >= joint_count()) fail(item, ": joint index ", joint, " out of range [0, ", joint_count(), ")");
+  if (joint < 0 || joint >= joint_count())
+    fail(item, ": joint index ", joint, " out of range [0, ", joint_count(), ")");
   const JointType type = joints_[joint].type;
   if (type != JointType::Revolute && type != JointType::Prismatic)
     fail(item, ": a motor drives a Revolute or Prismatic joint, joint ", joint, " is ", joint_type_name(type));
@@ -288,7 +290,8 @@ Model ModelBuilder::finalize() const {
       id = next_articulation++;
       model.articulation_start[id] = j;
     } else if (model.joint_articulation[j - 1] != id) {
-      fail(label("joint", j, joint.options.name), ": its articulation's joints are not contiguous "
+      fail(label("joint", j, joint.options.name),
+           ": its articulation's joints are not contiguous "
            "(add each articulation's joints one after another)");
     }
     child_joint[joint.child] = j;

@@ -63,7 +63,8 @@ class ModelBuilder {
   int add_articulation(const std::vector<int>& joints);
 
   // plane through `offset * normal` with the given normal, static (body -1)
-  int add_plane(const Vec3& normal, Scalar offset, Scalar mu = 0.5, Scalar restitution = 0, const std::string& name = "");
+  int add_plane(const Vec3& normal, Scalar offset, Scalar mu = 0.5, Scalar restitution = 0,
+                const std::string& name = "");
   int add_ground_plane(Scalar y = 0, Scalar mu = 0.5, Scalar restitution = 0);
   int add_shape_box(int body, const Vec3& half_extents, const Transform& xform = {}, Scalar mu = 0.5,
                     Scalar restitution = 0);

@@ -112,7 +112,8 @@ VecX eval_control_force(const Model& model, const Control& control) {
   check_finite(control.actuator_ctrl, "actuator_ctrl");
   VecX tau = Eigen::Map<const VecX>(control.joint_f.data(), model.joint_dof_count);
   for (int u = 0; u < model.actuator_count; ++u) {
-    const Scalar ctrl = std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
+    const Scalar ctrl =
+        std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
     const Scalar force = std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
     tau[model.joint_qd_start[model.actuator_joint[u]]] += model.actuator_gear[u] * force;
   }

@@ -124,8 +124,10 @@ class MjcfImporter {
           // MuJoCo moves the joint by qpos - qpos0: fold -qpos0 into the parent joint frame
           Transform ref;
           const Vec3 axis = dof.axis.normalized();
-          if (hinge) ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_->qpos0[qa], axis));
-          else ref.p = -m_->qpos0[qa] * axis;
+          if (hinge)
+            ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_->qpos0[qa], axis));
+          else
+            ref.p = -m_->qpos0[qa] * axis;
           options.parent_xform = (k == 0 ? P : Transform::identity()) * translation(anchor) * ref;
           options.child_xform = translation(anchor);
           break;
@@ -145,8 +147,7 @@ class MjcfImporter {
           break;
       }
       for (int d = 0; d < joint_dof_count(type); ++d)
-        if (m_->dof_frictionloss[da + d] != 0)
-          warn("joint '" + joint_name + "': frictionloss is not modelled");
+        if (m_->dof_frictionloss[da + d] != 0) warn("joint '" + joint_name + "': frictionloss is not modelled");
 
       RigidBody link = body;
       if (!last) link = RigidBody{0, Vec3::Zero(), Mat3::Zero()};
@@ -240,9 +241,7 @@ void MujocoImport::to_joint_q(const mjModel* m, const mjtNum* qpos, Scalar* join
       case mjJNT_HINGE:
       case mjJNT_SLIDE: q[a] = qpos[a]; break;
       case mjJNT_BALL: q[a] = qpos[a + 1], q[a + 1] = qpos[a + 2], q[a + 2] = qpos[a + 3], q[a + 3] = qpos[a]; break;
-      case mjJNT_FREE:
-        pose(qpos + a, qpos + a + 3).to_array(q + a);
-        break;
+      case mjJNT_FREE: pose(qpos + a, qpos + a + 3).to_array(q + a); break;
     }
   }
 }

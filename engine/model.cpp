@@ -21,8 +21,8 @@ void Model::allocate() {
 }
 
 void Model::check_sizes() const {
-#define NOVAPHY_CHECK_SIZE(T, name, count, width)                                                   \
-  if (name.size() != static_cast<size_t>(count) * (width))                                          \
+#define NOVAPHY_CHECK_SIZE(T, name, count, width)          \
+  if (name.size() != static_cast<size_t>(count) * (width)) \
     fail("model field " #name " has ", name.size(), " entries, expected ", static_cast<size_t>(count) * (width));
   NOVAPHY_MODEL_FIELDS(NOVAPHY_CHECK_SIZE)
 }
@@ -68,8 +68,8 @@ Control Model::control() const {
 }
 
 void Model::check(const State& state) const {
-#define NOVAPHY_CHECK_ARRAY(T, name, count, width)                                                      \
-  if (state.name.size() != static_cast<size_t>(count) * (width))                                        \
+#define NOVAPHY_CHECK_ARRAY(T, name, count, width)                                                             \
+  if (state.name.size() != static_cast<size_t>(count) * (width))                                               \
     fail(#name " has ", state.name.size(), " entries, the model needs ", static_cast<size_t>(count) * (width), \
          " (state or control from another model?)");
   NOVAPHY_STATE_FIELDS(NOVAPHY_CHECK_ARRAY)

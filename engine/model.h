@@ -14,51 +14,51 @@ enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
 const char* shape_type_name(ShapeType type);
 
 // X(type, name, count, width): `count` is an expression over the Model's counts
-#define NOVAPHY_MODEL_FIELDS(X)                                                         \
-  X(Scalar, body_mass, body_count, 1)                                                   \
-  X(Scalar, body_com, body_count, 3)                                                    \
-  X(Scalar, body_inertia, body_count, 9)                                                \
-  X(int, joint_type, joint_count, 1)                                                    \
-  X(int, joint_parent, joint_count, 1)                                                  \
-  X(int, joint_child, joint_count, 1)                                                   \
-  X(int, joint_ancestor, joint_count, 1)                                                \
-  X(int, joint_articulation, joint_count, 1)                                            \
-  X(int, joint_q_start, joint_count + 1, 1)                                             \
-  X(int, joint_qd_start, joint_count + 1, 1)                                            \
-  X(Scalar, joint_X_p, joint_count, 7)                                                  \
-  X(Scalar, joint_X_c, joint_count, 7)                                                  \
-  X(Scalar, joint_axis, joint_count, 3)                                                 \
-  X(Scalar, joint_q0, joint_coord_count, 1)                                             \
-  X(Scalar, joint_q_ref, joint_coord_count, 1)                                          \
-  X(Scalar, joint_armature, joint_dof_count, 1)                                         \
-  X(Scalar, joint_damping, joint_dof_count, 1)                                          \
-  X(Scalar, joint_stiffness, joint_dof_count, 1)                                        \
-  X(Scalar, joint_limit_lower, joint_dof_count, 1)                                      \
-  X(Scalar, joint_limit_upper, joint_dof_count, 1)                                      \
-  X(int, articulation_start, articulation_count + 1, 1)                                 \
-  X(int, shape_type, shape_count, 1)                                                    \
-  X(int, shape_body, shape_count, 1)                                                    \
-  X(Scalar, shape_transform, shape_count, 7)                                            \
-  X(Scalar, shape_scale, shape_count, 3)                                                \
-  X(Scalar, shape_mu, shape_count, 1)                                                   \
-  X(Scalar, shape_restitution, shape_count, 1)                                          \
-  X(int, actuator_joint, actuator_count, 1)                                             \
-  X(Scalar, actuator_gear, actuator_count, 1)                                           \
-  X(Scalar, actuator_ctrl_lower, actuator_count, 1)                                     \
-  X(Scalar, actuator_ctrl_upper, actuator_count, 1)                                     \
-  X(Scalar, actuator_force_lower, actuator_count, 1)                                    \
+#define NOVAPHY_MODEL_FIELDS(X)                         \
+  X(Scalar, body_mass, body_count, 1)                   \
+  X(Scalar, body_com, body_count, 3)                    \
+  X(Scalar, body_inertia, body_count, 9)                \
+  X(int, joint_type, joint_count, 1)                    \
+  X(int, joint_parent, joint_count, 1)                  \
+  X(int, joint_child, joint_count, 1)                   \
+  X(int, joint_ancestor, joint_count, 1)                \
+  X(int, joint_articulation, joint_count, 1)            \
+  X(int, joint_q_start, joint_count + 1, 1)             \
+  X(int, joint_qd_start, joint_count + 1, 1)            \
+  X(Scalar, joint_X_p, joint_count, 7)                  \
+  X(Scalar, joint_X_c, joint_count, 7)                  \
+  X(Scalar, joint_axis, joint_count, 3)                 \
+  X(Scalar, joint_q0, joint_coord_count, 1)             \
+  X(Scalar, joint_q_ref, joint_coord_count, 1)          \
+  X(Scalar, joint_armature, joint_dof_count, 1)         \
+  X(Scalar, joint_damping, joint_dof_count, 1)          \
+  X(Scalar, joint_stiffness, joint_dof_count, 1)        \
+  X(Scalar, joint_limit_lower, joint_dof_count, 1)      \
+  X(Scalar, joint_limit_upper, joint_dof_count, 1)      \
+  X(int, articulation_start, articulation_count + 1, 1) \
+  X(int, shape_type, shape_count, 1)                    \
+  X(int, shape_body, shape_count, 1)                    \
+  X(Scalar, shape_transform, shape_count, 7)            \
+  X(Scalar, shape_scale, shape_count, 3)                \
+  X(Scalar, shape_mu, shape_count, 1)                   \
+  X(Scalar, shape_restitution, shape_count, 1)          \
+  X(int, actuator_joint, actuator_count, 1)             \
+  X(Scalar, actuator_gear, actuator_count, 1)           \
+  X(Scalar, actuator_ctrl_lower, actuator_count, 1)     \
+  X(Scalar, actuator_ctrl_upper, actuator_count, 1)     \
+  X(Scalar, actuator_force_lower, actuator_count, 1)    \
   X(Scalar, actuator_force_upper, actuator_count, 1)
 
-#define NOVAPHY_STATE_FIELDS(X)               \
-  X(Scalar, joint_q, joint_coord_count, 1)    \
-  X(Scalar, joint_qd, joint_dof_count, 1)     \
-  X(Scalar, body_q, body_count, 7)            \
-  X(Scalar, body_qd, body_count, 6)           \
+#define NOVAPHY_STATE_FIELDS(X)            \
+  X(Scalar, joint_q, joint_coord_count, 1) \
+  X(Scalar, joint_qd, joint_dof_count, 1)  \
+  X(Scalar, body_q, body_count, 7)         \
+  X(Scalar, body_qd, body_count, 6)        \
   X(Scalar, body_f, body_count, 6)
 
 // joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped)
-#define NOVAPHY_CONTROL_FIELDS(X)          \
-  X(Scalar, joint_f, joint_dof_count, 1)   \
+#define NOVAPHY_CONTROL_FIELDS(X)        \
+  X(Scalar, joint_f, joint_dof_count, 1) \
   X(Scalar, actuator_ctrl, actuator_count, 1)
 
 // the counts every field's size is written in

@@ -13,14 +13,14 @@ namespace novaphy {
 struct ArticulationView {
   int joint_begin = 0;
   int joint_end = 0;
-  const int* joint_type = nullptr;      // [joint]
-  const int* joint_ancestor = nullptr;  // [joint] parent joint (model index), -1 for the world
-  const int* joint_child = nullptr;     // [joint] child body
-  const int* joint_q_start = nullptr;   // [joint + 1]
-  const int* joint_qd_start = nullptr;  // [joint + 1]
-  const Scalar* joint_X_p = nullptr;    // [joint][7] parent link -> parent joint frame
-  const Scalar* joint_X_c = nullptr;    // [joint][7] child link -> child joint frame
-  const Scalar* joint_axis = nullptr;   // [joint][3]
+  const int* joint_type = nullptr;          // [joint]
+  const int* joint_ancestor = nullptr;      // [joint] parent joint (model index), -1 for the world
+  const int* joint_child = nullptr;         // [joint] child body
+  const int* joint_q_start = nullptr;       // [joint + 1]
+  const int* joint_qd_start = nullptr;      // [joint + 1]
+  const Scalar* joint_X_p = nullptr;        // [joint][7] parent link -> parent joint frame
+  const Scalar* joint_X_c = nullptr;        // [joint][7] child link -> child joint frame
+  const Scalar* joint_axis = nullptr;       // [joint][3]
   const Scalar* joint_armature = nullptr;   // [dof]
   const Scalar* joint_damping = nullptr;    // [dof]
   const Scalar* joint_stiffness = nullptr;  // [dof]

@@ -16,7 +16,8 @@ void crba(const ArticulationView& art, ArticulationScratch& s) {
     if (d_i == 0) continue;
     const int r_i = art.qd_start(i);
     Eigen::Matrix<Scalar, 6, Eigen::Dynamic, 0, 6, 6> F = s.IC[i] * s.S.middleCols(r_i, d_i);
-    const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> H_ii = s.S.middleCols(r_i, d_i).transpose() * F;
+    const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> H_ii =
+        s.S.middleCols(r_i, d_i).transpose() * F;
     s.H.block(r_i, r_i, d_i, d_i) = 0.5 * (H_ii + H_ii.transpose());  // exactly symmetric
     // walk up the tree: H_ji = S_j^T X^T ... F
     for (int j = i; art.parent(j) >= 0;) {

@@ -24,8 +24,8 @@ void rnea(const ArticulationView& art, const Scalar* qdd, const Vec3& gravity, c
     const int p = art.parent(i);
     const int d = art.dof(i);
     const Vec6 a_p = p < 0 ? a_world : s.a[p];
-    s.a[i] = s.Xup[i] * a_p + s.S.middleCols(art.qd_start(i), d) *
-                                  Eigen::Map<const VecX>(qdd + art.qd_start(i), d) + s.c[i];
+    s.a[i] =
+        s.Xup[i] * a_p + s.S.middleCols(art.qd_start(i), d) * Eigen::Map<const VecX>(qdd + art.qd_start(i), d) + s.c[i];
     s.f[i] = s.I[i] * s.a[i] + crf(s.v[i]) * (s.I[i] * s.v[i]) - link_external_force(art, s, body_f, i);
   }
 
@@ -34,8 +34,8 @@ void rnea(const ArticulationView& art, const Scalar* qdd, const Vec3& gravity, c
     const int d = art.dof(i);
     const int r = art.qd_start(i);
     Eigen::Map<VecX>(tau + r, d) =
-        s.S.middleCols(r, d).transpose() * s.f[i] +
-        Eigen::Map<const VecX>(art.joint_armature + art.qd_begin() + r, d).cwiseProduct(Eigen::Map<const VecX>(qdd + r, d));
+        s.S.middleCols(r, d).transpose() * s.f[i] + Eigen::Map<const VecX>(art.joint_armature + art.qd_begin() + r, d)
+                                                        .cwiseProduct(Eigen::Map<const VecX>(qdd + r, d));
     const int p = art.parent(i);
     if (p >= 0) s.f[p] += s.Xup[i].transpose() * s.f[i];
   }

@@ -12,7 +12,9 @@ namespace {
 Scalar uniform(std::mt19937& rng, Scalar lo, Scalar hi) { return std::uniform_real_distribution<Scalar>(lo, hi)(rng); }
 int uniform_int(std::mt19937& rng, int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
 
-Vec3 random_vec(std::mt19937& rng, Scalar r) { return Vec3(uniform(rng, -r, r), uniform(rng, -r, r), uniform(rng, -r, r)); }
+Vec3 random_vec(std::mt19937& rng, Scalar r) {
+  return Vec3(uniform(rng, -r, r), uniform(rng, -r, r), uniform(rng, -r, r));
+}
 
 Quat random_quat(std::mt19937& rng) {
   std::normal_distribution<Scalar> n;
@@ -114,7 +116,10 @@ std::string random_tree_mjcf(std::mt19937& rng, int bodies, bool floating) {
       const int joints = uniform_int(rng, parent[b] < 0 ? 1 : 0, 3);
       for (int k = 0, type = -1; k < joints && type != 2; ++k) {
         type = uniform_int(rng, 0, 2);
-        xml << ind << "  <joint name=\"j" << b << "_" << k << "\" type=\"" << (type == 0 ? "hinge" : type == 1 ? "slide" : "ball")
+        xml << ind << "  <joint name=\"j" << b << "_" << k << "\" type=\""
+            << (type == 0   ? "hinge"
+                : type == 1 ? "slide"
+                            : "ball")
             << "\" pos=\"" << fmt(random_vec(rng, 0.3)) << "\" armature=\"" << uniform(rng, 0, 0.1) << "\" damping=\""
             << uniform(rng, 0, 0.5) << "\"";
         if (type != 2)
@@ -136,7 +141,8 @@ std::string random_tree_mjcf(std::mt19937& rng, int bodies, bool floating) {
 }
 
 std::string write_temp_file(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("novaphy_test_" + std::to_string(::getpid()) + "_" + name);
+  const auto path =
+      std::filesystem::temp_directory_path() / ("novaphy_test_" + std::to_string(::getpid()) + "_" + name);
   std::ofstream(path) << text;
   return path.string();
 }

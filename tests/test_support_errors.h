@@ -7,12 +7,12 @@
 
 #include "engine/error.h"
 
-#define EXPECT_NOVAPHY_ERROR(statement, text)                                                  \
-  do {                                                                                         \
-    try {                                                                                      \
-      statement;                                                                               \
-      ADD_FAILURE() << #statement " did not throw";                                            \
-    } catch (const ::novaphy::Error& e) {                                                      \
+#define EXPECT_NOVAPHY_ERROR(statement, text)                                                    \
+  do {                                                                                           \
+    try {                                                                                        \
+      statement;                                                                                 \
+      ADD_FAILURE() << #statement " did not throw";                                              \
+    } catch (const ::novaphy::Error& e) {                                                        \
       EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << "message: " << e.what(); \
-    }                                                                                          \
+    }                                                                                            \
   } while (0)

@@ -23,9 +23,7 @@ void random_unit_quat(std::mt19937& rng, mjtNum* q) {
 
 }  // namespace
 
-Scalar OracleErrors::max() const {
-  return std::max({body_pose, body_velocity, mass_matrix, bias, qdd_crba, qdd_aba});
-}
+Scalar OracleErrors::max() const { return std::max({body_pose, body_velocity, mass_matrix, bias, qdd_crba, qdd_aba}); }
 
 void OracleErrors::accumulate(const OracleErrors& o) {
   body_pose = std::max(body_pose, o.body_pose);

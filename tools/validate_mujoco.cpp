@@ -14,13 +14,15 @@ int main(int argc, char** argv) {
   std::vector<std::string> scenes;
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
-    if (arg == "--states" && k + 1 < argc) states = std::atoi(argv[++k]);
-    else scenes.push_back(arg);
+    if (arg == "--states" && k + 1 < argc)
+      states = std::atoi(argv[++k]);
+    else
+      scenes.push_back(arg);
   }
   if (scenes.empty()) scenes = {"/usr/share/mujoco/model/humanoid/humanoid.xml", NOVAPHY_SCENE_DIR "/chain15.xml"};
 
-  std::printf("%-16s %5s %5s | %-9s %-9s %-9s %-9s %-9s %-9s\n", "scene", "dofs", "states", "pose", "velocity",
-              "H", "bias", "qdd CRBA", "qdd ABA");
+  std::printf("%-16s %5s %5s | %-9s %-9s %-9s %-9s %-9s %-9s\n", "scene", "dofs", "states", "pose", "velocity", "H",
+              "bias", "qdd CRBA", "qdd ABA");
   novaphy::Scalar worst = 0;
   std::mt19937 rng(2026);
   for (const std::string& scene : scenes) {

@@ -70,8 +70,9 @@ TEST(ArticulationFunctionsErrors, WrongLengthsAndNonFiniteValues) {
                        "qdd has 5 entries, the model has 2 dofs");
   EXPECT_NOVAPHY_ERROR(forward_dynamics(arm.joints, arm.bodies, two, two, VecX::Zero(1), Vec3::Zero()),
                        "tau has 1 entries, the joints need 2");
-  EXPECT_NOVAPHY_ERROR(forward_dynamics(arm.joints, arm.bodies, (VecX(2) << 0, kNaN).finished(), two, two, Vec3::Zero()),
-                       "q[1] is not finite: nan");
+  EXPECT_NOVAPHY_ERROR(
+      forward_dynamics(arm.joints, arm.bodies, (VecX(2) << 0, kNaN).finished(), two, two, Vec3::Zero()),
+      "q[1] is not finite: nan");
   EXPECT_NOVAPHY_ERROR(mass_matrix_crba(arm.joints, {arm.bodies[0]}, two), "joints and bodies differ in length");
   EXPECT_NOVAPHY_ERROR(inverse_dynamics(arm.joints, arm.bodies, two, two, two, Vec3(0, kNaN, 0)),
                        "gravity[1] is not finite: nan");

@@ -124,7 +124,8 @@ TEST(ModelBuilderErrors, ParentOutOfRangeOrNotYetDefined) {
   ModelBuilder builder;
   const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
   const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
-  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(7, a), "joint 0 (Revolute): parent body index 7 out of range [-1, 2)");
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(7, a),
+                       "joint 0 (Revolute): parent body index 7 out of range [-1, 2)");
   EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-2, a), "parent body index -2 out of range");
   EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(-1, 5), "child body index 5 out of range [0, 2)");
   EXPECT_NOVAPHY_ERROR(builder.add_joint_revolute(b, a), "parent body 1 is not yet defined");
@@ -137,7 +138,8 @@ TEST(ModelBuilderErrors, BodyClaimedByTwoJoints) {
   ModelBuilder builder;
   const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
   builder.add_joint_revolute(-1, a);
-  EXPECT_NOVAPHY_ERROR(builder.add_joint_prismatic(-1, a), "joint 1 (Prismatic): body 0 is already the child of joint 0");
+  EXPECT_NOVAPHY_ERROR(builder.add_joint_prismatic(-1, a),
+                       "joint 1 (Prismatic): body 0 is already the child of joint 0");
 }
 
 TEST(ModelBuilderErrors, BadMass) {
@@ -211,7 +213,8 @@ TEST(ModelBuilderErrors, BadArticulationsAndShapes) {
   builder.add_articulation({ja, jb});
   EXPECT_NOVAPHY_ERROR(builder.add_articulation({jb}), "joint 1 already belongs to articulation 0");
   EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(3, 0.1), "shape 0 (Sphere): body index 3 out of range [-1, 2)");
-  EXPECT_NOVAPHY_ERROR(builder.add_shape_box(a, Vec3(0.1, 0, 0.1)), "shape 0 (Box): size must be finite and > 0, got 0");
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_box(a, Vec3(0.1, 0, 0.1)),
+                       "shape 0 (Box): size must be finite and > 0, got 0");
   EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(a, 0.1, {}, 0.5, 2), "restitution must be in [0, 1], got 2");
   EXPECT_NOVAPHY_ERROR(builder.add_plane(Vec3::Zero(), 0), "plane: normal has zero length");
 }

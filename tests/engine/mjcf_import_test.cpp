@@ -116,7 +116,8 @@ TEST(MjcfImport, MissingFileIsAClearError) {
     builder.add_mjcf("/nonexistent/robot.xml");
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("'/nonexistent/robot.xml': file does not exist"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'/nonexistent/robot.xml': file does not exist"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -56,7 +56,7 @@ TEST(Rnea, PassiveForcesAreDampingAndSprings) {
   const Model model = builder.finalize();
   State state = model.state();
   state.joint_q[0] = 1.0;
-  state.joint_qd[0] = 0; 
+  state.joint_qd[0] = 0;
   // at rest the only bias is the spring: bias = -tau_passive = k (q - q_ref)
   EXPECT_NEAR(eval_bias_forces(model, state)[0], 3 * 0.75, 1e-14);
   state.joint_qd[0] = 2.0;
