@@ -50,6 +50,21 @@ void def_joint(Class& c, const char* method, JointType type, const char* doc) {
         py::arg("limit_lower") = py::none(), py::arg("limit_upper") = py::none(), py::arg("name") = "", doc);
 }
 
+ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar restitution, int group, int mask) {
+  ShapeOptions options;
+  options.xform = xform.value_or(Transform::identity());
+  options.mu = mu;
+  options.restitution = restitution;
+  options.collision_group = group;
+  options.collision_mask = mask;
+  return options;
+}
+
+// keyword arguments shared by every add_shape_* and plane
+#define XFORM_KWARG py::kw_only(), py::arg("xform") = py::none()
+#define SHAPE_KWARGS \
+  py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("collision_group") = 1, py::arg("collision_mask") = -1
+
 // runs an importer and passes each of its warnings to Python's warnings module
 template <std::vector<std::string> (ModelBuilder::*importer)(const std::string&)>
 std::vector<std::string> import_file(ModelBuilder& builder, const std::string& path) {
@@ -104,35 +119,40 @@ void bind_builder(py::module_& m) {
            py::arg("force_upper") = INFINITY, py::arg("name") = "",
            "Motor on a Revolute/Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range).")
       .def_property_readonly("actuator_count", &ModelBuilder::actuator_count)
-      .def("add_ground_plane", &ModelBuilder::add_ground_plane, py::arg("y") = 0.0, py::kw_only(), py::arg("mu") = 0.5,
-           py::arg("restitution") = 0.0, "Static plane y = const with normal +Y.")
-      .def("add_plane", &ModelBuilder::add_plane, py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(),
-           py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("name") = "",
-           "Static plane {x : normal . x = offset}.")
+      .def(
+          "add_ground_plane",
+          [](ModelBuilder& self, Scalar y, Scalar mu, Scalar restitution, int group, int mask) {
+            return self.add_ground_plane(y, shape_options(std::nullopt, mu, restitution, group, mask));
+          },
+          py::arg("y") = 0.0, py::kw_only(), SHAPE_KWARGS, "Static plane y = const with normal +Y.")
+      .def(
+          "add_plane",
+          [](ModelBuilder& self, const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, int group, int mask) {
+            return self.add_plane(normal, offset, shape_options(std::nullopt, mu, restitution, group, mask));
+          },
+          py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(), SHAPE_KWARGS, "Static plane {x : normal . x = offset}.")
       .def(
           "add_shape_box",
           [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution) {
-            return self.add_shape_box(body, half_extents, xform.value_or(Transform{}), mu, restitution);
+             Scalar restitution, int group, int mask) {
+            return self.add_shape_box(body, half_extents, shape_options(xform, mu, restitution, group, mask));
           },
-          py::arg("body"), py::arg("half_extents"), py::kw_only(), py::arg("xform") = py::none(), py::arg("mu") = 0.5,
-          py::arg("restitution") = 0.0)
+          py::arg("body"), py::arg("half_extents"), XFORM_KWARG, SHAPE_KWARGS)
       .def(
           "add_shape_sphere",
-          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution) {
-            return self.add_shape_sphere(body, radius, xform.value_or(Transform{}), mu, restitution);
+          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu, Scalar restitution,
+             int group, int mask) {
+            return self.add_shape_sphere(body, radius, shape_options(xform, mu, restitution, group, mask));
           },
-          py::arg("body"), py::arg("radius"), py::kw_only(), py::arg("xform") = py::none(), py::arg("mu") = 0.5,
-          py::arg("restitution") = 0.0)
+          py::arg("body"), py::arg("radius"), XFORM_KWARG, SHAPE_KWARGS)
       .def(
           "add_shape_capsule",
           [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution) {
-            return self.add_shape_capsule(body, radius, half_height, xform.value_or(Transform{}), mu, restitution);
+             Scalar restitution, int group, int mask) {
+            return self.add_shape_capsule(body, radius, half_height, shape_options(xform, mu, restitution, group, mask));
           },
-          py::arg("body"), py::arg("radius"), py::arg("half_height"), py::kw_only(), py::arg("xform") = py::none(),
-          py::arg("mu") = 0.5, py::arg("restitution") = 0.0, "Capsule along the shape frame's local Y axis.")
+          py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
+          "Capsule along the shape frame's local Y axis.")
       .def("add_mjcf", &import_file<&ModelBuilder::add_mjcf>, py::arg("path"),
            "Imports an MJCF file through MuJoCo's parser; warns (UserWarning) about what is not modelled and "
            "returns those warnings.")

@@ -191,15 +191,17 @@ int ModelBuilder::add_articulation(const std::vector<int>& joints) {
   return articulation_count_++;
 }
 
-int ModelBuilder::add_shape(ShapeType type, int body, const Transform& xform, const Vec3& scale, Scalar mu,
-                            Scalar restitution) {
+int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options) {
   const std::string item = label("shape", shape_count(), "") + " (" + shape_type_name(type) + ")";
   if (body < -1 || body >= body_count()) fail(item, ": body index ", body, " out of range [-1, ", body_count(), ")");
   if (type != ShapeType::Plane)
     for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
-  check_nonnegative(item, "mu", mu);
-  if (!(restitution >= 0 && restitution <= 1)) fail(item, ": restitution must be in [0, 1], got ", restitution);
-  shapes_.push_back({type, body, checked_transform(item, "xform", xform), scale, mu, restitution});
+  check_nonnegative(item, "mu", options.mu);
+  if (!(options.restitution >= 0 && options.restitution <= 1))
+    fail(item, ": restitution must be in [0, 1], got ", options.restitution);
+  ShapeRecord shape{type, body, scale, options};
+  shape.options.xform = checked_transform(item, "xform", options.xform);
+  shapes_.push_back(shape);
   return shape_count() - 1;
 }
 
@@ -220,34 +222,32 @@ int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ct
   return actuator_count() - 1;
 }
 
-int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, const std::string&) {
+int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, const ShapeOptions& options) {
   check_finite("plane", "normal", normal);
   check_finite("plane", "offset", offset);
   if (normal.norm() < 1e-9) fail("plane: normal has zero length");
   const Vec3 n = normal.normalized();
   // plane shapes are the local XZ plane, normal +Y
-  Transform xform;
-  xform.q = Quat::FromTwoVectors(Vec3::UnitY(), n);
-  xform.p = offset * n;
-  return add_shape(ShapeType::Plane, -1, xform, Vec3::Ones(), mu, restitution);
+  ShapeOptions plane = options;
+  plane.xform.q = Quat::FromTwoVectors(Vec3::UnitY(), n);
+  plane.xform.p = offset * n;
+  return add_shape(ShapeType::Plane, -1, Vec3::Ones(), plane);
 }
 
-int ModelBuilder::add_ground_plane(Scalar y, Scalar mu, Scalar restitution) {
-  return add_plane(Vec3::UnitY(), y, mu, restitution);
+int ModelBuilder::add_ground_plane(Scalar y, const ShapeOptions& options) {
+  return add_plane(Vec3::UnitY(), y, options);
 }
 
-int ModelBuilder::add_shape_box(int body, const Vec3& half_extents, const Transform& xform, Scalar mu,
-                                Scalar restitution) {
-  return add_shape(ShapeType::Box, body, xform, half_extents, mu, restitution);
+int ModelBuilder::add_shape_box(int body, const Vec3& half_extents, const ShapeOptions& options) {
+  return add_shape(ShapeType::Box, body, half_extents, options);
 }
 
-int ModelBuilder::add_shape_sphere(int body, Scalar radius, const Transform& xform, Scalar mu, Scalar restitution) {
-  return add_shape(ShapeType::Sphere, body, xform, Vec3::Constant(radius), mu, restitution);
+int ModelBuilder::add_shape_sphere(int body, Scalar radius, const ShapeOptions& options) {
+  return add_shape(ShapeType::Sphere, body, Vec3::Constant(radius), options);
 }
 
-int ModelBuilder::add_shape_capsule(int body, Scalar radius, Scalar half_height, const Transform& xform, Scalar mu,
-                                    Scalar restitution) {
-  return add_shape(ShapeType::Capsule, body, xform, Vec3(radius, half_height, radius), mu, restitution);
+int ModelBuilder::add_shape_capsule(int body, Scalar radius, Scalar half_height, const ShapeOptions& options) {
+  return add_shape(ShapeType::Capsule, body, Vec3(radius, half_height, radius), options);
 }
 
 Model ModelBuilder::finalize() const {
@@ -347,10 +347,12 @@ Model ModelBuilder::finalize() const {
     const ShapeRecord& shape = shapes_[s];
     model.shape_type[s] = static_cast<int>(shape.type);
     model.shape_body[s] = shape.body;
-    shape.xform.to_array(&model.shape_transform[7 * s]);
+    shape.options.xform.to_array(&model.shape_transform[7 * s]);
     Eigen::Map<Vec3>(&model.shape_scale[3 * s]) = shape.scale;
-    model.shape_mu[s] = shape.mu;
-    model.shape_restitution[s] = shape.restitution;
+    model.shape_mu[s] = shape.options.mu;
+    model.shape_restitution[s] = shape.options.restitution;
+    model.shape_collision_group[s] = shape.options.collision_group;
+    model.shape_collision_mask[s] = shape.options.collision_mask;
   }
 
   for (int u = 0; u < actuator_count(); ++u) {

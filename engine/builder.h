@@ -31,6 +31,15 @@ struct JointDofConfig {
   Scalar q_ref = 0;
 };
 
+// shapes collide when (group_a & mask_b) != 0 and (group_b & mask_a) != 0
+struct ShapeOptions {
+  Transform xform;  // body frame -> shape frame
+  Scalar mu = 0.5;
+  Scalar restitution = 0;
+  int collision_group = 1;
+  int collision_mask = -1;
+};
+
 struct JointOptions {
   Transform parent_xform;  // parent link frame -> parent joint frame
   Transform child_xform;   // child link frame -> child joint frame
@@ -62,16 +71,13 @@ class ModelBuilder {
   // joints: contiguous, ascending, each parent inside the articulation or the world
   int add_articulation(const std::vector<int>& joints);
 
-  // plane through `offset * normal` with the given normal, static (body -1)
-  int add_plane(const Vec3& normal, Scalar offset, Scalar mu = 0.5, Scalar restitution = 0,
-                const std::string& name = "");
-  int add_ground_plane(Scalar y = 0, Scalar mu = 0.5, Scalar restitution = 0);
-  int add_shape_box(int body, const Vec3& half_extents, const Transform& xform = {}, Scalar mu = 0.5,
-                    Scalar restitution = 0);
-  int add_shape_sphere(int body, Scalar radius, const Transform& xform = {}, Scalar mu = 0.5, Scalar restitution = 0);
+  // plane through `offset * normal` with the given normal, static (body -1); options.xform is ignored
+  int add_plane(const Vec3& normal, Scalar offset, const ShapeOptions& options = {});
+  int add_ground_plane(Scalar y = 0, const ShapeOptions& options = {});
+  int add_shape_box(int body, const Vec3& half_extents, const ShapeOptions& options = {});
+  int add_shape_sphere(int body, Scalar radius, const ShapeOptions& options = {});
   // capsule along the shape frame's local Y axis
-  int add_shape_capsule(int body, Scalar radius, Scalar half_height, const Transform& xform = {}, Scalar mu = 0.5,
-                        Scalar restitution = 0);
+  int add_shape_capsule(int body, Scalar radius, Scalar half_height, const ShapeOptions& options = {});
 
   // a motor on a Revolute or Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range)
   int add_motor(int joint, Scalar gear = 1, Scalar ctrl_lower = -std::numeric_limits<Scalar>::infinity(),
@@ -103,14 +109,13 @@ class ModelBuilder {
   struct ShapeRecord {
     ShapeType type;
     int body;
-    Transform xform;
     Vec3 scale;
-    Scalar mu, restitution;
+    ShapeOptions options;
   };
 
   // massless links are allowed for imported bodies that carry several MuJoCo joints
   int add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name, bool allow_massless);
-  int add_shape(ShapeType type, int body, const Transform& xform, const Vec3& scale, Scalar mu, Scalar restitution);
+  int add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options);
 
   Vec3 gravity_;
   std::vector<Scalar> body_mass_;

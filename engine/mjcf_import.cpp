@@ -165,12 +165,16 @@ class MjcfImporter {
     Transform G = pose(m_->geom_pos + 3 * g, m_->geom_quat + 4 * g);
     if (body < 0) G = static_pose_[b] * G;
     const mjtNum* size = m_->geom_size + 3 * g;
-    const Scalar mu = m_->geom_friction[3 * g];
+    ShapeOptions options;
+    options.xform = G;
+    options.mu = m_->geom_friction[3 * g];
+    ShapeOptions along_z = options;  // capsules and plane normals: MuJoCo's Z onto NovaPhy's Y
+    along_z.xform = G * y_to_z();
     switch (m_->geom_type[g]) {
-      case mjGEOM_PLANE: builder_.add_shape(ShapeType::Plane, body, G * y_to_z(), Vec3::Ones(), mu, 0); break;
-      case mjGEOM_SPHERE: builder_.add_shape_sphere(body, size[0], G, mu); break;
-      case mjGEOM_CAPSULE: builder_.add_shape_capsule(body, size[0], size[1], G * y_to_z(), mu); break;
-      case mjGEOM_BOX: builder_.add_shape_box(body, vec3(size), G, mu); break;
+      case mjGEOM_PLANE: builder_.add_shape(ShapeType::Plane, body, Vec3::Ones(), along_z); break;
+      case mjGEOM_SPHERE: builder_.add_shape_sphere(body, size[0], options); break;
+      case mjGEOM_CAPSULE: builder_.add_shape_capsule(body, size[0], size[1], along_z); break;
+      case mjGEOM_BOX: builder_.add_shape_box(body, vec3(size), options); break;
       default:
         warn("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
              " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");

@@ -42,6 +42,8 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, shape_scale, shape_count, 3)                \
   X(Scalar, shape_mu, shape_count, 1)                   \
   X(Scalar, shape_restitution, shape_count, 1)          \
+  X(int, shape_collision_group, shape_count, 1)         \
+  X(int, shape_collision_mask, shape_count, 1)          \
   X(int, actuator_joint, actuator_count, 1)             \
   X(Scalar, actuator_gear, actuator_count, 1)           \
   X(Scalar, actuator_ctrl_lower, actuator_count, 1)     \

@@ -215,7 +215,9 @@ TEST(ModelBuilderErrors, BadArticulationsAndShapes) {
   EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(3, 0.1), "shape 0 (Sphere): body index 3 out of range [-1, 2)");
   EXPECT_NOVAPHY_ERROR(builder.add_shape_box(a, Vec3(0.1, 0, 0.1)),
                        "shape 0 (Box): size must be finite and > 0, got 0");
-  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(a, 0.1, {}, 0.5, 2), "restitution must be in [0, 1], got 2");
+  ShapeOptions bouncy;
+  bouncy.restitution = 2;
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(a, 0.1, bouncy), "restitution must be in [0, 1], got 2");
   EXPECT_NOVAPHY_ERROR(builder.add_plane(Vec3::Zero(), 0), "plane: normal has zero length");
 }
 

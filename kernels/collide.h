@@ -1,0 +1,45 @@
+// Narrow phase: contact points between pairs of primitive shapes (reference kernels).
+// Every function writes the points of shape a against shape b within `margin` of touching:
+//   normal  unit, pointing from a to b
+//   depth   penetration (> 0 overlapping, < 0 a gap smaller than the margin)
+//   point   midway between the two surfaces, world frame
+//   feature an id that stays the same while the same features touch (warm starting)
+// and returns how many it wrote. Planes are the local XZ plane of their frame, normal +Y;
+// capsules run along their local Y axis (radius, half height of the segment); boxes take half extents.
+#pragma once
+
+#include "kernels/spatial.h"
+
+namespace novaphy {
+
+struct ContactPoint {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitY();
+  Scalar depth = 0;
+  int feature = 0;
+};
+
+constexpr int kMaxPairContacts = 8;
+
+int collide_plane_sphere(const Transform& plane, const Vec3& center, Scalar radius, Scalar margin, ContactPoint* out);
+int collide_plane_box(const Transform& plane, const Transform& box, const Vec3& half, Scalar margin, ContactPoint* out);
+int collide_plane_capsule(const Transform& plane, const Transform& capsule, Scalar radius, Scalar half_height,
+                          Scalar margin, ContactPoint* out);
+int collide_sphere_sphere(const Vec3& center_a, Scalar radius_a, const Vec3& center_b, Scalar radius_b, Scalar margin,
+                          ContactPoint* out);
+int collide_sphere_box(const Vec3& center, Scalar radius, const Transform& box, const Vec3& half, Scalar margin,
+                       ContactPoint* out);
+int collide_sphere_capsule(const Vec3& center, Scalar radius, const Transform& capsule, Scalar capsule_radius,
+                           Scalar half_height, Scalar margin, ContactPoint* out);
+int collide_capsule_capsule(const Transform& a, Scalar radius_a, Scalar half_height_a, const Transform& b,
+                            Scalar radius_b, Scalar half_height_b, Scalar margin, ContactPoint* out);
+int collide_capsule_box(const Transform& capsule, Scalar radius, Scalar half_height, const Transform& box,
+                        const Vec3& half, Scalar margin, ContactPoint* out);
+// separating axes, then the incident face clipped against the reference face: up to 4 points
+int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, const Vec3& half_b, Scalar margin,
+                    ContactPoint* out);
+
+// signed distance from a point (box frame) to a box, and the outward normal of the nearest surface
+Scalar box_signed_distance(const Vec3& p, const Vec3& half, Vec3* normal);
+
+}  // namespace novaphy
