@@ -164,6 +164,8 @@ int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOp
   check_nonnegative(item, "armature", dof.armature);
   check_nonnegative(item, "damping", dof.damping);
   check_nonnegative(item, "stiffness", dof.stiffness);
+  check_nonnegative(item, "target_ke", dof.target_ke);
+  check_nonnegative(item, "target_kd", dof.target_kd);
   check_finite(item, "q_ref", dof.q_ref);
 
   joints_.push_back(joint);
@@ -314,6 +316,8 @@ Model ModelBuilder::finalize() const {
       model.joint_stiffness[qd + k] = dof.stiffness;
       model.joint_limit_lower[qd + k] = dof.limit_lower;
       model.joint_limit_upper[qd + k] = dof.limit_upper;
+      model.joint_target_ke[qd + k] = dof.target_ke;
+      model.joint_target_kd[qd + k] = dof.target_kd;
     }
     Scalar* q0 = &model.joint_q0[q];
     switch (joint.type) {

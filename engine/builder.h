@@ -29,6 +29,8 @@ struct JointDofConfig {
   Scalar damping = 0;
   Scalar stiffness = 0;  // spring towards q_ref, Revolute and Prismatic joints
   Scalar q_ref = 0;
+  Scalar target_ke = 0;  // PD drive gains (Control.joint_target_ke/kd start here)
+  Scalar target_kd = 0;
 };
 
 // shapes collide when (group_a & mask_b) != 0 and (group_b & mask_a) != 0

@@ -52,25 +52,26 @@ void check_finite_state(const State& state) {
   check_finite(state.body_f, "body_f");
 }
 
+void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state) {
+  for (int i = 0; i < art.link_count(); ++i) {
+    const int b = art.body(i);
+    const Transform& X = s.X_world[i];
+    X.to_array(state.body_q.data() + 7 * b);
+    // body_qd = [velocity of the centre of mass; angular velocity], world frame
+    const Mat3 R = X.rotation();
+    const Vec3 w = s.v[i].head<3>();
+    const Vec3 v_com = s.v[i].tail<3>() + w.cross(art.com(i));
+    Eigen::Map<Vec6> qd(state.body_qd.data() + 6 * b);
+    qd << R * v_com, R * w;
+  }
+}
+
 void eval_fk(const Model& model, State& state) {
   model.check(state);
   check_finite(state.joint_q, "joint_q");
   check_finite(state.joint_qd, "joint_qd");
   ArticulationScratch s;
-  for (int a = 0; a < model.articulation_count; ++a) {
-    const ArticulationView art = kinematics(model, state, a, s);
-    for (int i = 0; i < art.link_count(); ++i) {
-      const int b = art.body(i);
-      const Transform& X = s.X_world[i];
-      X.to_array(state.body_q.data() + 7 * b);
-      // body_qd = [velocity of the centre of mass; angular velocity], world frame
-      const Mat3 R = X.rotation();
-      const Vec3 w = s.v[i].head<3>();
-      const Vec3 v_com = s.v[i].tail<3>() + w.cross(art.com(i));
-      Eigen::Map<Vec6> qd(state.body_qd.data() + 6 * b);
-      qd << R * v_com, R * w;
-    }
-  }
+  for (int a = 0; a < model.articulation_count; ++a) store_body_state(kinematics(model, state, a, s), s, state);
 }
 
 MatX eval_mass_matrix(const Model& model, const State& state) {
@@ -106,17 +107,21 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
   return tau;
 }
 
+void control_force(const Model& model, const Control& control, Scalar* tau) {
+  std::copy(control.joint_f.begin(), control.joint_f.end(), tau);
+  for (int u = 0; u < model.actuator_count; ++u) {
+    const Scalar ctrl = std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
+    const Scalar force = std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
+    tau[model.joint_qd_start[model.actuator_joint[u]]] += model.actuator_gear[u] * force;
+  }
+}
+
 VecX eval_control_force(const Model& model, const Control& control) {
   model.check(control);
   check_finite(control.joint_f, "joint_f");
   check_finite(control.actuator_ctrl, "actuator_ctrl");
-  VecX tau = Eigen::Map<const VecX>(control.joint_f.data(), model.joint_dof_count);
-  for (int u = 0; u < model.actuator_count; ++u) {
-    const Scalar ctrl =
-        std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
-    const Scalar force = std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
-    tau[model.joint_qd_start[model.actuator_joint[u]]] += model.actuator_gear[u] * force;
-  }
+  VecX tau(model.joint_dof_count);
+  control_force(model, control, tau.data());
   return tau;
 }
 

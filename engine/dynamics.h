@@ -23,6 +23,10 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
 
 // tau = control.joint_f plus every motor's gear * clamp(clamp(actuator_ctrl, ctrl range), force range)
 VecX eval_control_force(const Model& model, const Control& control);
+void control_force(const Model& model, const Control& control, Scalar* tau);  // into joint_dof_count entries
+
+// body_q / body_qd of the articulation's bodies from scratch after forward_kinematics + forward_velocity
+void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state);
 
 // qdd from tau = eval_control_force(model, control); CRBA + Cholesky or ABA
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,

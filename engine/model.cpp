@@ -64,6 +64,8 @@ Control Model::control() const {
   Control s;
   static_cast<ModelCounts&>(s) = *this;
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_ALLOCATE_MEMBER)
+  s.joint_target_ke = joint_target_ke;
+  s.joint_target_kd = joint_target_kd;
   return s;
 }
 

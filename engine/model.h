@@ -35,6 +35,8 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_stiffness, joint_dof_count, 1)        \
   X(Scalar, joint_limit_lower, joint_dof_count, 1)      \
   X(Scalar, joint_limit_upper, joint_dof_count, 1)      \
+  X(Scalar, joint_target_ke, joint_dof_count, 1)        \
+  X(Scalar, joint_target_kd, joint_dof_count, 1)        \
   X(int, articulation_start, articulation_count + 1, 1) \
   X(int, shape_type, shape_count, 1)                    \
   X(int, shape_body, shape_count, 1)                    \
@@ -58,10 +60,16 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, body_qd, body_count, 6)        \
   X(Scalar, body_f, body_count, 6)
 
-// joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped)
-#define NOVAPHY_CONTROL_FIELDS(X)        \
-  X(Scalar, joint_f, joint_dof_count, 1) \
-  X(Scalar, actuator_ctrl, actuator_count, 1)
+// joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped);
+// PD drives per dof: tau = ke (target_pos - q) + kd (target_vel - qd), integrated implicitly by the
+// solver (ke acts on Revolute and Prismatic joints; ke/kd start at the model's joint_target_ke/kd)
+#define NOVAPHY_CONTROL_FIELDS(X)                 \
+  X(Scalar, joint_f, joint_dof_count, 1)          \
+  X(Scalar, actuator_ctrl, actuator_count, 1)     \
+  X(Scalar, joint_target_pos, joint_dof_count, 1) \
+  X(Scalar, joint_target_vel, joint_dof_count, 1) \
+  X(Scalar, joint_target_ke, joint_dof_count, 1)  \
+  X(Scalar, joint_target_kd, joint_dof_count, 1)
 
 // the counts every field's size is written in
 struct ModelCounts {

@@ -31,6 +31,8 @@ void ArticulationScratch::resize(const ArticulationView& art) {
   U.setZero(6, nv);
   H.setZero(nv, nv);
   u.setZero(nv);
+  link_jacobian.assign(n, Eigen::Matrix<Scalar, 6, Eigen::Dynamic>::Zero(6, nv));
+  S_world.setZero(6, nv);
 }
 
 }  // namespace novaphy

@@ -12,4 +12,8 @@ int cholesky_factor(MatX& H);
 // solves L L^T x = b in place (x holds b on entry), L from cholesky_factor
 void cholesky_solve(const MatX& L, Scalar* x);
 
+// factor and forward substitution in one pass over the columns, then back substitution:
+// H holds L and x the solution afterwards; returns as cholesky_factor
+int cholesky_factor_solve(MatX& H, Scalar* x);
+
 }  // namespace novaphy

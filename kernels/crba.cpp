@@ -35,4 +35,21 @@ void crba(const ArticulationView& art, ArticulationScratch& s) {
   for (int k = 0; k < art.dof_count(); ++k) s.H(k, k) += art.joint_armature[qd0 + k];
 }
 
+void mass_matrix_gemm(const ArticulationView& art, ArticulationScratch& s) {
+  const int n = art.link_count();
+  s.H.setZero();
+  for (int i = 0; i < n; ++i) {
+    // J_i = Xup_i J_parent + S_i in its own columns (link coordinates)
+    auto& J = s.link_jacobian[i];
+    const int p = art.parent(i);
+    if (p < 0) J.setZero();
+    else J = s.Xup[i] * s.link_jacobian[p];
+    J.middleCols(art.qd_start(i), art.dof(i)) = s.S.middleCols(art.qd_start(i), art.dof(i));
+    const Eigen::Matrix<Scalar, 6, Eigen::Dynamic> IJ = s.I[i] * J;
+    s.H.noalias() += J.transpose() * IJ;
+  }
+  const int qd0 = art.qd_begin();
+  for (int k = 0; k < art.dof_count(); ++k) s.H(k, k) += art.joint_armature[qd0 + k];
+}
+
 }  // namespace novaphy

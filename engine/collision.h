@@ -1,0 +1,76 @@
+// CollisionPipeline: broad phase (sweep and prune per world, planes against everything) and the
+// narrow-phase kernels of kernels/collide, writing into a Contacts buffer allocated once.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "engine/model.h"
+
+namespace novaphy {
+
+// X(type, name, count, width); count is contact_capacity
+#define NOVAPHY_CONTACT_FIELDS(X)                     \
+  X(int, contact_shape_a, contact_capacity, 1)        \
+  X(int, contact_shape_b, contact_capacity, 1)        \
+  X(int, contact_body_a, contact_capacity, 1)         \
+  X(int, contact_body_b, contact_capacity, 1)         \
+  X(Scalar, contact_point, contact_capacity, 3)       \
+  X(Scalar, contact_normal, contact_capacity, 3)      \
+  X(Scalar, contact_depth, contact_capacity, 1)       \
+  X(int, contact_feature, contact_capacity, 1)        \
+  X(Scalar, contact_impulse, contact_capacity, 3)
+
+// contacts of one collide(): the first contact_count entries of each array are valid.
+// normal points from shape a to shape b; depth > 0 is penetration; contact_impulse is the
+// impulse (world frame, on b) the solver applied, kept for warm starting the next step
+struct Contacts : ModelCounts {
+  int contact_capacity = 0;
+  int contact_count = 0;
+  int contact_dropped = 0;  // contacts the last collide() found beyond the capacity
+#define NOVAPHY_DECLARE_CONTACT(T, name, count, width) std::vector<T> name;
+  NOVAPHY_CONTACT_FIELDS(NOVAPHY_DECLARE_CONTACT)
+#undef NOVAPHY_DECLARE_CONTACT
+
+  // the previous collide()'s contacts, sorted by key, with the impulses the solver applied to them
+  std::vector<std::uint64_t> previous_key;
+  std::vector<Scalar> previous_impulse;  // [previous][3]
+  int previous_count = 0;
+
+  static std::uint64_t key(int shape_a, int shape_b, int feature);
+  // impulse applied to the same contact at the previous step, or nullptr
+  const Scalar* previous(int contact) const;
+};
+
+struct CollisionOptions {
+  int contact_capacity = 0;      // 0: 8 per shape, at least 64
+  Scalar margin = 0.01;          // contacts are made this far before touching
+  bool self_collision = true;    // links of one articulation collide (never a parent with its child)
+};
+
+class CollisionPipeline {
+ public:
+  explicit CollisionPipeline(const Model& model, const CollisionOptions& options = {});
+
+  Contacts contacts() const;
+  // contacts between the shapes at the poses of state.body_q
+  void collide(const State& state, Contacts& contacts);
+
+  const CollisionOptions& options() const { return options_; }
+
+ private:
+  bool may_collide(int a, int b) const;
+  void narrow_phase(int a, int b, const State& state, Contacts& contacts) const;
+
+  const Model& model_;
+  CollisionOptions options_;
+  std::vector<int> body_parent_;       // parent body of each body through its joint, -1
+  std::vector<int> body_articulation_;
+  std::vector<int> planes_, others_;   // shape indices
+  // scratch
+  std::vector<Scalar> lower_, upper_;  // [shape][3] world AABBs
+  std::vector<int> order_;
+  std::vector<int> sort_index_;
+};
+
+}  // namespace novaphy

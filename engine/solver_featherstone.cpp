@@ -1,0 +1,366 @@
+#include "engine/solver_featherstone.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "engine/dynamics.h"
+#include "engine/error.h"
+#include "kernels/cholesky.h"
+#include "kernels/crba.h"
+#include "kernels/fk.h"
+#include "kernels/integrate.h"
+#include "kernels/rnea.h"
+
+namespace novaphy {
+
+namespace {
+
+// two unit tangents completing the normal to a right-handed frame (Frisvad's construction)
+void tangents(const Vec3& n, Vec3* t1, Vec3* t2) {
+  const Scalar sign = std::copysign(Scalar(1), n.z());
+  const Scalar a = -1 / (sign + n.z()), b = n.x() * n.y() * a;
+  *t1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
+  *t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
+}
+
+void check_range(const char* name, Scalar value, Scalar lo, Scalar hi) {
+  if (!(value >= lo && value <= hi)) fail("settings.", name, " must be in [", lo, ", ", hi, "], got ", value);
+}
+
+bool is_finite(const VecX& x) { return x.allFinite(); }
+
+}  // namespace
+
+void SolverFeatherstoneSettings::check() const {
+  constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
+  if (num_iterations < 0) fail("settings.num_iterations must be >= 0, got ", num_iterations);
+  if (update_mass_matrix_interval < 1)
+    fail("settings.update_mass_matrix_interval must be >= 1, got ", update_mass_matrix_interval);
+  check_range("linear_slop", linear_slop, 0, 1e3);
+  check_range("erp", erp, 0, 1);
+  check_range("cfm", cfm, 0, 1e6);
+  check_range("warmstarting_factor", warmstarting_factor, 0, 1);
+  check_range("restitution_threshold", restitution_threshold, 0, 1e6);
+  check_range("angular_damping", angular_damping, 0, inf);
+  check_range("friction_smoothing", friction_smoothing, 0, 1);
+  if (!std::isfinite(angular_damping)) fail("settings.angular_damping must be finite, got ", angular_damping);
+}
+
+bool JointSupportMatrix::supports(const std::string& joint) const {
+  for (const Entry& e : entries)
+    if (e.joint == joint) return e.supported;
+  fail("unknown joint type '", joint, "'");
+}
+
+std::string JointSupportMatrix::to_string() const {
+  std::ostringstream os;
+  os << "SolverFeatherstone joint support:";
+  for (const Entry& e : entries) os << "\n  " << e.joint << ": " << (e.supported ? "yes" : "no");
+  return os.str();
+}
+
+SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
+    : settings(settings_), model_(model) {
+  settings.check();
+  if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
+  for (int a = 0; a < model.articulation_count; ++a) {
+    art_.push_back(model.articulation(a));
+    scratch_.emplace_back();
+    scratch_.back().resize(art_.back());
+  }
+  body_articulation_.assign(model.body_count, -1);
+  body_link_.assign(model.body_count, -1);
+  for (int j = 0; j < model.joint_count; ++j) {
+    const int a = model.joint_articulation[j];
+    body_articulation_[model.joint_child[j]] = a;
+    body_link_[model.joint_child[j]] = j - model.articulation_start[a];
+    const auto type = static_cast<JointType>(model.joint_type[j]);
+    const int dof = model.joint_qd_start[j];
+    if (type == JointType::Revolute) rotational_dof_.push_back(dof);
+    if (type == JointType::Ball || type == JointType::Free)
+      for (int k = 0; k < 3; ++k) rotational_dof_.push_back(dof + k);
+  }
+  dof_articulation_.resize(model.joint_dof_count);
+  for (int a = 0; a < model.articulation_count; ++a)
+    std::fill_n(dof_articulation_.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
+  qd_.setZero(model.joint_dof_count);
+  zero_.setZero(model.joint_dof_count);
+  qd_in_.setZero(model.joint_dof_count);
+  rhs_.setZero(model.joint_dof_count);
+  q_next_.setZero(model.joint_coord_count);
+  limit_row_.assign(2 * model.joint_dof_count, -1);
+  limit_impulse_.assign(2 * model.joint_dof_count, 0);
+}
+
+JointSupportMatrix SolverFeatherstone::joint_support() const {
+  return {{{"Revolute", true},
+           {"Prismatic", true},
+           {"Slide", true},
+           {"Ball", true},
+           {"Fixed", true},
+           {"Free", true},
+           {"Distance", false},
+           {"D6", false},
+           {"Cable", false}}};
+}
+
+void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
+  check_step(in, out, control, contacts, dt);
+  unconstrained_velocity(in, control, dt);
+  row_count_ = 0;
+  pool_size_ = 0;
+  build_limit_rows(in, dt);
+  build_contact_rows(in, contacts, dt);
+  solve_constraints(contacts);
+  integrate(in, out, dt);
+}
+
+void SolverFeatherstone::check_step(const State& in, const State& out, const Control& control,
+                                    const Contacts& contacts, Scalar dt) const {
+  if (!(dt > 0) || !std::isfinite(dt)) fail("dt must be finite and > 0, got ", dt);
+  settings.check();
+  model_.check(in);
+  model_.check(out);
+  model_.check(control);
+  if (contacts.body_count != model_.body_count || contacts.shape_count != model_.shape_count ||
+      contacts.joint_count != model_.joint_count)
+    fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
+         " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
+  check_finite_state(in);
+  for (const auto* field : {&control.joint_f, &control.actuator_ctrl, &control.joint_target_pos,
+                            &control.joint_target_vel, &control.joint_target_ke, &control.joint_target_kd})
+    for (size_t k = 0; k < field->size(); ++k)
+      if (!std::isfinite((*field)[k])) fail("control value ", k, " is not finite: ", (*field)[k]);
+}
+
+void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt) {
+  const bool refactor = steps_since_factor_ % settings.update_mass_matrix_interval == 0 || dt != factored_dt_;
+  steps_since_factor_ = refactor ? 1 : steps_since_factor_ + 1;
+  if (refactor) factored_dt_ = dt;
+  qd_in_ = Eigen::Map<const VecX>(in.joint_qd.data(), model_.joint_dof_count);
+  control_force(model_, control, rhs_.data());
+
+  for (size_t a = 0; a < art_.size(); ++a) {
+    const ArticulationView& art = art_[a];
+    ArticulationScratch& s = scratch_[a];
+    const int q0 = art.q_begin(), qd0 = art.qd_begin(), nv = art.dof_count();
+    const Scalar* q = in.joint_q.data() + q0;
+    const Scalar* qd = in.joint_qd.data() + qd0;
+    forward_kinematics(art, q, s);
+    forward_velocity(art, qd, s);
+    for (int i = 0; i < art.link_count(); ++i)
+      s.S_world.middleCols(art.qd_start(i), art.dof(i)) =
+          motion_xform(s.X_world[i].inverse()) * s.S.middleCols(art.qd_start(i), art.dof(i));
+
+    // rhs = tau - bias + springs, dampers and drives evaluated at the end of the step (implicit):
+    // (H + dt D + dt^2 K) qdd = tau - bias - K_s (q + dt qd - q_ref) - D_s qd + ke (q_t - q - dt qd) + kd (v_t - qd)
+    Scalar* rhs = rhs_.data() + qd0;
+    rnea(art, zero_.data() + qd0, model_.gravity, in.body_f.data(), s, s.u.data());
+    for (int k = 0; k < nv; ++k) rhs[k] -= s.u[k];
+    for (int i = 0; i < art.link_count(); ++i) {
+      const JointType type = art.type(i);
+      for (int m = 0; m < art.dof(i); ++m) {
+        const int k = art.qd_start(i) + m, g = qd0 + k;
+        const Scalar damping = model_.joint_damping[g], kd = control.joint_target_kd[g];
+        rhs[k] += -damping * qd[k] + kd * (control.joint_target_vel[g] - qd[k]);
+        s.u[k] = dt * (damping + kd);  // diagonal added to H
+        if (type != JointType::Revolute && type != JointType::Prismatic) continue;
+        const int c = art.q_start(i);
+        const Scalar stiffness = model_.joint_stiffness[g], ke = control.joint_target_ke[g];
+        const Scalar q_end = q[c] + dt * qd[k];
+        rhs[k] += -stiffness * (q_end - model_.joint_q_ref[q0 + c]) + ke * (control.joint_target_pos[g] - q_end);
+        s.u[k] += dt * dt * (stiffness + ke);
+      }
+    }
+
+    // M = H + diag, factored every update_mass_matrix_interval steps; qdd = M^-1 rhs
+    int bad = -1;
+    if (refactor) {
+      if (settings.use_tile_gemm) mass_matrix_gemm(art, s);
+      else crba(art, s);
+      s.H.diagonal() += s.u;
+      if (settings.fuse_cholesky) {
+        bad = cholesky_factor_solve(s.H, rhs);
+      } else {
+        bad = cholesky_factor(s.H);
+        if (bad < 0) cholesky_solve(s.H, rhs);
+      }
+    } else {
+      cholesky_solve(s.H, rhs);
+    }
+    if (bad >= 0)
+      fail("articulation ", a, ": mass matrix is not positive definite at dof ", qd0 + bad,
+           " (a massless link without children?)");
+    qd_.segment(qd0, nv) = qd_in_.segment(qd0, nv) + dt * rhs_.segment(qd0, nv);
+  }
+
+  const Scalar keep = std::max<Scalar>(0, 1 - settings.angular_damping * dt);
+  for (const int dof : rotational_dof_) qd_[dof] *= keep;
+}
+
+int SolverFeatherstone::begin_row(int art_a, int art_b, RowKind kind, Scalar target) {
+  if (row_count_ == static_cast<int>(rows_.size())) rows_.resize(std::max<size_t>(64, 2 * rows_.size()));
+  PgsRow& row = rows_[row_count_];
+  row = PgsRow{};
+  row.kind = kind;
+  row.target = target;
+  row.side_count = 0;
+  for (const int a : {art_b, art_a}) {
+    if (a < 0 || (row.side_count == 1 && a == art_b)) continue;
+    const int s = row.side_count++;
+    row.dof_begin[s] = art_[a].qd_begin();
+    row.dof_count[s] = art_[a].dof_count();
+    row.pool[s] = pool_size_;
+    pool_size_ += row.dof_count[s];
+  }
+  if (pool_size_ > static_cast<int>(J_.size())) {
+    J_.resize(2 * pool_size_);
+    MinvJT_.resize(2 * pool_size_);
+  }
+  for (int s = 0; s < row.side_count; ++s) std::fill_n(J_.begin() + row.pool[s], row.dof_count[s], 0);
+  return row_count_++;
+}
+
+Scalar* SolverFeatherstone::row_jacobian(int r, int art) {
+  PgsRow& row = rows_[r];
+  for (int s = 0; s < row.side_count; ++s)
+    if (row.dof_begin[s] == art_[art].qd_begin()) return J_.data() + row.pool[s];
+  return nullptr;
+}
+
+void SolverFeatherstone::finish_row(int r) {
+  PgsRow& row = rows_[r];
+  Scalar W = 0;
+  for (int s = 0; s < row.side_count; ++s) {
+    Scalar* z = MinvJT_.data() + row.pool[s];
+    const Scalar* J = J_.data() + row.pool[s];
+    std::copy(J, J + row.dof_count[s], z);
+    cholesky_solve(scratch_[dof_articulation_[row.dof_begin[s]]].H, z);
+    for (int k = 0; k < row.dof_count[s]; ++k) W += J[k] * z[k];
+  }
+  row.inv_mass = W + settings.cfm > 1e-12 ? 1 / (W + settings.cfm) : 0;
+}
+
+void SolverFeatherstone::add_point_jacobian(int body, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const {
+  // J qd = d . (velocity of the body-fixed point at p) = sum over ancestor dofs of d . S_lin + (p x d) . S_ang
+  const int a = body_articulation_[body];
+  const ArticulationView& art = art_[a];
+  const MatX& S = scratch_[a].S_world;
+  const Vec3 pxd = p.cross(d);
+  for (int i = body_link_[body]; i >= 0; i = art.parent(i))
+    for (int k = art.qd_start(i); k < art.qd_start(i) + art.dof(i); ++k)
+      J[k] += sign * (d.dot(S.col(k).tail<3>()) + pxd.dot(S.col(k).head<3>()));
+}
+
+int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target) {
+  const int art_a = body_a < 0 ? -1 : body_articulation_[body_a];
+  const int art_b = body_b < 0 ? -1 : body_articulation_[body_b];
+  const int r = begin_row(art_a, art_b, kind, target);
+  if (body_b >= 0) add_point_jacobian(body_b, p, d, 1, row_jacobian(r, art_b));
+  if (body_a >= 0) add_point_jacobian(body_a, p, d, -1, row_jacobian(r, art_a));
+  finish_row(r);
+  return r;
+}
+
+void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
+  std::fill(limit_row_.begin(), limit_row_.end(), -1);
+  for (int j = 0; j < model_.joint_count; ++j) {
+    const auto type = static_cast<JointType>(model_.joint_type[j]);
+    if (type != JointType::Revolute && type != JointType::Prismatic) continue;
+    const int g = model_.joint_qd_start[j];
+    const Scalar q = in.joint_q[model_.joint_q_start[j]];
+    for (int side = 0; side < 2; ++side) {
+      // gap >= 0 inside the range; the row keeps sign * qd >= target
+      const Scalar sign = side == 0 ? 1 : -1;
+      const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
+      if (!std::isfinite(limit)) continue;
+      const Scalar gap = sign * (q - limit);
+      if (gap + dt * sign * qd_[g] >= 0) continue;
+      const Scalar target = gap >= 0 ? -gap / dt : settings.erp * std::max<Scalar>(-gap - settings.linear_slop, 0) / dt;
+      const int a = model_.joint_articulation[j];
+      const int r = begin_row(a, -1, RowKind::Unilateral, target);
+      row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
+      finish_row(r);
+      if (settings.use_warmstarting) rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[2 * g + side];
+      limit_row_[2 * g + side] = r;
+    }
+  }
+}
+
+void SolverFeatherstone::build_contact_rows(const State&, const Contacts& contacts, Scalar dt) {
+  contact_row_.assign(contacts.contact_count, -1);
+  for (int c = 0; c < contacts.contact_count; ++c) {
+    const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
+    const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
+    const Vec3 p = Eigen::Map<const Vec3>(&contacts.contact_point[3 * c]);
+    const Vec3 n = Eigen::Map<const Vec3>(&contacts.contact_normal[3 * c]);
+    const Scalar depth = contacts.contact_depth[c];
+    const Scalar mu = std::sqrt(model_.shape_mu[sa] * model_.shape_mu[sb]);
+    const Scalar restitution = std::max(model_.shape_restitution[sa], model_.shape_restitution[sb]);
+    Vec3 t1, t2;
+    tangents(n, &t1, &t2);
+
+    // normal row: push the penetration beyond the slop out at erp / dt, let a gap close in one step,
+    // bounce at -restitution times the approach speed above the threshold
+    const int rn = add_row(ba, bb, p, n, RowKind::Unilateral, 0);
+    PgsRow& normal = rows_[rn];
+    Scalar target = depth > settings.linear_slop ? settings.erp * (depth - settings.linear_slop) / dt
+                                                 : std::min<Scalar>(depth, 0) / dt;
+    const Scalar v_approach = row_velocity(normal, J_, qd_in_.data());
+    if (v_approach < -settings.restitution_threshold) target = std::max(target, -restitution * v_approach);
+    normal.target = target;
+    const int r1 = add_row(ba, bb, p, t1, RowKind::FrictionPair, 0);
+    const int r2 = add_row(ba, bb, p, t2, RowKind::FrictionPair, 0);
+    rows_[r1].normal = rn;
+    rows_[r1].mu = mu;
+
+    const Scalar* previous = contacts.previous(c);
+    if (settings.use_warmstarting && previous) {
+      const Vec3 P = settings.warmstarting_factor * Eigen::Map<const Vec3>(previous);
+      rows_[rn].lambda = std::max<Scalar>(0, P.dot(n));
+      rows_[r1].lambda = P.dot(t1);
+      rows_[r2].lambda = P.dot(t2);
+    }
+    contact_row_[c] = rn;
+  }
+}
+
+void SolverFeatherstone::solve_constraints(Contacts& contacts) {
+  for (int r = 0; r < row_count_; ++r) apply_impulse(rows_[r], MinvJT_, rows_[r].lambda, qd_.data());
+  PgsSettings pgs;
+  pgs.iterations = settings.num_iterations;
+  pgs.cfm = settings.cfm;
+  pgs.friction_smoothing = settings.friction_smoothing;
+  pgs_solve(rows_, row_count_, J_, MinvJT_, pgs, qd_.data());
+
+  // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
+  for (int c = 0; c < contacts.contact_count; ++c) {
+    const int rn = contact_row_[c];
+    const Vec3 n = Eigen::Map<const Vec3>(&contacts.contact_normal[3 * c]);
+    Vec3 t1, t2;
+    tangents(n, &t1, &t2);
+    Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) =
+        rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
+  }
+  for (size_t k = 0; k < limit_row_.size(); ++k) limit_impulse_[k] = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
+}
+
+void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
+  for (size_t a = 0; a < art_.size(); ++a) {
+    const ArticulationView& art = art_[a];
+    integrate_joints(art, in.joint_q.data() + art.q_begin(), qd_.data() + art.qd_begin(), dt,
+                     q_next_.data() + art.q_begin());
+  }
+  if (!is_finite(q_next_) || !is_finite(qd_))
+    fail("step produced a non-finite state (dt ", dt, " too large for the model's stiffness or forces?)");
+  std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
+  std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
+  if (&out != &in) out.body_f = in.body_f;
+  for (size_t a = 0; a < art_.size(); ++a) {
+    forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), scratch_[a]);
+    forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), scratch_[a]);
+    store_body_state(art_[a], scratch_[a], out);
+  }
+}
+
+}  // namespace novaphy

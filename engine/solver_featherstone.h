@@ -1,0 +1,96 @@
+// SolverFeatherstone: one time step of every articulation in reduced coordinates.
+//   forward kinematics -> RNEA bias forces -> CRBA mass matrix (+ implicit damping, springs and PD
+//   drives) -> Cholesky -> unconstrained velocity -> sequential-impulse PGS over contact and
+//   joint-limit rows through M^-1 J^T -> semi-implicit integration -> forward kinematics
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "engine/collision.h"
+#include "kernels/pgs.h"
+
+namespace novaphy {
+
+struct SolverFeatherstoneSettings {
+  int num_iterations = 20;              // PGS sweeps
+  Scalar linear_slop = 0.001;           // penetration (m) left alone by the position correction
+  Scalar erp = 0.2;                     // fraction of the penetration beyond the slop removed per step
+  Scalar cfm = 1e-6;                    // constraint force mixing: softens every row
+  Scalar warmstarting_factor = 0.85;    // share of the previous step's impulses applied up front
+  Scalar restitution_threshold = 0.2;   // approach speed (m/s) below which contacts do not bounce
+  bool use_warmstarting = true;
+  Scalar angular_damping = 0.05;        // rotational dof velocities scaled by (1 - angular_damping dt)
+  int update_mass_matrix_interval = 1;  // recompute and refactor H every N steps
+  Scalar friction_smoothing = 1.0;      // 0: box friction per tangent; 1: circular cone; between: blend
+  bool use_tile_gemm = false;           // H as sum J^T I J over link Jacobians instead of CRBA
+  bool fuse_cholesky = true;            // factor and forward-substitute in one pass
+
+  // throws Error naming the first setting out of range
+  void check() const;
+};
+
+struct JointSupportMatrix {
+  struct Entry {
+    std::string joint;
+    bool supported;
+  };
+  std::vector<Entry> entries;
+  bool supports(const std::string& joint) const;  // throws Error for an unknown name
+  std::string to_string() const;
+};
+
+class SolverFeatherstone {
+ public:
+  explicit SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings = {});
+
+  // state_in may be state_out; on error nothing is written
+  void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
+
+  JointSupportMatrix joint_support() const;
+  const Model& model() const { return model_; }
+
+  SolverFeatherstoneSettings settings;
+
+ private:
+  void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
+                  Scalar dt) const;
+  void unconstrained_velocity(const State& in, const Control& control, Scalar dt);
+  void build_contact_rows(const State& in, const Contacts& contacts, Scalar dt);
+  void build_limit_rows(const State& in, Scalar dt);
+  void solve_constraints(Contacts& contacts);
+  void integrate(const State& in, State& out, Scalar dt);
+
+  // a row over the dofs of up to two articulations (-1: none), J zeroed; finish_row computes
+  // M^-1 J^T and the effective mass once J is filled in
+  int begin_row(int art_a, int art_b, RowKind kind, Scalar target);
+  Scalar* row_jacobian(int row, int art);
+  void finish_row(int row);
+  // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world)
+  int add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target);
+  void add_point_jacobian(int body, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const;
+
+  const Model& model_;
+  std::vector<ArticulationView> art_;
+  std::vector<ArticulationScratch> scratch_;
+  std::vector<int> body_articulation_, body_link_;
+  std::vector<int> dof_articulation_;
+  std::vector<int> rotational_dof_;  // dofs scaled by angular damping
+  VecX qd_;                          // velocity being solved, all dofs
+  VecX qd_in_;                       // the step's initial velocity (restitution)
+  VecX q_next_;
+  VecX rhs_;
+  VecX zero_;
+  int steps_since_factor_ = 0;
+  Scalar factored_dt_ = 0;
+  // constraint rows and their pools
+  std::vector<PgsRow> rows_;
+  int row_count_ = 0;
+  std::vector<Scalar> J_, MinvJT_;
+  int pool_size_ = 0;
+  std::vector<int> contact_row_;    // first row of each contact, -1
+  std::vector<int> limit_row_;      // [dof][2] row of each active limit, -1
+  std::vector<Scalar> limit_impulse_;  // [dof][2] impulses of the previous step's limit rows
+};
+
+}  // namespace novaphy

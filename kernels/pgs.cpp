@@ -1,0 +1,53 @@
+#include "kernels/pgs.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace novaphy {
+
+Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scalar* qd) {
+  Scalar v = 0;
+  for (int s = 0; s < row.side_count; ++s)
+    for (int k = 0; k < row.dof_count[s]; ++k) v += J[row.pool[s] + k] * qd[row.dof_begin[s] + k];
+  return v;
+}
+
+void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar impulse, Scalar* qd) {
+  for (int s = 0; s < row.side_count; ++s)
+    for (int k = 0; k < row.dof_count[s]; ++k) qd[row.dof_begin[s] + k] += MinvJT[row.pool[s] + k] * impulse;
+}
+
+void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scalar>& J,
+               const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd) {
+  // unconstrained step of one row: the impulse that would bring J qd to its target
+  auto step = [&](const PgsRow& row) {
+    return -(row_velocity(row, J, qd) - row.target + settings.cfm * row.lambda) * row.inv_mass;
+  };
+  for (int it = 0; it < settings.iterations; ++it) {
+    for (int r = 0; r < row_count; ++r) {
+      PgsRow& row = rows[r];
+      if (row.kind == RowKind::Unilateral) {
+        const Scalar lambda = std::max<Scalar>(0, row.lambda + step(row));
+        apply_impulse(row, MinvJT, lambda - row.lambda, qd);
+        row.lambda = lambda;
+        continue;
+      }
+      // friction pair: both tangents, bounded by mu * normal impulse (box, disk or a blend)
+      PgsRow& second = rows[r + 1];
+      const Scalar limit = row.mu * rows[row.normal].lambda;
+      const Scalar l1 = row.lambda + step(row), l2 = second.lambda + step(second);
+      const Scalar box1 = std::clamp(l1, -limit, limit), box2 = std::clamp(l2, -limit, limit);
+      const Scalar norm = std::hypot(l1, l2);
+      const Scalar scale = norm > limit ? limit / norm : 1;
+      const Scalar s = settings.friction_smoothing;
+      const Scalar new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
+      apply_impulse(row, MinvJT, new1 - row.lambda, qd);
+      apply_impulse(second, MinvJT, new2 - second.lambda, qd);
+      row.lambda = new1;
+      second.lambda = new2;
+      ++r;
+    }
+  }
+}
+
+}  // namespace novaphy

@@ -1,0 +1,44 @@
+// Projected Gauss-Seidel over velocity constraint rows in joint space (sequential impulses,
+// Catto 2005; Featherstone RBDA chapter 11 for the joint-space form). A row acts on the dofs of
+// one or two articulations through J (its Jacobian row over each side's dofs) and M^-1 J^T.
+#pragma once
+
+#include <vector>
+
+#include "kernels/spatial.h"
+
+namespace novaphy {
+
+enum class RowKind : int { Unilateral = 0, FrictionPair = 1 };
+
+struct PgsRow {
+  RowKind kind = RowKind::Unilateral;  // a FrictionPair row is followed by its second tangent row
+  int side_count = 1;
+  int dof_begin[2] = {0, 0};  // first dof of each side in the global velocity vector
+  int dof_count[2] = {0, 0};
+  int pool[2] = {0, 0};       // offset of each side's J and M^-1 J^T in the pools
+  Scalar inv_mass = 0;        // 1 / (J M^-1 J^T + cfm)
+  Scalar target = 0;          // the velocity J qd the row drives towards
+  Scalar lambda = 0;          // accumulated impulse
+  int normal = -1;            // FrictionPair: the row holding the normal impulse
+  Scalar mu = 0;              // FrictionPair: friction coefficient
+};
+
+struct PgsSettings {
+  int iterations = 20;
+  Scalar cfm = 0;
+  Scalar friction_smoothing = 1;  // 0: box friction per tangent, 1: circular cone, between: blend
+};
+
+// J qd of one row
+Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scalar* qd);
+
+// qd += M^-1 J^T * impulse for one row
+void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar impulse, Scalar* qd);
+
+// inputs:  rows with lambda as the warm start (already applied to qd), the pools
+// outputs: rows[].lambda, qd
+void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scalar>& J,
+               const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd);
+
+}  // namespace novaphy
