@@ -27,7 +27,8 @@ auto joint_adder(JointType type) {
   return [type](ModelBuilder& builder, int parent, int child, std::optional<Transform> parent_xform,
                 std::optional<Transform> child_xform, py::object axis, std::optional<Scalar> armature,
                 std::optional<Scalar> damping, std::optional<Scalar> stiffness, std::optional<Scalar> limit_lower,
-                std::optional<Scalar> limit_upper, const std::string& name) {
+                std::optional<Scalar> limit_upper, std::optional<Scalar> target_ke, std::optional<Scalar> target_kd,
+                const std::string& name) {
     JointOptions options;
     options.parent_xform = parent_xform.value_or(Transform::identity());
     options.child_xform = child_xform.value_or(Transform::identity());
@@ -37,6 +38,8 @@ auto joint_adder(JointType type) {
     if (stiffness) options.dof.stiffness = *stiffness;
     if (limit_lower) options.dof.limit_lower = *limit_lower;
     if (limit_upper) options.dof.limit_upper = *limit_upper;
+    if (target_ke) options.dof.target_ke = *target_ke;
+    if (target_kd) options.dof.target_kd = *target_kd;
     options.name = name;
     return builder.add_joint(type, parent, child, options);
   };
@@ -47,7 +50,8 @@ void def_joint(Class& c, const char* method, JointType type, const char* doc) {
   c.def(method, joint_adder(type), py::arg("parent"), py::arg("child"), py::kw_only(),
         py::arg("parent_xform") = py::none(), py::arg("child_xform") = py::none(), py::arg("axis") = py::none(),
         py::arg("armature") = py::none(), py::arg("damping") = py::none(), py::arg("stiffness") = py::none(),
-        py::arg("limit_lower") = py::none(), py::arg("limit_upper") = py::none(), py::arg("name") = "", doc);
+        py::arg("limit_lower") = py::none(), py::arg("limit_upper") = py::none(), py::arg("target_ke") = py::none(),
+        py::arg("target_kd") = py::none(), py::arg("name") = "", doc);
 }
 
 ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar restitution, int group, int mask) {
@@ -98,7 +102,9 @@ void bind_builder(py::module_& m) {
       .def_readwrite("armature", &JointDofConfig::armature)
       .def_readwrite("damping", &JointDofConfig::damping)
       .def_readwrite("stiffness", &JointDofConfig::stiffness)
-      .def_readwrite("q_ref", &JointDofConfig::q_ref);
+      .def_readwrite("q_ref", &JointDofConfig::q_ref)
+      .def_readwrite("target_ke", &JointDofConfig::target_ke)
+      .def_readwrite("target_kd", &JointDofConfig::target_kd);
 
   auto builder = py::class_<ModelBuilder>(m, "ModelBuilder", "Builds a Model; every call checks its arguments.");
   builder.def(py::init<const Vec3&>(), py::arg("gravity") = Vec3(0, -9.81, 0))

@@ -9,4 +9,6 @@ PYBIND11_MODULE(_novaphy, m) {
   novaphy::python::bind_model(m);
   novaphy::python::bind_builder(m);
   novaphy::python::bind_dynamics(m);
+  novaphy::python::bind_collision(m);
+  novaphy::python::bind_solver_featherstone(m);
 }

@@ -1,6 +1,9 @@
 """NovaPhy: batched articulated-body physics in reduced coordinates (Featherstone's algorithms)."""
 
+from . import solvers
 from ._novaphy import (
+    CollisionPipeline,
+    Contacts,
     Control,
     Error,
     Joint,
@@ -25,6 +28,8 @@ from ._novaphy import (
 )
 
 __all__ = [
+    "CollisionPipeline",
+    "Contacts",
     "Control",
     "Error",
     "Joint",
@@ -46,4 +51,5 @@ __all__ = [
     "forward_kinematics",
     "inverse_dynamics",
     "mass_matrix_crba",
+    "solvers",
 ]

@@ -1,0 +1,62 @@
+// novaphy.solvers.SolverFeatherstone with the seed's keyword arguments mirrored into solver.settings.
+#include "bindings/bindings.h"
+#include "engine/solver_featherstone.h"
+
+namespace novaphy::python {
+
+void bind_solver_featherstone(py::module_& m) {
+  using Settings = SolverFeatherstoneSettings;
+  py::class_<Settings>(m, "SolverFeatherstoneSettings", "Every knob of SolverFeatherstone; checked at each step.")
+      .def(py::init<>())
+      .def_readwrite("num_iterations", &Settings::num_iterations, "PGS sweeps per step.")
+      .def_readwrite("linear_slop", &Settings::linear_slop, "Penetration (m) the position correction leaves alone.")
+      .def_readwrite("erp", &Settings::erp, "Share of the penetration beyond the slop removed per step, in [0, 1].")
+      .def_readwrite("cfm", &Settings::cfm, "Constraint force mixing: softens every constraint row.")
+      .def_readwrite("warmstarting_factor", &Settings::warmstarting_factor, "Share of last step's impulses reused.")
+      .def_readwrite("restitution_threshold", &Settings::restitution_threshold, "Approach speed below which no bounce.")
+      .def_readwrite("use_warmstarting", &Settings::use_warmstarting)
+      .def_readwrite("angular_damping", &Settings::angular_damping,
+                     "Rotational dof velocities are scaled by (1 - angular_damping * dt) each step.")
+      .def_readwrite("update_mass_matrix_interval", &Settings::update_mass_matrix_interval,
+                     "Recompute and refactor the mass matrix every N steps.")
+      .def_readwrite("friction_smoothing", &Settings::friction_smoothing,
+                     "0: box friction per tangent (direction snaps to the tangent axes); 1: circular cone "
+                     "(friction opposes the slip direction smoothly); between: a blend.")
+      .def_readwrite("use_tile_gemm", &Settings::use_tile_gemm, "Mass matrix as sum J^T I J instead of CRBA.")
+      .def_readwrite("fuse_cholesky", &Settings::fuse_cholesky, "Factor and forward-substitute in one pass.");
+
+  py::class_<JointSupportMatrix>(m, "JointSupportMatrix", "Which joint types a solver enforces.")
+      .def("supports", &JointSupportMatrix::supports, py::arg("joint"))
+      .def("__getitem__", &JointSupportMatrix::supports)
+      .def_property_readonly("joints",
+                             [](const JointSupportMatrix& self) {
+                               py::dict d;
+                               for (const auto& e : self.entries) d[py::str(e.joint)] = e.supported;
+                               return d;
+                             })
+      .def("__str__", &JointSupportMatrix::to_string)
+      .def("__repr__", &JointSupportMatrix::to_string);
+
+  py::class_<SolverFeatherstone>(m, "SolverFeatherstone",
+                                 "Featherstone articulated-body solver: CRBA + Cholesky, sequential-impulse PGS.")
+      .def(py::init([](const Model& model, Scalar angular_damping, int update_mass_matrix_interval,
+                       Scalar friction_smoothing, bool use_tile_gemm, bool fuse_cholesky) {
+             Settings settings;
+             settings.angular_damping = angular_damping;
+             settings.update_mass_matrix_interval = update_mass_matrix_interval;
+             settings.friction_smoothing = friction_smoothing;
+             settings.use_tile_gemm = use_tile_gemm;
+             settings.fuse_cholesky = fuse_cholesky;
+             return new SolverFeatherstone(model, settings);
+           }),
+           py::arg("model"), py::kw_only(), py::arg("angular_damping") = 0.05,
+           py::arg("update_mass_matrix_interval") = 1, py::arg("friction_smoothing") = 1.0,
+           py::arg("use_tile_gemm") = false, py::arg("fuse_cholesky") = true, py::keep_alive<1, 2>())
+      .def_readwrite("settings", &SolverFeatherstone::settings)
+      .def("step", &SolverFeatherstone::step, py::arg("state_in"), py::arg("state_out"), py::arg("control"),
+           py::arg("contacts"), py::arg("dt"), py::call_guard<py::gil_scoped_release>(),
+           "Advances state_in by dt into state_out (they may be the same State).")
+      .def("joint_support", &SolverFeatherstone::joint_support);
+}
+
+}  // namespace novaphy::python
