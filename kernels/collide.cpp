@@ -228,12 +228,13 @@ int collide_capsule_box(const Transform& capsule, Scalar radius, Scalar half_hei
       lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = sdf(x2);
     }
   }
+  // both ends, and the deepest interior point where it is deeper than the ends (crossing an edge)
   const Scalar t_min = 0.5 * (lo + hi);
+  const bool interior = t_min > 1e-3 && t_min < 1 - 1e-3 && sdf(t_min) < std::min(sdf(0), sdf(1)) - 1e-6;
   const Scalar candidates[3] = {0, 1, t_min};
   int count = 0;
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < (interior ? 3 : 2); ++k) {
     const Scalar t = candidates[k];
-    if (k == 2 && (t < 1e-3 || t > 1 - 1e-3)) break;
     const Vec3 p = p0 + t * (p1 - p0);
     const Scalar dist = box_signed_distance(p, half, &n);
     const Vec3 c = box.apply(p), n_world = box.q * n;  // box -> capsule

@@ -1,0 +1,256 @@
+#include "engine/solver_featherstone.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <memory>
+
+#include "engine/builder.h"
+#include "engine/mjcf_import.h"
+#include "test_support_errors.h"
+
+namespace novaphy {
+namespace {
+
+const Scalar kDt = 1.0 / 120;
+
+// a finalized scene with its pipeline, contacts, solver, state and control
+struct Scene {
+  explicit Scene(const ModelBuilder& builder, const SolverFeatherstoneSettings& settings = {})
+      : model(builder.finalize()),
+        pipeline(model),
+        contacts(pipeline.contacts()),
+        solver(model, settings),
+        state(model.state()),
+        control(model.control()) {}
+
+  void run(Scalar seconds, Scalar dt = kDt, const std::function<void()>& after_step = {}) {
+    const int steps = static_cast<int>(std::lround(seconds / dt));
+    for (int k = 0; k < steps; ++k) {
+      pipeline.collide(state, contacts);
+      solver.step(state, state, control, contacts, dt);
+      if (after_step) after_step();
+    }
+  }
+  Vec3 position(int body) const { return Eigen::Map<const Vec3>(&state.body_q[7 * body]); }
+  Vec3 velocity(int body) const { return Eigen::Map<const Vec3>(&state.body_qd[6 * body]); }
+
+  Model model;
+  CollisionPipeline pipeline;
+  Contacts contacts;
+  SolverFeatherstone solver;
+  State state;
+  Control control;
+};
+
+Transform at(const Vec3& p, const Quat& q = Quat::Identity()) {
+  Transform T;
+  T.p = p;
+  T.q = q;
+  return T;
+}
+
+ShapeOptions material(Scalar mu, Scalar restitution = 0) {
+  ShapeOptions options;
+  options.mu = mu;
+  options.restitution = restitution;
+  return options;
+}
+
+int add_box(ModelBuilder& builder, const Vec3& position, Scalar half = 0.2, Scalar mass = 1, Scalar mu = 0.5) {
+  const int body = builder.add_body(RigidBody::from_box(mass, Vec3::Constant(half)), at(position));
+  builder.add_shape_box(body, Vec3::Constant(half), material(mu));
+  return body;
+}
+
+SolverFeatherstoneSettings no_damping() {
+  SolverFeatherstoneSettings settings;
+  settings.angular_damping = 0;
+  return settings;
+}
+
+TEST(SolverFeatherstone, BoxRestsWithinSlopWithoutDrift) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  const int box = add_box(builder, Vec3(0, 0.2, 0));
+  Scene scene(builder);
+  Scalar worst = 0;
+  scene.run(10, kDt, [&] { worst = std::max(worst, std::abs(scene.position(box).y() - 0.2)); });
+  EXPECT_LE(worst, scene.solver.settings.linear_slop);
+  EXPECT_LT(std::abs(scene.position(box).x()) + std::abs(scene.position(box).z()), 1e-6);  // a micrometre in 10 s
+  EXPECT_LT(scene.velocity(box).norm(), 1e-6);
+  EXPECT_EQ(scene.contacts.contact_count, 4);
+}
+
+TEST(SolverFeatherstone, FiveBoxTowerStandsTenSeconds) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  std::vector<int> boxes;
+  for (int k = 0; k < 5; ++k) boxes.push_back(add_box(builder, Vec3(0, 0.2 + 0.4 * k, 0)));
+  Scene scene(builder);
+  scene.run(10);
+  for (int k = 0; k < 5; ++k) {
+    const Vec3 p = scene.position(boxes[k]);
+    EXPECT_LT((p - Vec3(0, 0.2 + 0.4 * k, 0)).norm(), 0.01) << "box " << k;
+  }
+}
+
+// a box released on a slope of 30 degrees with mu = 0.2 slides with a = g (sin - mu cos)
+TEST(SolverFeatherstone, BoxOnSlopeSlidesAtCoulombAcceleration) {
+  const Scalar angle = M_PI / 6, mu = 0.2;
+  const Quat tilt(Eigen::AngleAxis<Scalar>(angle, Vec3::UnitZ()));
+  const Vec3 n = tilt * Vec3::UnitY(), down_slope = tilt * Vec3(-1, 0, 0);
+  ModelBuilder builder;
+  builder.add_plane(n, 0, material(mu));
+  const int box = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.2)), at(0.2 * n, tilt));
+  builder.add_shape_box(box, Vec3::Constant(0.2), material(mu));
+  Scene scene(builder, no_damping());
+  scene.run(0.5);
+  const Scalar v0 = scene.velocity(box).dot(down_slope);
+  scene.run(1.0);
+  const Scalar measured = (scene.velocity(box).dot(down_slope) - v0) / 1.0;
+  const Scalar expected = 9.81 * (std::sin(angle) - mu * std::cos(angle));
+  EXPECT_NEAR(measured, expected, 0.05 * expected);
+}
+
+TEST(SolverFeatherstone, BoxOnSlopeWithEnoughFrictionStays) {
+  const Scalar angle = M_PI / 6, mu = 0.8;
+  const Quat tilt(Eigen::AngleAxis<Scalar>(angle, Vec3::UnitZ()));
+  const Vec3 n = tilt * Vec3::UnitY();
+  ModelBuilder builder;
+  builder.add_plane(n, 0, material(mu));
+  const int box = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.2)), at(0.2 * n, tilt));
+  builder.add_shape_box(box, Vec3::Constant(0.2), material(mu));
+  Scene scene(builder);
+  scene.run(3);
+  EXPECT_LT((scene.position(box) - 0.2 * n).norm(), 0.005);
+}
+
+// a ball dropped from 1 m onto the ground bounces to e^2 of its height
+TEST(SolverFeatherstone, BounceHeightFollowsRestitution) {
+  for (const Scalar e : {0.5, 0.8}) {
+    ModelBuilder builder;
+    builder.add_ground_plane(0, material(0.5, e));
+    const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), at(Vec3(0, 1.1, 0)));
+    builder.add_shape_sphere(ball, 0.1, material(0.5, e));
+    SolverFeatherstoneSettings settings = no_damping();
+    settings.restitution_threshold = 0.05;
+    Scene scene(builder, settings);
+    Scalar peak = 0;
+    bool bounced = false;
+    scene.run(0.45 + 2 * e, 1.0 / 1000, [&] {
+      if (scene.velocity(ball).y() > 0) bounced = true;
+      if (bounced) peak = std::max(peak, scene.position(ball).y() - 0.1);
+    });
+    EXPECT_NEAR(peak, e * e * 1.0, 0.05 * e * e) << "restitution " << e;
+  }
+}
+
+// a link driven by a stiff PD drive (implicit, so kp = 1e4 is stable at dt = 1/60) reaches its target
+TEST(SolverFeatherstone, PdArmReachesTarget) {
+  ModelBuilder builder;
+  const int arm = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.child_xform.p = Vec3(0, 0.25, 0);  // hinge at the top of the link
+  const int joint = builder.add_joint_revolute(-1, arm, options);
+  Scene scene(builder);
+  scene.control.joint_target_pos[joint] = 1.0;
+  scene.control.joint_target_ke[joint] = 1e4;
+  scene.control.joint_target_kd[joint] = 200;
+  scene.run(3, 1.0 / 60);
+  EXPECT_NEAR(scene.state.joint_q[0], 1.0, 0.01);
+  EXPECT_LT(std::abs(scene.state.joint_qd[0]), 1e-3);
+}
+
+TEST(SolverFeatherstone, LimitsHoldAJointInsideItsRange) {
+  ModelBuilder builder;
+  const int arm = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.child_xform.p = Vec3(-0.25, 0, 0);  // horizontal link: gravity swings it down
+  options.dof.limit_lower = -0.5;
+  options.dof.limit_upper = 0.5;
+  builder.add_joint_revolute(-1, arm, options);
+  Scene scene(builder);
+  Scalar lowest = 0;
+  scene.run(3, kDt, [&] { lowest = std::min(lowest, scene.state.joint_q[0]); });
+  EXPECT_GE(lowest, -0.5 - 0.02);
+  EXPECT_NEAR(scene.state.joint_q[0], -0.5, scene.solver.settings.linear_slop + 1e-6);
+}
+
+TEST(SolverFeatherstone, StateInMayBeStateOut) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  add_box(builder, Vec3(0, 0.5, 0));
+  Scene a(builder), b(builder);
+  State out = b.state;
+  for (int k = 0; k < 120; ++k) {
+    a.pipeline.collide(a.state, a.contacts);
+    a.solver.step(a.state, a.state, a.control, a.contacts, kDt);
+    b.pipeline.collide(b.state, b.contacts);
+    b.solver.step(b.state, out, b.control, b.contacts, kDt);
+    b.state = out;
+  }
+  EXPECT_EQ(a.state.joint_q, b.state.joint_q);
+  EXPECT_EQ(a.state.body_q, b.state.body_q);
+}
+
+TEST(SolverFeatherstone, JointSupport) {
+  ModelBuilder builder;
+  add_box(builder, Vec3::Zero());
+  const Model model = builder.finalize();
+  const JointSupportMatrix support = SolverFeatherstone(model).joint_support();
+  for (const char* joint : {"Revolute", "Prismatic", "Slide", "Ball", "Fixed", "Free"}) EXPECT_TRUE(support.supports(joint));
+  for (const char* joint : {"Distance", "D6", "Cable"}) EXPECT_FALSE(support.supports(joint));
+  EXPECT_NE(support.to_string().find("D6: no"), std::string::npos);
+  EXPECT_NOVAPHY_ERROR(support.supports("Hinge"), "unknown joint type 'Hinge'");
+}
+
+TEST(SolverFeatherstoneErrors, BadStepArguments) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  add_box(builder, Vec3(0, 0.5, 0));
+  Scene scene(builder);
+  const State before = scene.state;
+  for (const Scalar dt : {0.0, -0.01, std::nan("")})
+    EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, dt),
+                         "dt must be finite and > 0");
+
+  ModelBuilder other;
+  other.add_ground_plane();
+  add_box(other, Vec3(0, 0.5, 0));
+  add_box(other, Vec3(0, 1.5, 0));
+  Scene foreign(other);
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(foreign.state, scene.state, scene.control, scene.contacts, kDt),
+                       "state or control from another model");
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, foreign.contacts, kDt),
+                       "contacts buffer is from another model");
+  EXPECT_NOVAPHY_ERROR(scene.pipeline.collide(scene.state, foreign.contacts), "contacts buffer was not made by this pipeline");
+
+  scene.solver.settings.num_iterations = -1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.num_iterations must be >= 0, got -1");
+  scene.solver.settings = {};
+  scene.solver.settings.erp = 1.5;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.erp must be in [0, 1], got 1.5");
+  scene.solver.settings = {};
+  scene.solver.settings.update_mass_matrix_interval = 0;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.update_mass_matrix_interval must be >= 1, got 0");
+  scene.solver.settings = {};
+  scene.control.joint_f[2] = std::nan("");
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "control value 2 is not finite");
+  // nothing was written by the failed steps
+  EXPECT_EQ(scene.state.joint_q, before.joint_q);
+  EXPECT_EQ(scene.state.body_q, before.body_q);
+
+  SolverFeatherstoneSettings bad;
+  bad.friction_smoothing = -1;
+  EXPECT_NOVAPHY_ERROR(SolverFeatherstone(scene.model, bad), "settings.friction_smoothing must be in [0, 1], got -1");
+}
+
+}  // namespace
+}  // namespace novaphy
