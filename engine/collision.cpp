@@ -30,7 +30,10 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
   body_parent_.assign(model.body_count, -1);
   body_articulation_.assign(model.body_count, -1);
   for (int j = 0; j < model.joint_count; ++j) {
-    body_parent_[model.joint_child[j]] = model.joint_parent[j];
+    // the parent through massless links (a MuJoCo body with several joints is a chain of them)
+    int parent = model.joint_parent[j];
+    while (parent >= 0 && model.body_mass[parent] == 0) parent = body_parent_[parent];
+    body_parent_[model.joint_child[j]] = parent;
     body_articulation_[model.joint_child[j]] = model.joint_articulation[j];
   }
   for (int s = 0; s < model.shape_count; ++s)

@@ -64,7 +64,7 @@ class CollisionPipeline {
 
   const Model& model_;
   CollisionOptions options_;
-  std::vector<int> body_parent_;       // parent body of each body through its joint, -1
+  std::vector<int> body_parent_;       // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
   std::vector<int> planes_, others_;   // shape indices
   // scratch

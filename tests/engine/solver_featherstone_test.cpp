@@ -179,6 +179,38 @@ TEST(SolverFeatherstone, LimitsHoldAJointInsideItsRange) {
   EXPECT_NEAR(scene.state.joint_q[0], -0.5, scene.solver.settings.linear_slop + 1e-6);
 }
 
+// the same MJCF stepped by MuJoCo (its own soft contacts) and by NovaPhy comes to rest at the same height
+Scalar mujoco_rest_height(const std::string& path, const char* body, Scalar seconds) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  const std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m.get()), mj_deleteData);
+  const int steps = static_cast<int>(std::lround(seconds / m->opt.timestep));
+  for (int k = 0; k < steps; ++k) mj_step(m.get(), d.get());
+  return d->xpos[3 * mj_name2id(m.get(), mjOBJ_BODY, body) + 2];
+}
+
+Scalar novaphy_rest_height(const std::string& path, const char* body, Scalar seconds, Scalar dt) {
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  Scene scene(builder);
+  scene.run(seconds, dt);
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  return scene.position(import.body_map[mj_name2id(m.get(), mjOBJ_BODY, body)]).z();
+}
+
+TEST(SolverFeatherstone, BoxDropRestsWhereMujocoRests) {
+  const std::string path = NOVAPHY_SCENE_DIR "/box_drop.xml";
+  const Scalar mujoco = mujoco_rest_height(path, "box", 3), novaphy = novaphy_rest_height(path, "box", 3, 0.005);
+  EXPECT_NEAR(novaphy, mujoco, 0.01);
+  EXPECT_NEAR(novaphy, 0.1, 0.01);  // on its smallest face
+}
+
+TEST(SolverFeatherstone, QuadrupedSettlesWhereMujocoSettles) {
+  const std::string path = NOVAPHY_SCENE_DIR "/quadruped.xml";
+  const Scalar mujoco = mujoco_rest_height(path, "torso", 4), novaphy = novaphy_rest_height(path, "torso", 4, 0.005);
+  EXPECT_NEAR(novaphy, mujoco, 0.01);
+  EXPECT_GT(novaphy, 0.3);  // standing on its feet
+}
+
 TEST(SolverFeatherstone, StateInMayBeStateOut) {
   ModelBuilder builder;
   builder.add_ground_plane();
