@@ -70,9 +70,13 @@ ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar res
   py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("collision_group") = 1, py::arg("collision_mask") = -1
 
 // runs an importer and passes each of its warnings to Python's warnings module
-template <std::vector<std::string> (ModelBuilder::*importer)(const std::string&)>
-std::vector<std::string> import_file(ModelBuilder& builder, const std::string& path) {
-  const std::vector<std::string> warnings = (builder.*importer)(path);
+template <std::vector<std::string> (ModelBuilder::*importer)(const std::string&, const ImportOptions&)>
+std::vector<std::string> import_file(ModelBuilder& builder, const std::string& path, std::optional<Transform> xform,
+                                     bool static_shapes) {
+  ImportOptions options;
+  options.xform = xform.value_or(Transform::identity());
+  options.static_shapes = static_shapes;
+  const std::vector<std::string> warnings = (builder.*importer)(path, options);
   const py::object warn = py::module_::import("warnings").attr("warn");
   for (const std::string& w : warnings) warn("novaphy: " + w, py::handle(PyExc_UserWarning), 2);
   return warnings;
@@ -159,10 +163,13 @@ void bind_builder(py::module_& m) {
           },
           py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
           "Capsule along the shape frame's local Y axis.")
-      .def("add_mjcf", &import_file<&ModelBuilder::add_mjcf>, py::arg("path"),
-           "Imports an MJCF file through MuJoCo's parser; warns (UserWarning) about what is not modelled and "
+      .def("add_mjcf", &import_file<&ModelBuilder::add_mjcf>, py::arg("path"), py::kw_only(),
+           py::arg("xform") = py::none(), py::arg("static_shapes") = true,
+           "Imports an MJCF file through MuJoCo's parser, its world frame placed at xform (static_shapes=False "
+           "leaves out the world's geoms, such as a floor); warns (UserWarning) about what is not modelled and "
            "returns those warnings.")
-      .def("add_urdf", &import_file<&ModelBuilder::add_urdf>, py::arg("path"),
+      .def("add_urdf", &import_file<&ModelBuilder::add_urdf>, py::arg("path"), py::kw_only(),
+           py::arg("xform") = py::none(), py::arg("static_shapes") = true,
            "Imports a URDF file through MuJoCo's parser; warns like add_mjcf.")
       .def("finalize", &ModelBuilder::finalize, "Lays the scene out as a Model.");
   def_joint(builder, "add_joint_revolute", JointType::Revolute, "Revolute joint: rotation by q about axis.");

@@ -42,6 +42,11 @@ struct ShapeOptions {
   int collision_mask = -1;
 };
 
+struct ImportOptions {
+  Transform xform;            // places the file's world frame in the builder's world
+  bool static_shapes = true;  // geoms of the world body and bodies welded to it (a floor)
+};
+
 struct JointOptions {
   Transform parent_xform;  // parent link frame -> parent joint frame
   Transform child_xform;   // child link frame -> child joint frame
@@ -89,8 +94,10 @@ class ModelBuilder {
 
   // MJCF / URDF import through MuJoCo's parser (engine/mjcf_import.cpp): returns the warnings
   // for everything in the file the engine does not model, by name
-  std::vector<std::string> add_mjcf(const std::string& path);
-  std::vector<std::string> add_urdf(const std::string& path) { return add_mjcf(path); }
+  std::vector<std::string> add_mjcf(const std::string& path, const ImportOptions& options = {});
+  std::vector<std::string> add_urdf(const std::string& path, const ImportOptions& options = {}) {
+    return add_mjcf(path, options);
+  }
 
   int body_count() const { return static_cast<int>(body_mass_.size()); }
   int joint_count() const { return static_cast<int>(joints_.size()); }

@@ -43,7 +43,10 @@ Transform y_to_z() {
 
 class MjcfImporter {
  public:
-  MjcfImporter(ModelBuilder& builder, const mjModel* m) : builder_(builder), m_(m) {}
+  MjcfImporter(ModelBuilder& builder, const mjModel* m, const ImportOptions& options)
+      : builder_(builder), m_(m), options_(options) {
+    static_pose_.assign(m_->nbody, options.xform);
+  }
 
   MujocoImport run() {
     out_.body_map.assign(m_->nbody, -1);
@@ -51,7 +54,6 @@ class MjcfImporter {
       out_.q_begin += joint_coord_count(joint.type);
       out_.qd_begin += joint_dof_count(joint.type);
     }
-    static_pose_.assign(m_->nbody, Transform::identity());
     joint_index_.assign(m_->njnt, -1);
     builder_.set_gravity(vec3(m_->opt.gravity));
     for (int b = 1; b < m_->nbody; ++b) add_body(b);
@@ -142,7 +144,7 @@ class MjcfImporter {
         case mjJNT_FREE:
           // a free joint places the body frame directly at qpos (MuJoCo ignores its pos)
           type = JointType::Free;
-          body_xform = pose(m_->qpos0 + qa, m_->qpos0 + qa + 3);
+          body_xform = static_pose_[0] * pose(m_->qpos0 + qa, m_->qpos0 + qa + 3);
           if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': free joint stiffness is not modelled");
           break;
       }
@@ -162,6 +164,7 @@ class MjcfImporter {
   void add_geom(int g) {
     const int b = m_->geom_bodyid[g];
     const int body = out_.body_map[b];
+    if (body < 0 && !options_.static_shapes) return;
     Transform G = pose(m_->geom_pos + 3 * g, m_->geom_quat + 4 * g);
     if (body < 0) G = static_pose_[b] * G;
     const mjtNum* size = m_->geom_size + 3 * g;
@@ -215,6 +218,7 @@ class MjcfImporter {
 
   ModelBuilder& builder_;
   const mjModel* m_;
+  ImportOptions options_;
   MujocoImport out_;
   std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
   std::vector<int> joint_index_;        // MuJoCo joint -> NovaPhy joint
@@ -228,14 +232,18 @@ mjModel* load_mujoco_model(const std::string& path) {
   return m;
 }
 
-MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m) { return MjcfImporter(builder, m).run(); }
-
-MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path) {
-  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
-  return import_mujoco_model(builder, m.get());
+MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m, const ImportOptions& options) {
+  return MjcfImporter(builder, m, options).run();
 }
 
-std::vector<std::string> ModelBuilder::add_mjcf(const std::string& path) { return import_mjcf(*this, path).warnings; }
+MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path, const ImportOptions& options) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  return import_mujoco_model(builder, m.get(), options);
+}
+
+std::vector<std::string> ModelBuilder::add_mjcf(const std::string& path, const ImportOptions& options) {
+  return import_mjcf(*this, path, options).warnings;
+}
 
 void MujocoImport::to_joint_q(const mjModel* m, const mjtNum* qpos, Scalar* joint_q) const {
   Scalar* q = joint_q + q_begin;

@@ -33,7 +33,7 @@ struct MujocoImport {
 // loads an MJCF or URDF file; throws Error with MuJoCo's message when it does not exist or parse
 mjModel* load_mujoco_model(const std::string& path);
 
-MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m);
-MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path);
+MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m, const ImportOptions& options = {});
+MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path, const ImportOptions& options = {});
 
 }  // namespace novaphy

@@ -110,6 +110,25 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
   std::filesystem::remove(path);
 }
 
+TEST(MjcfImport, CopiesPlacedByXformWithoutTheirFloor) {
+  ModelBuilder builder;
+  builder.add_mjcf(NOVAPHY_SCENE_DIR "/quadruped.xml");
+  ImportOptions options;
+  options.xform.p = Vec3(2, 0, 0);
+  options.static_shapes = false;
+  const MujocoImport second = import_mjcf(builder, NOVAPHY_SCENE_DIR "/quadruped.xml", options);
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.articulation_count, 2);
+  int planes = 0;
+  for (int s = 0; s < model.shape_count; ++s) planes += model.shape_type[s] == static_cast<int>(ShapeType::Plane);
+  EXPECT_EQ(planes, 1);
+  const State state = model.state();
+  const int torso = second.body_map[1];
+  EXPECT_NEAR(state.body_q[7 * torso], 2.0, 1e-12);
+  EXPECT_NEAR(state.body_q[7 * torso + 2], 0.45, 1e-12);
+  EXPECT_EQ(second.q_begin, 19);
+}
+
 TEST(MjcfImport, MissingFileIsAClearError) {
   ModelBuilder builder;
   try {
