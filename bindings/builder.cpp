@@ -137,10 +137,12 @@ void bind_builder(py::module_& m) {
           py::arg("y") = 0.0, py::kw_only(), SHAPE_KWARGS, "Static plane y = const with normal +Y.")
       .def(
           "add_plane",
-          [](ModelBuilder& self, const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, int group, int mask) {
+          [](ModelBuilder& self, const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, int group,
+             int mask) {
             return self.add_plane(normal, offset, shape_options(std::nullopt, mu, restitution, group, mask));
           },
-          py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(), SHAPE_KWARGS, "Static plane {x : normal . x = offset}.")
+          py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(), SHAPE_KWARGS,
+          "Static plane {x : normal . x = offset}.")
       .def(
           "add_shape_box",
           [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, Scalar mu,
@@ -159,7 +161,8 @@ void bind_builder(py::module_& m) {
           "add_shape_capsule",
           [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
              Scalar restitution, int group, int mask) {
-            return self.add_shape_capsule(body, radius, half_height, shape_options(xform, mu, restitution, group, mask));
+            return self.add_shape_capsule(body, radius, half_height,
+                                          shape_options(xform, mu, restitution, group, mask));
           },
           py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
           "Capsule along the shape frame's local Y axis.")

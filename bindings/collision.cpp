@@ -1,18 +1,20 @@
 // CollisionPipeline and Contacts: contact arrays are numpy views over the first contact_count entries.
-#include "bindings/bindings.h"
 #include "engine/collision.h"
+
+#include "bindings/bindings.h"
 
 namespace novaphy::python {
 
 void bind_collision(py::module_& m) {
-  auto contacts = py::class_<Contacts>(m, "Contacts", "Contacts of the last collide(), numpy views of contact_count rows.");
+  auto contacts =
+      py::class_<Contacts>(m, "Contacts", "Contacts of the last collide(), numpy views of contact_count rows.");
   contacts.def_readonly("contact_count", &Contacts::contact_count)
       .def_readonly("contact_capacity", &Contacts::contact_capacity)
       .def_readonly("contact_dropped", &Contacts::contact_dropped, "Contacts found beyond the capacity last time.");
-#define NOVAPHY_BIND_CONTACT_FIELD(T, name, count, width)                            \
-  contacts.def_property_readonly(#name, [](py::object self) {                        \
-    Contacts& c = self.cast<Contacts&>();                                            \
-    return view(c.name.data(), c.contact_count, width, self, false);                 \
+#define NOVAPHY_BIND_CONTACT_FIELD(T, name, count, width)            \
+  contacts.def_property_readonly(#name, [](py::object self) {        \
+    Contacts& c = self.cast<Contacts&>();                            \
+    return view(c.name.data(), c.contact_count, width, self, false); \
   });
   NOVAPHY_CONTACT_FIELDS(NOVAPHY_BIND_CONTACT_FIELD)
 #undef NOVAPHY_BIND_CONTACT_FIELD

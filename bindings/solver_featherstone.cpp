@@ -1,6 +1,7 @@
 // novaphy.solvers.SolverFeatherstone with the seed's keyword arguments mirrored into solver.settings.
-#include "bindings/bindings.h"
 #include "engine/solver_featherstone.h"
+
+#include "bindings/bindings.h"
 
 namespace novaphy::python {
 

@@ -81,9 +81,7 @@ void shape_bounds(const Model& model, const Transform& X, int s, Scalar margin, 
   switch (static_cast<ShapeType>(model.shape_type[s])) {
     case ShapeType::Sphere: extent = Vec3::Constant(scale.x()); break;
     case ShapeType::Box: extent = X.rotation().cwiseAbs() * scale; break;
-    case ShapeType::Capsule:
-      extent = (X.q * Vec3(0, scale.y(), 0)).cwiseAbs() + Vec3::Constant(scale.x());
-      break;
+    case ShapeType::Capsule: extent = (X.q * Vec3(0, scale.y(), 0)).cwiseAbs() + Vec3::Constant(scale.x()); break;
     case ShapeType::Plane: break;
   }
   Eigen::Map<Vec3>{lower} = X.p - extent - Vec3::Constant(margin);
@@ -117,9 +115,8 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // broad phase: sweep and prune along x, then every plane against every other shape
   for (const int s : others_)
     shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
-  std::sort(order_.begin(), order_.end(), [&](int x, int y) {
-    return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y);
-  });
+  std::sort(order_.begin(), order_.end(),
+            [&](int x, int y) { return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y); });
   for (size_t i = 0; i < order_.size(); ++i) {
     const int a = order_[i];
     for (size_t j = i + 1; j < order_.size() && lower_[3 * order_[j]] <= upper_[3 * a]; ++j) {

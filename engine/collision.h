@@ -10,15 +10,15 @@
 namespace novaphy {
 
 // X(type, name, count, width); count is contact_capacity
-#define NOVAPHY_CONTACT_FIELDS(X)                     \
-  X(int, contact_shape_a, contact_capacity, 1)        \
-  X(int, contact_shape_b, contact_capacity, 1)        \
-  X(int, contact_body_a, contact_capacity, 1)         \
-  X(int, contact_body_b, contact_capacity, 1)         \
-  X(Scalar, contact_point, contact_capacity, 3)       \
-  X(Scalar, contact_normal, contact_capacity, 3)      \
-  X(Scalar, contact_depth, contact_capacity, 1)       \
-  X(int, contact_feature, contact_capacity, 1)        \
+#define NOVAPHY_CONTACT_FIELDS(X)                \
+  X(int, contact_shape_a, contact_capacity, 1)   \
+  X(int, contact_shape_b, contact_capacity, 1)   \
+  X(int, contact_body_a, contact_capacity, 1)    \
+  X(int, contact_body_b, contact_capacity, 1)    \
+  X(Scalar, contact_point, contact_capacity, 3)  \
+  X(Scalar, contact_normal, contact_capacity, 3) \
+  X(Scalar, contact_depth, contact_capacity, 1)  \
+  X(int, contact_feature, contact_capacity, 1)   \
   X(Scalar, contact_impulse, contact_capacity, 3)
 
 // contacts of one collide(): the first contact_count entries of each array are valid.
@@ -43,9 +43,9 @@ struct Contacts : ModelCounts {
 };
 
 struct CollisionOptions {
-  int contact_capacity = 0;      // 0: 8 per shape, at least 64
-  Scalar margin = 0.01;          // contacts are made this far before touching
-  bool self_collision = true;    // links of one articulation collide (never a parent with its child)
+  int contact_capacity = 0;    // 0: 8 per shape, at least 64
+  Scalar margin = 0.01;        // contacts are made this far before touching
+  bool self_collision = true;  // links of one articulation collide (never a parent with its child)
 };
 
 class CollisionPipeline {
@@ -64,9 +64,9 @@ class CollisionPipeline {
 
   const Model& model_;
   CollisionOptions options_;
-  std::vector<int> body_parent_;       // parent body of each body through its joint (skipping massless links), -1
+  std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
-  std::vector<int> planes_, others_;   // shape indices
+  std::vector<int> planes_, others_;  // shape indices
   // scratch
   std::vector<Scalar> lower_, upper_;  // [shape][3] world AABBs
   std::vector<int> order_;

@@ -115,8 +115,8 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   integrate(in, out, dt);
 }
 
-void SolverFeatherstone::check_step(const State& in, const State& out, const Control& control,
-                                    const Contacts& contacts, Scalar dt) const {
+void SolverFeatherstone::check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
+                                    Scalar dt) const {
   if (!(dt > 0) || !std::isfinite(dt)) fail("dt must be finite and > 0, got ", dt);
   settings.check();
   model_.check(in);
@@ -176,8 +176,10 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     // M = H + diag, factored every update_mass_matrix_interval steps; qdd = M^-1 rhs
     int bad = -1;
     if (refactor) {
-      if (settings.use_tile_gemm) mass_matrix_gemm(art, s);
-      else crba(art, s);
+      if (settings.use_tile_gemm)
+        mass_matrix_gemm(art, s);
+      else
+        crba(art, s);
       s.H.diagonal() += s.u;
       if (settings.fuse_cholesky) {
         bad = cholesky_factor_solve(s.H, rhs);
@@ -306,8 +308,10 @@ void SolverFeatherstone::build_contact_rows(const State&, const Contacts& contac
     PgsRow& normal = rows_[rn];
     Scalar target = depth > settings.linear_slop ? settings.erp * (depth - settings.linear_slop) / dt
                                                  : std::min<Scalar>(depth, 0) / dt;
+    // restitution only for a contact that closes within this step
     const Scalar v_approach = row_velocity(normal, J_, qd_in_.data());
-    if (v_approach < -settings.restitution_threshold) target = std::max(target, -restitution * v_approach);
+    if (v_approach < -settings.restitution_threshold && depth - v_approach * dt >= 0)
+      target = std::max(target, -restitution * v_approach);
     normal.target = target;
     const int r1 = add_row(ba, bb, p, t1, RowKind::FrictionPair, 0);
     const int r2 = add_row(ba, bb, p, t2, RowKind::FrictionPair, 0);
@@ -342,7 +346,8 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
     Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) =
         rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
   }
-  for (size_t k = 0; k < limit_row_.size(); ++k) limit_impulse_[k] = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
+  for (size_t k = 0; k < limit_row_.size(); ++k)
+    limit_impulse_[k] = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
 }
 
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {

@@ -13,12 +13,12 @@
 namespace novaphy {
 
 struct SolverFeatherstoneSettings {
-  int num_iterations = 20;              // PGS sweeps
-  Scalar linear_slop = 0.001;           // penetration (m) left alone by the position correction
-  Scalar erp = 0.2;                     // fraction of the penetration beyond the slop removed per step
-  Scalar cfm = 1e-6;                    // constraint force mixing: softens every row
-  Scalar warmstarting_factor = 0.85;    // share of the previous step's impulses applied up front
-  Scalar restitution_threshold = 0.2;   // approach speed (m/s) below which contacts do not bounce
+  int num_iterations = 20;             // PGS sweeps
+  Scalar linear_slop = 0.001;          // penetration (m) left alone by the position correction
+  Scalar erp = 0.2;                    // fraction of the penetration beyond the slop removed per step
+  Scalar cfm = 1e-6;                   // constraint force mixing: softens every row
+  Scalar warmstarting_factor = 0.85;   // share of the previous step's impulses applied up front
+  Scalar restitution_threshold = 0.2;  // approach speed (m/s) below which contacts do not bounce
   bool use_warmstarting = true;
   Scalar angular_damping = 0.05;        // rotational dof velocities scaled by (1 - angular_damping dt)
   int update_mass_matrix_interval = 1;  // recompute and refactor H every N steps
@@ -53,8 +53,7 @@ class SolverFeatherstone {
   SolverFeatherstoneSettings settings;
 
  private:
-  void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
-                  Scalar dt) const;
+  void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt) const;
   void unconstrained_velocity(const State& in, const Control& control, Scalar dt);
   void build_contact_rows(const State& in, const Contacts& contacts, Scalar dt);
   void build_limit_rows(const State& in, Scalar dt);
@@ -88,8 +87,8 @@ class SolverFeatherstone {
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
-  std::vector<int> contact_row_;    // first row of each contact, -1
-  std::vector<int> limit_row_;      // [dof][2] row of each active limit, -1
+  std::vector<int> contact_row_;       // first row of each contact, -1
+  std::vector<int> limit_row_;         // [dof][2] row of each active limit, -1
   std::vector<Scalar> limit_impulse_;  // [dof][2] impulses of the previous step's limit rows
 };
 

@@ -71,8 +71,8 @@ struct ArticulationScratch {
   std::vector<Mat6> D_inv;         // inverse of S^T IA S, top-left dof x dof block (ABA)
   MatX H;                          // dof x dof joint-space inertia, then its Cholesky factor
   std::vector<Eigen::Matrix<Scalar, 6, Eigen::Dynamic>> link_jacobian;  // 6 x dof per link (mass_matrix_gemm)
-  MatX S_world;                    // 6 x dof motion subspace in world coordinates
-  VecX u;                          // dof work vector
+  MatX S_world;                                                         // 6 x dof motion subspace in world coordinates
+  VecX u;                                                               // dof work vector
 
   void resize(const ArticulationView& art);
 };

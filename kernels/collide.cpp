@@ -138,7 +138,8 @@ int collide_plane_sphere(const Transform& plane, const Vec3& center, Scalar radi
   return 1;
 }
 
-int collide_plane_box(const Transform& plane, const Transform& box, const Vec3& half, Scalar margin, ContactPoint* out) {
+int collide_plane_box(const Transform& plane, const Transform& box, const Vec3& half, Scalar margin,
+                      ContactPoint* out) {
   const Vec3 n = plane.q * Vec3::UnitY();
   int count = 0;
   for (int v = 0; v < 8; ++v) {
@@ -250,7 +251,8 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
   const Vec3 T = b.p - a.p;
   auto separation = [&](const Vec3& L) {
     Scalar pa = 0, pb = 0;
-    for (int k = 0; k < 3; ++k) pa += half_a[k] * std::abs(Ra.col(k).dot(L)), pb += half_b[k] * std::abs(Rb.col(k).dot(L));
+    for (int k = 0; k < 3; ++k)
+      pa += half_a[k] * std::abs(Ra.col(k).dot(L)), pb += half_b[k] * std::abs(Rb.col(k).dot(L));
     return std::abs(T.dot(L)) - pa - pb;
   };
 
@@ -325,8 +327,8 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
     Vec3 p;
     int id;
   };
-  std::array<Vertex, 16> poly{{{inc_center + du + dv, 0}, {inc_center - du + dv, 1}, {inc_center - du - dv, 2},
-                               {inc_center + du - dv, 3}}},
+  std::array<Vertex, 16> poly{
+      {{inc_center + du + dv, 0}, {inc_center - du + dv, 1}, {inc_center - du - dv, 2}, {inc_center + du - dv, 3}}},
       clipped;
   int count = 4;
   const int ru = (k + 1) % 3, rv = (k + 2) % 3;
@@ -339,7 +341,8 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
       const Vertex& q = poly[(e + 1) % count];
       const Scalar dp = axis.dot(p.p - ref.p) - limit, dq = axis.dot(q.p - ref.p) - limit;
       if (dp <= 0) clipped[next++] = p;
-      if ((dp < 0) != (dq < 0) && dp != dq) clipped[next++] = {p.p + (dp / (dp - dq)) * (q.p - p.p), 4 + 4 * plane + e % 4};
+      if ((dp < 0) != (dq < 0) && dp != dq)
+        clipped[next++] = {p.p + (dp / (dp - dq)) * (q.p - p.p), 4 + 4 * plane + e % 4};
     }
     count = next;
     std::copy(clipped.begin(), clipped.begin() + count, poly.begin());

@@ -42,8 +42,10 @@ void mass_matrix_gemm(const ArticulationView& art, ArticulationScratch& s) {
     // J_i = Xup_i J_parent + S_i in its own columns (link coordinates)
     auto& J = s.link_jacobian[i];
     const int p = art.parent(i);
-    if (p < 0) J.setZero();
-    else J = s.Xup[i] * s.link_jacobian[p];
+    if (p < 0)
+      J.setZero();
+    else
+      J = s.Xup[i] * s.link_jacobian[p];
     J.middleCols(art.qd_start(i), art.dof(i)) = s.S.middleCols(art.qd_start(i), art.dof(i));
     const Eigen::Matrix<Scalar, 6, Eigen::Dynamic> IJ = s.I[i] * J;
     s.H.noalias() += J.transpose() * IJ;

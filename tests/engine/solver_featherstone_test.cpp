@@ -233,7 +233,8 @@ TEST(SolverFeatherstone, JointSupport) {
   add_box(builder, Vec3::Zero());
   const Model model = builder.finalize();
   const JointSupportMatrix support = SolverFeatherstone(model).joint_support();
-  for (const char* joint : {"Revolute", "Prismatic", "Slide", "Ball", "Fixed", "Free"}) EXPECT_TRUE(support.supports(joint));
+  for (const char* joint : {"Revolute", "Prismatic", "Slide", "Ball", "Fixed", "Free"})
+    EXPECT_TRUE(support.supports(joint));
   for (const char* joint : {"Distance", "D6", "Cable"}) EXPECT_FALSE(support.supports(joint));
   EXPECT_NE(support.to_string().find("D6: no"), std::string::npos);
   EXPECT_NOVAPHY_ERROR(support.supports("Hinge"), "unknown joint type 'Hinge'");
@@ -258,7 +259,8 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
                        "state or control from another model");
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, foreign.contacts, kDt),
                        "contacts buffer is from another model");
-  EXPECT_NOVAPHY_ERROR(scene.pipeline.collide(scene.state, foreign.contacts), "contacts buffer was not made by this pipeline");
+  EXPECT_NOVAPHY_ERROR(scene.pipeline.collide(scene.state, foreign.contacts),
+                       "contacts buffer was not made by this pipeline");
 
   scene.solver.settings.num_iterations = -1;
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
@@ -298,9 +300,7 @@ Scalar tower_top_error(int iterations) {
   return std::abs(scene.position(top).y() - 1.8);
 }
 
-TEST(SolverFeatherstoneSettingsEffect, NumIterations) {
-  EXPECT_GT(tower_top_error(1), 5 * tower_top_error(30));
-}
+TEST(SolverFeatherstoneSettingsEffect, NumIterations) { EXPECT_GT(tower_top_error(1), 5 * tower_top_error(30)); }
 
 // a box started 2 cm inside the ground is pushed out until the slop is left
 Scalar rest_depth(const std::function<void(SolverFeatherstoneSettings&)>& configure, Scalar seconds = 3) {
@@ -371,8 +371,10 @@ TEST(SolverFeatherstoneSettingsEffect, RestitutionThreshold) {
     scene.run(0.8, kDt, [&] { rebound = std::max(rebound, scene.velocity(ball).y()); });
     // impact at sqrt(2 g) = 4.4 m/s: above the low threshold it bounces at 0.8 of that; below the
     // high one only the position correction of the impact's penetration lifts it (erp, see README)
-    if (threshold < 4) EXPECT_GT(rebound, 3.0);
-    else EXPECT_LT(rebound, 0.1 * 0.8 * 4.4);
+    if (threshold < 4)
+      EXPECT_GT(rebound, 3.0);
+    else
+      EXPECT_LT(rebound, 0.1 * 0.8 * 4.4);
   }
 }
 

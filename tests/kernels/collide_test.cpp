@@ -28,8 +28,8 @@ TEST(Collide, SphereOnPlane) {
 
 TEST(Collide, BoxRestingOnPlaneTouchesAtFourCorners) {
   ContactPoint c[kMaxPairContacts];
-  const int n = collide_plane_box(at(Vec3::Zero()), at(Vec3(0, 0.19, 0), about(Vec3::UnitY(), 0.3)), Vec3(0.2, 0.2, 0.2),
-                                  0.005, c);
+  const int n = collide_plane_box(at(Vec3::Zero()), at(Vec3(0, 0.19, 0), about(Vec3::UnitY(), 0.3)),
+                                  Vec3(0.2, 0.2, 0.2), 0.005, c);
   ASSERT_EQ(n, 4);
   std::set<int> features;
   for (int k = 0; k < n; ++k) {
@@ -63,7 +63,8 @@ TEST(Collide, CrossedBoxEdgesTouchAtOnePoint) {
   // two long bars rotated 45 degrees about their axes, crossing at right angles, edges touching
   const Vec3 h(1, 0.1, 0.1);
   const Transform a = at(Vec3::Zero(), about(Vec3::UnitX(), M_PI / 4));
-  const Transform b = at(Vec3(0, 0.1 * std::sqrt(8.0) - 0.01, 0), about(Vec3::UnitY(), M_PI / 2) * about(Vec3::UnitX(), M_PI / 4));
+  const Transform b =
+      at(Vec3(0, 0.1 * std::sqrt(8.0) - 0.01, 0), about(Vec3::UnitY(), M_PI / 2) * about(Vec3::UnitX(), M_PI / 4));
   ASSERT_EQ(collide_box_box(a, h, b, h, 0.001, c), 1);
   EXPECT_LT((c[0].normal - Vec3::UnitY()).norm(), 1e-9);
   EXPECT_NEAR(c[0].depth, 0.01, 1e-9);
