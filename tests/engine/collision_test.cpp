@@ -1,0 +1,165 @@
+#include "engine/collision.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "engine/builder.h"
+#include "test_support_errors.h"
+
+namespace novaphy {
+namespace {
+
+Transform at(const Vec3& p) {
+  Transform T;
+  T.p = p;
+  return T;
+}
+
+std::set<std::pair<int, int>> touching_pairs(const Model& model, const CollisionOptions& options = {}) {
+  CollisionPipeline pipeline(model, options);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  std::set<std::pair<int, int>> pairs;
+  for (int c = 0; c < contacts.contact_count; ++c) {
+    const int a = contacts.contact_shape_a[c], b = contacts.contact_shape_b[c];
+    pairs.insert({std::min(a, b), std::max(a, b)});
+  }
+  return pairs;
+}
+
+TEST(CollisionPipeline, ShapesOfOneBodyAndOfJointedBodiesDoNotCollide) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.2));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.2));
+  const int c = builder.add_body(RigidBody::from_sphere(1, 0.2));
+  builder.add_shape_sphere(a, 0.2);  // 0
+  builder.add_shape_sphere(a, 0.2);  // 1: same body as 0
+  builder.add_shape_sphere(b, 0.2);  // 2: child of a
+  builder.add_shape_sphere(c, 0.2);  // 3: grandchild of a
+  builder.add_joint_free(-1, a);
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.parent_xform.p = Vec3(0.1, 0, 0);
+  builder.add_joint_revolute(a, b, options);
+  builder.add_joint_revolute(b, c, options);
+  const Model model = builder.finalize();
+  // all four overlap: only a's shapes against its grandchild c may touch
+  EXPECT_EQ(touching_pairs(model), (std::set<std::pair<int, int>>{{0, 3}, {1, 3}}));
+  CollisionOptions no_self;
+  no_self.self_collision = false;
+  EXPECT_TRUE(touching_pairs(model, no_self).empty());
+}
+
+TEST(CollisionPipeline, GroupsAndMasks) {
+  ModelBuilder builder;
+  ShapeOptions options;
+  std::vector<int> bodies;
+  for (int k = 0; k < 3; ++k)
+    bodies.push_back(builder.add_body(RigidBody::from_sphere(1, 0.2), at(Vec3(0.1 * k, 0, 0))));
+  options.collision_group = 1, options.collision_mask = ~2;  // 0: skips group 2
+  builder.add_shape_sphere(bodies[0], 0.2, options);
+  options.collision_group = 2, options.collision_mask = -1;  // 1
+  builder.add_shape_sphere(bodies[1], 0.2, options);
+  options.collision_group = 4, options.collision_mask = -1;  // 2
+  builder.add_shape_sphere(bodies[2], 0.2, options);
+  EXPECT_EQ(touching_pairs(builder.finalize()), (std::set<std::pair<int, int>>{{0, 2}, {1, 2}}));
+}
+
+// sweep and prune finds exactly the pairs that testing every pair finds
+TEST(CollisionPipeline, BroadPhaseMissesNoPair) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<Scalar> u(-1, 1);
+  ModelBuilder builder;
+  builder.add_ground_plane(-0.5);
+  for (int k = 0; k < 60; ++k) {
+    Transform x = at(Vec3(u(rng), u(rng), u(rng)));
+    x.q = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
+    const int body = builder.add_body(RigidBody::from_sphere(1, 0.1), x);
+    if (k % 3 == 0) builder.add_shape_sphere(body, 0.1 + 0.1 * std::abs(u(rng)));
+    if (k % 3 == 1) builder.add_shape_box(body, Vec3(0.1, 0.15, 0.2));
+    if (k % 3 == 2) builder.add_shape_capsule(body, 0.05, 0.15);
+  }
+  const Model model = builder.finalize();
+  const auto found = touching_pairs(model);
+
+  // every pair through the narrow phase alone: one pipeline per pair of shapes
+  std::set<std::pair<int, int>> expected;
+  const State state = model.state();
+  for (int a = 0; a < model.shape_count; ++a) {
+    for (int b = a + 1; b < model.shape_count; ++b) {
+      ModelBuilder pair;
+      const int types[2] = {model.shape_type[a], model.shape_type[b]};
+      for (int k = 0; k < 2; ++k) {
+        const int s = k == 0 ? a : b;
+        const int body = model.shape_body[s];
+        const Vec3 scale = Eigen::Map<const Vec3>(&model.shape_scale[3 * s]);
+        const Transform X = body < 0 ? Transform::from_array(&model.shape_transform[7 * s])
+                                     : Transform::from_array(&state.body_q[7 * body]);
+        const auto type = static_cast<ShapeType>(types[k]);
+        if (type == ShapeType::Plane) {
+          pair.add_ground_plane(-0.5);
+          continue;
+        }
+        const int nb = pair.add_body(RigidBody::from_sphere(1, 0.1), X);
+        if (type == ShapeType::Sphere) pair.add_shape_sphere(nb, scale.x());
+        if (type == ShapeType::Box) pair.add_shape_box(nb, scale);
+        if (type == ShapeType::Capsule) pair.add_shape_capsule(nb, scale.x(), scale.y());
+      }
+      if (!touching_pairs(pair.finalize()).empty()) expected.insert({a, b});
+    }
+  }
+  EXPECT_EQ(found, expected);
+  EXPECT_GT(found.size(), 10u);
+}
+
+TEST(CollisionPipeline, CapacityOverflowIsCounted) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  for (int k = 0; k < 4; ++k)
+    builder.add_shape_box(builder.add_body(RigidBody(), at(Vec3(k, 0.1, 0))), Vec3::Constant(0.2));
+  const Model model = builder.finalize();
+  CollisionOptions options;
+  options.contact_capacity = 10;
+  CollisionPipeline pipeline(model, options);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  EXPECT_EQ(contacts.contact_count, 10);
+  EXPECT_EQ(contacts.contact_dropped, 6);
+}
+
+TEST(CollisionPipeline, PreviousImpulsesAreFoundByFeature) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  builder.add_shape_box(builder.add_body(RigidBody(), at(Vec3(0, 0.19, 0))), Vec3::Constant(0.2));
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  ASSERT_EQ(contacts.contact_count, 4);
+  for (int c = 0; c < 4; ++c) contacts.contact_impulse[3 * c + 1] = 10 + c;
+  const std::vector<int> features(contacts.contact_feature.begin(), contacts.contact_feature.begin() + 4);
+  pipeline.collide(model.state(), contacts);
+  for (int c = 0; c < 4; ++c) {
+    const Scalar* previous = contacts.previous(c);
+    ASSERT_NE(previous, nullptr);
+    const int before = std::find(features.begin(), features.end(), contacts.contact_feature[c]) - features.begin();
+    EXPECT_EQ(previous[1], 10 + before);
+  }
+}
+
+TEST(CollisionPipelineErrors, BadOptions) {
+  ModelBuilder builder;
+  builder.add_body(RigidBody());
+  const Model model = builder.finalize();
+  CollisionOptions options;
+  options.contact_capacity = -1;
+  EXPECT_NOVAPHY_ERROR(CollisionPipeline(model, options), "contact_capacity must be >= 0, got -1");
+  options = {};
+  options.margin = std::nan("");
+  EXPECT_NOVAPHY_ERROR(CollisionPipeline(model, options), "margin must be finite and >= 0, got nan");
+}
+
+}  // namespace
+}  // namespace novaphy
