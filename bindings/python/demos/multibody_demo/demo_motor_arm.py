@@ -6,7 +6,7 @@ The PD torque is computed in Python from the state each step and written into co
 import numpy as np
 
 import novaphy
-from demo_common import Simulation, arguments
+from demo_common import Simulation, arguments, save_render, steps_of
 
 ARM = np.array([0.6, 0.05, 0.05])  # half extents; the arm turns about the vertical axis at its end
 TARGET = np.pi / 2
@@ -35,20 +35,23 @@ def build():
     return Simulation(builder.finalize()), boxes
 
 
-def run(steps):
+def run(steps, render=None, frames=60):
     sim, boxes = build()
+    if render:
+        sim.record(steps, frames)
     start = sim.state.body_q[boxes, :3].copy()
-    for _ in range(steps):
+    for _ in steps_of(steps, "motor_arm"):
         q, qd = sim.state.joint_q[0], sim.state.joint_qd[0]
         sim.control.joint_f[0] = KP * (TARGET - q) - KD * qd
         sim.step()
     moved = np.linalg.norm(sim.state.body_q[boxes, :3] - start, axis=1)
+    save_render(sim, render)
     return {"arm_angle": float(sim.state.joint_q[0]), "target": TARGET, "boxes_moved": int(np.sum(moved > 0.05))}
 
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=600)
-    s = run(args.steps)
+    s = run(args.steps, render=args.render)
     print(
         f"arm at {np.degrees(s['arm_angle']):.2f} deg for a target of {np.degrees(s['target']):.0f} deg; "
         f"{s['boxes_moved']} of 3 boxes swept aside"

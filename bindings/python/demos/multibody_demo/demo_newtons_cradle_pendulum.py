@@ -7,7 +7,7 @@ swings out to the height the first was released from.
 import numpy as np
 
 import novaphy
-from demo_common import Simulation, arguments
+from demo_common import Simulation, arguments, save_render, steps_of
 
 BALLS = 5
 RADIUS = 0.1
@@ -37,13 +37,15 @@ def build():
     return sim
 
 
-def run(steps):
+def run(steps, render=None, frames=60):
     """Simulates until the last ball turns back (or steps run out) and reports the swing."""
     sim = build()
+    if render:
+        sim.record(steps, frames)
     peak_last = 0.0
     first_after = 0.0
     hit = False
-    for _ in range(steps):
+    for _ in steps_of(steps, "newtons_cradle_pendulum"):
         sim.step()
         q, qd = sim.state.joint_q, sim.state.joint_qd
         hit = hit or q[0] >= -1e-3
@@ -52,12 +54,13 @@ def run(steps):
             first_after = max(first_after, abs(q[0]))
             if q[-1] > 0.01 and qd[-1] < 0:
                 break
+    save_render(sim, render)
     return {"release_angle": RELEASE, "last_ball_peak_angle": peak_last, "first_ball_peak_after_impact": first_after}
 
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=2000)
-    s = run(args.steps)
+    s = run(args.steps, render=args.render)
     print(
         f"released the first ball at {np.degrees(s['release_angle']):.1f} deg; the last ball swung out to "
         f"{np.degrees(s['last_ball_peak_angle']):.1f} deg while the first stayed within "

@@ -6,7 +6,7 @@ Reduced coordinates keep every link attached exactly, however hard the chain whi
 import numpy as np
 
 import novaphy
-from demo_common import Simulation, arguments, rotation_z
+from demo_common import Simulation, arguments, save_render, steps_of, rotation_z
 
 LINKS = 15
 LINK_LENGTH = 0.1
@@ -40,11 +40,13 @@ def tip(sim):
     return pose[:3] + LINK_LENGTH * np.array([np.cos(angle), np.sin(angle), 0.0])
 
 
-def run(steps):
+def run(steps, render=None, frames=60):
     sim = build()
+    if render:
+        sim.record(steps, frames)
     lowest_tip = np.inf
     worst_joint_gap = 0.0
-    for _ in range(steps):
+    for _ in steps_of(steps, "rope"):
         sim.step()
         lowest_tip = min(lowest_tip, tip(sim)[1])
         # each link's origin sits at the end of its parent
@@ -54,12 +56,13 @@ def run(steps):
             angle = 2 * np.arctan2(z, w)
             end = q[i - 1, :3] + LINK_LENGTH * np.array([np.cos(angle), np.sin(angle), 0.0])
             worst_joint_gap = max(worst_joint_gap, np.linalg.norm(end - q[i, :3]))
+    save_render(sim, render)
     return {"lowest_tip_height": lowest_tip, "worst_joint_gap": worst_joint_gap, "final_tip": tip(sim)}
 
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=1200)
-    s = run(args.steps)
+    s = run(args.steps, render=args.render)
     print(
         f"chain of {LINKS} links from y = {PIVOT[1]:.1f} m: the tip swung down to y = {s['lowest_tip_height']:.3f} m; "
         f"links stayed attached within {s['worst_joint_gap']:.1e} m"

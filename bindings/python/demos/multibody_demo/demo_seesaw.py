@@ -3,7 +3,7 @@
 import numpy as np
 
 import novaphy
-from demo_common import Simulation, arguments
+from demo_common import Simulation, arguments, save_render, steps_of
 
 FULCRUM = np.array([0.0, 0.5, 0.0])
 PLANK = np.array([1.0, 0.04, 0.25])  # half extents
@@ -23,16 +23,19 @@ def build():
     return Simulation(builder.finalize()), box
 
 
-def run(steps):
+def run(steps, render=None, frames=60):
     sim, box = build()
-    for _ in range(steps):
+    if render:
+        sim.record(steps, frames)
+    for _ in steps_of(steps, "seesaw"):
         sim.step()
+    save_render(sim, render)
     return {"plank_angle": float(sim.state.joint_q[0]), "box_height": float(sim.state.body_q[box, 1])}
 
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=360)
-    s = run(args.steps)
+    s = run(args.steps, render=args.render)
     print(
         f"the plank tilted to {np.degrees(s['plank_angle']):.1f} deg (limit {np.degrees(LIMIT):.0f}); "
         f"the box rests at y = {s['box_height']:.2f} m"

@@ -3,7 +3,7 @@
 import numpy as np
 
 import novaphy
-from demo_common import Simulation, arguments, rotation_z
+from demo_common import Simulation, arguments, save_render, steps_of, rotation_z
 
 LINKS = 6
 LINK_LENGTH = 0.5
@@ -43,12 +43,15 @@ def build():
     return sim, boxes
 
 
-def run(steps):
+def run(steps, render=None, frames=60):
     sim, boxes = build()
+    if render:
+        sim.record(steps, frames)
     start = sim.state.body_q[boxes, :3].copy()
-    for _ in range(steps):
+    for _ in steps_of(steps, "wrecking_ball"):
         sim.step()
     moved = np.linalg.norm(sim.state.body_q[boxes, :3] - start, axis=1)
+    save_render(sim, render)
     return {
         "boxes": len(boxes),
         "boxes_moved": int(np.sum(moved > 0.3)),
@@ -59,7 +62,7 @@ def run(steps):
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=720)
-    s = run(args.steps)
+    s = run(args.steps, render=args.render)
     print(
         f"{s['boxes_moved']} of {s['boxes']} boxes knocked more than 0.3 m; the tower went from "
         f"{s['tower_height_before']:.2f} m to {s['tower_height_after']:.2f} m high"
