@@ -36,6 +36,7 @@ class CMakeBuild(build_ext):
 setup(
     packages=["novaphy"],
     package_dir={"novaphy": "bindings/python/novaphy"},
+    package_data={"novaphy": ["*.pyi", "py.typed"]},
     ext_modules=[CMakeExtension("novaphy._novaphy")],
     cmdclass={"build_ext": CMakeBuild},
     zip_safe=False,

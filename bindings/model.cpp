@@ -64,19 +64,10 @@ void bind_model(py::module_& m) {
             .format(py::cast(Eigen::RowVector3d(t.p)), py::cast(Eigen::RowVector4d(t.q.coeffs())));
       });
 
-  auto model = py::class_<Model>(m, "Model", "Read-only model: topology and parameters as flat arrays.");
-  bind_counts(model);
-  model.def_property_readonly("gravity", [](const Model& self) { return self.gravity; })
-      .def_readonly("body_name", &Model::body_name)
-      .def_readonly("joint_name", &Model::joint_name)
-      .def_readonly("actuator_name", &Model::actuator_name)
-      .def("state", &Model::state, "A state at the initial coordinates joint_q0, with body_q/body_qd from FK.")
-      .def("control", &Model::control, "A zeroed control.");
 #define NOVAPHY_BIND_FIELD(Owner, T, name, width, writeable) \
   .def_property_readonly(#name, [](py::object self) { return field_view(self, &Owner::name, width, writeable); })
-#define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
-  NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
 
+  // State and Control first: Model's methods return them
   auto state =
       py::class_<State>(m, "State", "Mutable state: joint and body arrays, numpy views over the engine's buffers.");
   bind_counts(state);
@@ -88,6 +79,17 @@ void bind_model(py::module_& m) {
   bind_counts(control);
 #define NOVAPHY_BIND_CONTROL_FIELD(T, name, count, width) control NOVAPHY_BIND_FIELD(Control, T, name, width, true);
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_BIND_CONTROL_FIELD)
+
+  auto model = py::class_<Model>(m, "Model", "Read-only model: topology and parameters as flat arrays.");
+  bind_counts(model);
+  model.def_property_readonly("gravity", [](const Model& self) { return self.gravity; })
+      .def_readonly("body_name", &Model::body_name)
+      .def_readonly("joint_name", &Model::joint_name)
+      .def_readonly("actuator_name", &Model::actuator_name)
+      .def("state", &Model::state, "A state at the initial coordinates joint_q0, with body_q/body_qd from FK.")
+      .def("control", &Model::control, "A zeroed control.");
+#define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
 }
 
 }  // namespace novaphy::python
