@@ -1,0 +1,150 @@
+"""Every bound class and function, the views' shapes and aliasing, and dtype/shape errors."""
+
+import threading
+
+import numpy as np
+import pytest
+
+import novaphy
+
+
+
+def every_joint_model():
+    builder = novaphy.ModelBuilder(gravity=[0.0, 0.0, -9.81])
+    bodies = [builder.add_body(novaphy.RigidBody.from_box(1.0, [0.1, 0.1, 0.1]), name=f"b{k}") for k in range(6)]
+    free = builder.add_joint_free(-1, bodies[0], name="root")
+    ball = builder.add_joint_ball(bodies[0], bodies[1], parent_xform=novaphy.Transform([0, 0, -0.2]))
+    hinge = builder.add_joint_revolute(bodies[1], bodies[2], axis=[0, 1, 0], limit_lower=-1.0, limit_upper=1.0)
+    slide = builder.add_joint_slide(bodies[2], bodies[3], axis=[0, 0, 1])
+    prismatic = builder.add_joint_prismatic(bodies[3], bodies[4], axis=[1, 0, 0], armature=0.1, damping=0.2)
+    fixed = builder.add_joint_fixed(bodies[4], bodies[5], child_xform=novaphy.Transform([0, 0, 0.1]))
+    builder.add_articulation([free, ball, hinge, slide, prismatic, fixed])
+    motor = builder.add_motor(hinge, gear=10.0, ctrl_lower=-1.0, ctrl_upper=1.0, name="m")
+    builder.add_plane([0, 0, 1], -1.0)
+    builder.add_shape_capsule(bodies[5], 0.05, 0.1)
+    return builder, builder.finalize(), motor
+
+
+def test_every_joint_type_and_the_model_views():
+    builder, model, motor = every_joint_model()
+    assert (builder.body_count, builder.joint_count, builder.shape_count, builder.actuator_count) == (6, 6, 2, 1)
+    assert list(model.joint_type) == [int(t) for t in (novaphy.JointType.Free, novaphy.JointType.Ball,
+                                                       novaphy.JointType.Revolute, novaphy.JointType.Slide,
+                                                       novaphy.JointType.Prismatic, novaphy.JointType.Fixed)]
+    assert model.joint_coord_count == 7 + 4 + 1 + 1 + 1 and model.joint_dof_count == 6 + 3 + 1 + 1 + 1
+    assert model.joint_name[0] == "root" and model.body_name[3] == "b3" and model.actuator_name[motor] == "m"
+    # every field view has the field table's shape
+    assert model.joint_X_p.shape == (6, 7) and model.joint_axis.shape == (6, 3)
+    assert model.joint_q_start.shape == (7,) and model.articulation_start.shape == (2,)
+    assert model.body_inertia.shape == (6, 9) and model.shape_transform.shape == (2, 7)
+    assert model.joint_armature.shape == (12,) and model.joint_armature[-1] == 0.1
+    assert model.shape_type[0] == int(novaphy.ShapeType.Plane) and model.shape_type[1] == int(novaphy.ShapeType.Capsule)
+    assert model.joint_q_start.dtype == np.int32 and model.body_mass.dtype == np.float64
+    np.testing.assert_allclose(model.gravity, [0, 0, -9.81])
+    np.testing.assert_array_equal(model.joint_limit_lower[[9]], [-1.0])
+
+
+def test_state_views_write_through_and_the_next_step_sees_them():
+    _, model, _ = every_joint_model()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts, state, control = pipeline.contacts(), model.state(), model.control()
+    state.joint_qd[3:6] = [1.0, 0.0, 0.0]  # the free joint's linear velocity, written through numpy
+    solver.step(state, state, control, contacts, 0.01)
+    assert state.joint_q[0] == pytest.approx(0.01, rel=1e-9)  # the step used the written velocity
+    control.actuator_ctrl[0] = 5.0
+    tau = novaphy.eval_control_force(model, control)
+    assert tau[9] == 10.0  # clamped to ctrl 1, gear 10
+
+
+def test_views_reject_wrong_shapes_and_read_only_writes():
+    _, model, _ = every_joint_model()
+    state = model.state()
+    with pytest.raises(ValueError):
+        state.body_q[:] = np.zeros((2, 7))
+    with pytest.raises(ValueError):
+        model.joint_axis[0, 0] = 1.0
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    pipeline.collide(state, contacts)
+    with pytest.raises(ValueError):
+        contacts.contact_depth[:] = 0.0
+
+
+def test_arguments_of_the_wrong_dtype_or_shape():
+    joint = novaphy.Joint()
+    body = novaphy.RigidBody.from_box(1.0, [0.1, 0.5, 0.1])
+    with pytest.raises(TypeError):
+        novaphy.mass_matrix_crba([joint], [body], np.zeros((1, 1, 1)))
+    with pytest.raises(TypeError):
+        novaphy.mass_matrix_crba([joint], [body], ["a"])
+    with pytest.raises(TypeError):
+        novaphy.RigidBody.from_box(1.0, [0.1, 0.5])
+    with pytest.raises(TypeError):
+        novaphy.mass_matrix_crba([body], [body], np.zeros(1))
+    # integer and float32 arrays convert
+    assert novaphy.mass_matrix_crba([joint], [body], np.zeros(1, dtype=np.int64)).shape == (1, 1)
+    assert novaphy.mass_matrix_crba([joint], [body], np.zeros(1, dtype=np.float32)).shape == (1, 1)
+
+
+def test_error_type_is_a_value_error():
+    assert issubclass(novaphy.Error, ValueError)
+    with pytest.raises(novaphy.Error, match="mass must be > 0"):
+        novaphy.ModelBuilder().add_body(novaphy.RigidBody(mass=-1.0))
+
+
+def test_transform_algebra():
+    a = novaphy.Transform([1.0, 0.0, 0.0], [0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)])
+    b = a * a.inverse()
+    np.testing.assert_allclose(b.position, 0, atol=1e-15)
+    np.testing.assert_allclose(np.abs(b.rotation), [0, 0, 0, 1], atol=1e-15)
+    c = a * novaphy.Transform([1.0, 0.0, 0.0])
+    np.testing.assert_allclose(c.position, [1, 1, 0], atol=1e-15)
+    assert "Transform(position=" in repr(a)
+    d = novaphy.JointDofConfig()
+    d.axis, d.limit_lower, d.limit_upper, d.armature, d.damping, d.stiffness, d.q_ref = [0, 1, 0], -1, 1, 0.1, 0.2, 3, 0.5
+    d.target_ke, d.target_kd = 10.0, 1.0
+    assert (d.limit_lower, d.stiffness, d.target_ke) == (-1, 3, 10.0)
+
+
+def test_urdf_import(tmp_path):
+    path = tmp_path / "arm.urdf"
+    path.write_text(
+        '<robot name="arm"><link name="base"><inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1"'
+        ' ixy="0" ixz="0" iyz="0"/></inertial></link><link name="upper"><inertial><mass value="1"/>'
+        '<inertia ixx="0.02" iyy="0.02" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        '<joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 1 0"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>'
+    )
+    builder = novaphy.ModelBuilder()
+    assert builder.add_urdf(str(path)) == []
+    assert builder.finalize().joint_dof_count == 1
+
+
+def test_long_calls_release_the_gil():
+    # a 2000-link chain: one mass_matrix_crba call runs long enough to count Python ticks during it
+    joints, bodies = [], []
+    for i in range(2000):
+        joint = novaphy.Joint()
+        joint.axis = [0.0, 0.0, 1.0]
+        joint.parent = i - 1
+        joint.parent_to_joint = novaphy.Transform([0.1, 0.0, 0.0])
+        joints.append(joint)
+        bodies.append(novaphy.RigidBody.from_box(1.0, [0.05, 0.01, 0.01]))
+    q = np.zeros(2000)
+    entered, done = threading.Event(), threading.Event()
+
+    def compute():
+        entered.set()
+        novaphy.mass_matrix_crba(joints, bodies, q)
+        done.set()
+
+    thread = threading.Thread(target=compute)
+    thread.start()
+    entered.wait()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1  # runs only while the other thread is inside the engine without the GIL
+        done.wait(0.001)
+    thread.join()
+    assert ticks > 5
