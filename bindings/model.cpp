@@ -15,6 +15,67 @@ py::array field_view(py::object self, std::vector<T> Owner::*field, int width, b
   return view(data.data(), static_cast<int>(data.size() / width), width, self, writeable);
 }
 
+// to_numpy / from_numpy / copy / assign of a State or Control, driven by its field table
+template <typename Owner>
+struct Checkpoint {
+  std::vector<std::pair<const char*, std::vector<Scalar> Owner::*>> fields;
+  std::vector<int> widths;
+
+  py::dict to_numpy(const Owner& owner) const {
+    py::dict out;
+    for (size_t k = 0; k < fields.size(); ++k) {
+      const std::vector<Scalar>& data = owner.*(fields[k].second);
+      const int width = widths[k];
+      py::array_t<Scalar> array(width > 1
+                                    ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size() / width), width}
+                                    : std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size())});
+      std::copy(data.begin(), data.end(), array.mutable_data());
+      out[fields[k].first] = array;
+    }
+    return out;
+  }
+
+  void from_numpy(Owner& owner, const py::dict& arrays) const {
+    // check everything first: on error nothing is written
+    std::vector<std::pair<std::vector<Scalar>*, py::array_t<Scalar>>> writes;
+    for (const auto& [key, value] : arrays) {
+      const std::string name = py::str(key);
+      size_t k = 0;
+      while (k < fields.size() && name != fields[k].first) ++k;
+      if (k == fields.size()) throw py::value_error("from_numpy: unknown field '" + name + "'");
+      const py::array array = py::array::ensure(value);
+      if (!array || !(array.dtype().kind() == 'f' || array.dtype().kind() == 'i' || array.dtype().kind() == 'u'))
+        throw py::type_error("from_numpy: field '" + name + "' must be a numeric array, got " +
+                             py::str(py::type::of(value)).cast<std::string>());
+      std::vector<Scalar>& data = owner.*(fields[k].second);
+      const int width = widths[k];
+      const std::vector<py::ssize_t> expected =
+          width > 1 ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size() / width), width}
+                    : std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size())};
+      const std::vector<py::ssize_t> shape(array.shape(), array.shape() + array.ndim());
+      if (shape != expected)
+        throw py::value_error("from_numpy: field '" + name + "' has shape " +
+                              py::str(py::tuple(py::cast(shape))).cast<std::string>() + ", expected " +
+                              py::str(py::tuple(py::cast(expected))).cast<std::string>());
+      writes.emplace_back(&data, py::array_t<Scalar, py::array::c_style | py::array::forcecast>::ensure(array));
+    }
+    for (auto& [data, array] : writes) std::copy(array.data(), array.data() + data->size(), data->begin());
+  }
+};
+
+template <typename Owner, typename Class>
+void bind_checkpoint(Class& c, const Checkpoint<Owner>& checkpoint) {
+  c.def(
+       "copy", [](const Owner& self) { return Owner(self); }, "An independent copy.")
+      .def("assign", &Owner::assign, py::arg("other"), "Copies every array of other (same model).")
+      .def(
+          "to_numpy", [checkpoint](const Owner& self) { return checkpoint.to_numpy(self); },
+          "Every array as a dict of numpy copies (a checkpoint).")
+      .def(
+          "from_numpy", [checkpoint](Owner& self, const py::dict& arrays) { checkpoint.from_numpy(self, arrays); },
+          py::arg("arrays"), "Restores arrays from a dict like to_numpy's; checks names, shapes and dtypes first.");
+}
+
 template <typename Class>
 void bind_counts(Class& c) {
   c.def_readonly("world_count", &ModelCounts::world_count)
@@ -73,12 +134,22 @@ void bind_model(py::module_& m) {
   bind_counts(state);
 #define NOVAPHY_BIND_STATE_FIELD(T, name, count, width) state NOVAPHY_BIND_FIELD(State, T, name, width, true);
   NOVAPHY_STATE_FIELDS(NOVAPHY_BIND_STATE_FIELD)
+  Checkpoint<State> state_checkpoint;
+#define NOVAPHY_STATE_CHECKPOINT(T, name, count, width) \
+  state_checkpoint.fields.emplace_back(#name, &State::name), state_checkpoint.widths.push_back(width);
+  NOVAPHY_STATE_FIELDS(NOVAPHY_STATE_CHECKPOINT)
+  bind_checkpoint(state, state_checkpoint);
 
   auto control =
       py::class_<Control>(m, "Control", "Control inputs: joint_f generalised forces, actuator_ctrl motor commands.");
   bind_counts(control);
 #define NOVAPHY_BIND_CONTROL_FIELD(T, name, count, width) control NOVAPHY_BIND_FIELD(Control, T, name, width, true);
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_BIND_CONTROL_FIELD)
+  Checkpoint<Control> control_checkpoint;
+#define NOVAPHY_CONTROL_CHECKPOINT(T, name, count, width) \
+  control_checkpoint.fields.emplace_back(#name, &Control::name), control_checkpoint.widths.push_back(width);
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CONTROL_CHECKPOINT)
+  bind_checkpoint(control, control_checkpoint);
 
   auto model = py::class_<Model>(m, "Model", "Read-only model: topology and parameters as flat arrays.");
   bind_counts(model);

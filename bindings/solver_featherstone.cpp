@@ -24,7 +24,9 @@ void bind_solver_featherstone(py::module_& m) {
                      "0: box friction per tangent (direction snaps to the tangent axes); 1: circular cone "
                      "(friction opposes the slip direction smoothly); between: a blend.")
       .def_readwrite("use_tile_gemm", &Settings::use_tile_gemm, "Mass matrix as sum J^T I J instead of CRBA.")
-      .def_readwrite("fuse_cholesky", &Settings::fuse_cholesky, "Factor and forward-substitute in one pass.");
+      .def_readwrite("fuse_cholesky", &Settings::fuse_cholesky, "Factor and forward-substitute in one pass.")
+      .def_readwrite("num_threads", &Settings::num_threads,
+                     "OpenMP threads over articulations (0: all available); results are bit-identical for any count.");
 
   py::class_<JointSupportMatrix>(m, "JointSupportMatrix", "Which joint types a solver enforces.")
       .def("supports", &JointSupportMatrix::supports, py::arg("joint"))

@@ -15,6 +15,27 @@ const char* shape_type_name(ShapeType type) {
   return "Unknown";
 }
 
+bool same_layout(const ModelCounts& a, const ModelCounts& b) {
+  return a.world_count == b.world_count && a.body_count == b.body_count && a.joint_count == b.joint_count &&
+         a.joint_coord_count == b.joint_coord_count && a.joint_dof_count == b.joint_dof_count &&
+         a.articulation_count == b.articulation_count && a.shape_count == b.shape_count &&
+         a.actuator_count == b.actuator_count;
+}
+
+void State::assign(const State& other) {
+  if (!same_layout(*this, other))
+    fail("assign: the other state belongs to a model with ", other.body_count, " bodies and ", other.joint_dof_count,
+         " dofs, this one to ", body_count, " bodies and ", joint_dof_count, " dofs");
+  *this = other;
+}
+
+void Control::assign(const Control& other) {
+  if (!same_layout(*this, other))
+    fail("assign: the other control belongs to a model with ", other.joint_dof_count, " dofs and ",
+         other.actuator_count, " actuators, this one to ", joint_dof_count, " dofs and ", actuator_count);
+  *this = other;
+}
+
 void Model::allocate() {
 #define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
   NOVAPHY_MODEL_FIELDS(NOVAPHY_ALLOCATE)

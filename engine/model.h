@@ -83,13 +83,18 @@ struct ModelCounts {
   int actuator_count = 0;
 };
 
+bool same_layout(const ModelCounts& a, const ModelCounts& b);
+
 struct State : ModelCounts {
 #define NOVAPHY_DECLARE(T, name, count, width) std::vector<T> name;
   NOVAPHY_STATE_FIELDS(NOVAPHY_DECLARE)
+  // copies every array of other (a checkpoint restored); throws Error unless both have one model's layout
+  void assign(const State& other);
 };
 
 struct Control : ModelCounts {
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_DECLARE)
+  void assign(const Control& other);
 };
 
 struct Model : ModelCounts {

@@ -1,5 +1,7 @@
 #include "engine/solver_featherstone.h"
 
+#include <omp.h>
+
 #include <cmath>
 #include <sstream>
 
@@ -34,6 +36,7 @@ bool is_finite(const VecX& x) { return x.allFinite(); }
 void SolverFeatherstoneSettings::check() const {
   constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
   if (num_iterations < 0) fail("settings.num_iterations must be >= 0, got ", num_iterations);
+  if (num_threads < 0) fail("settings.num_threads must be >= 0, got ", num_threads);
   if (update_mass_matrix_interval < 1)
     fail("settings.update_mass_matrix_interval must be >= 1, got ", update_mass_matrix_interval);
   check_range("linear_slop", linear_slop, 0, 1e3);
@@ -88,6 +91,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   qd_in_.setZero(model.joint_dof_count);
   rhs_.setZero(model.joint_dof_count);
   q_next_.setZero(model.joint_coord_count);
+  factor_failure_.assign(model.articulation_count, -1);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
 }
@@ -102,6 +106,15 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
            {"Distance", false},
            {"D6", false},
            {"Cable", false}}};
+}
+
+template <typename F>
+void SolverFeatherstone::for_each_articulation(F&& f) {
+  // articulations are independent here: a static schedule over threads, no shared writes
+  const int count = static_cast<int>(art_.size());
+  const int threads = settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads();
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int a = 0; a < count; ++a) f(a);
 }
 
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
@@ -140,7 +153,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
   qd_in_ = Eigen::Map<const VecX>(in.joint_qd.data(), model_.joint_dof_count);
   control_force(model_, control, rhs_.data());
 
-  for (size_t a = 0; a < art_.size(); ++a) {
+  for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
     ArticulationScratch& s = scratch_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nv = art.dof_count();
@@ -190,11 +203,13 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     } else {
       cholesky_solve(s.H, rhs);
     }
-    if (bad >= 0)
-      fail("articulation ", a, ": mass matrix is not positive definite at dof ", qd0 + bad,
-           " (a massless link without children?)");
+    factor_failure_[a] = bad < 0 ? -1 : qd0 + bad;
     qd_.segment(qd0, nv) = qd_in_.segment(qd0, nv) + dt * rhs_.segment(qd0, nv);
-  }
+  });
+  for (size_t a = 0; a < art_.size(); ++a)
+    if (factor_failure_[a] >= 0)
+      fail("articulation ", a, ": mass matrix is not positive definite at dof ", factor_failure_[a],
+           " (a massless link without children?)");
 
   const Scalar keep = std::max<Scalar>(0, 1 - settings.angular_damping * dt);
   for (const int dof : rotational_dof_) qd_[dof] *= keep;
@@ -351,21 +366,21 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
 }
 
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
-  for (size_t a = 0; a < art_.size(); ++a) {
+  for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
     integrate_joints(art, in.joint_q.data() + art.q_begin(), qd_.data() + art.qd_begin(), dt,
                      q_next_.data() + art.q_begin());
-  }
+  });
   if (!is_finite(q_next_) || !is_finite(qd_))
     fail("step produced a non-finite state (dt ", dt, " too large for the model's stiffness or forces?)");
   std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
   std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
   if (&out != &in) out.body_f = in.body_f;
-  for (size_t a = 0; a < art_.size(); ++a) {
+  for_each_articulation([&](int a) {
     forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), scratch_[a]);
     forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), scratch_[a]);
     store_body_state(art_[a], scratch_[a], out);
-  }
+  });
 }
 
 }  // namespace novaphy

@@ -25,6 +25,7 @@ struct SolverFeatherstoneSettings {
   Scalar friction_smoothing = 1.0;      // 0: box friction per tangent; 1: circular cone; between: blend
   bool use_tile_gemm = false;           // H as sum J^T I J over link Jacobians instead of CRBA
   bool fuse_cholesky = true;            // factor and forward-substitute in one pass
+  int num_threads = 0;                  // OpenMP threads over articulations; 0: all available
 
   // throws Error naming the first setting out of range
   void check() const;
@@ -59,6 +60,8 @@ class SolverFeatherstone {
   void build_limit_rows(const State& in, Scalar dt);
   void solve_constraints(Contacts& contacts);
   void integrate(const State& in, State& out, Scalar dt);
+  template <typename F>
+  void for_each_articulation(F&& f);
 
   // a row over the dofs of up to two articulations (-1: none), J zeroed; finish_row computes
   // M^-1 J^T and the effective mass once J is filled in
@@ -87,6 +90,7 @@ class SolverFeatherstone {
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
+  std::vector<int> factor_failure_;    // per articulation: first dof whose Cholesky pivot failed, -1
   std::vector<int> contact_row_;       // first row of each contact, -1
   std::vector<int> limit_row_;         // [dof][2] row of each active limit, -1
   std::vector<Scalar> limit_impulse_;  // [dof][2] impulses of the previous step's limit rows

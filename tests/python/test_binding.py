@@ -148,3 +148,39 @@ def test_long_calls_release_the_gil():
         done.wait(0.001)
     thread.join()
     assert ticks > 5
+
+
+def test_state_checkpoints():
+    _, model, _ = every_joint_model()
+    state = model.state()
+    state.joint_qd[:] = np.linspace(-1, 1, model.joint_dof_count)
+    snapshot = state.to_numpy()
+    assert set(snapshot) == {"joint_q", "joint_qd", "body_q", "body_qd", "body_f"}
+    assert snapshot["body_q"].shape == (6, 7) and not np.shares_memory(snapshot["joint_qd"], state.joint_qd)
+    copy = state.copy()
+    state.joint_qd[:] = 0.0
+    np.testing.assert_array_equal(copy.joint_qd, snapshot["joint_qd"])  # the copy is independent
+    state.assign(copy)
+    np.testing.assert_array_equal(state.joint_qd, snapshot["joint_qd"])
+    state.joint_qd[:] = 0.0
+    state.from_numpy({"joint_qd": snapshot["joint_qd"][::-1][::-1], "body_f": np.zeros((6, 6), dtype=np.int64)})
+    np.testing.assert_array_equal(state.joint_qd, snapshot["joint_qd"])
+    # nothing is written when any array is wrong
+    with pytest.raises(ValueError, match=r"from_numpy: field 'body_q' has shape \(7, 6\), expected \(6, 7\)"):
+        state.from_numpy({"joint_qd": np.zeros(12), "body_q": np.zeros((7, 6))})
+    np.testing.assert_array_equal(state.joint_qd, snapshot["joint_qd"])
+    with pytest.raises(ValueError, match="from_numpy: unknown field 'joint_qdd'"):
+        state.from_numpy({"joint_qdd": np.zeros(12)})
+    with pytest.raises(TypeError, match="from_numpy: field 'joint_q' must be a numeric array"):
+        state.from_numpy({"joint_q": np.array(["a"] * 14)})
+    other = novaphy.ModelBuilder()
+    other.add_body(novaphy.RigidBody())
+    with pytest.raises(ValueError, match="assign: the other state belongs to a model with"):
+        state.assign(other.finalize().state())
+    control = model.control()
+    control.joint_f[:] = 1.0
+    restored = model.control()
+    restored.from_numpy(control.to_numpy())
+    np.testing.assert_array_equal(restored.joint_f, 1.0)
+    restored.assign(model.control())
+    np.testing.assert_array_equal(restored.joint_f, 0.0)
