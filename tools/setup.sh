@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 
 packages=(cmake g++ make libeigen3-dev libgtest-dev libbenchmark-dev libmujoco-dev libmujoco-samples
           pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pil python3-tqdm
-          python3-setuptools python3-pip clang-format)
+          python3-setuptools python3-pip clang-format clang-14 libclang-rt-14-dev libomp-14-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

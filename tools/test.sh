@@ -1,7 +1,16 @@
 #!/usr/bin/env bash
-# Every test: set up and build, then ctest (GoogleTest and the pytest suite of the binding).
+# Every test: set up and build, then
+#   1. ctest in ./build: GoogleTest, the binding's pytest suite, formatting, the installed-package
+#      consumer and an offline pip install;
+#   2. the C++ tests again under AddressSanitizer + UndefinedBehaviorSanitizer in ./build-asan;
+#   3. each libFuzzer target for 60 s (tools/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
-cd build
-ctest --output-on-failure -j"$(nproc)"
+(cd build && ctest --output-on-failure -j"$(nproc)")
+
+cmake -S . -B build-asan -DNOVAPHY_SANITIZE=ON -DNOVAPHY_BUILD_PYTHON=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build-asan -j"$(nproc)"
+(cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$(nproc)" -E "clang_format|install_consumer")
+
+bash tools/fuzz.sh 60

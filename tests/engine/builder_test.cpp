@@ -221,6 +221,30 @@ TEST(ModelBuilderErrors, BadArticulationsAndShapes) {
   EXPECT_NOVAPHY_ERROR(builder.add_plane(Vec3::Zero(), 0), "plane: normal has zero length");
 }
 
+TEST(ModelBuilderErrors, InterleavedArticulationsAtFinalize) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int c = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  builder.add_joint_revolute(-1, a);
+  builder.add_joint_revolute(-1, b);  // a second tree starts
+  builder.add_joint_revolute(a, c);   // ... and the first one goes on after it
+  EXPECT_NOVAPHY_ERROR(builder.finalize(), "joint 2: its articulation's joints are not contiguous");
+}
+
+TEST(ModelBuilderErrors, MassMatrixNotPositiveDefiniteNamesTheJoint) {
+  ModelBuilder builder;
+  JointOptions options;
+  options.name = "wrist";
+  builder.add_joint_revolute(-1, builder.add_body(RigidBody::from_sphere(1, 0.1)), options);
+  Model model = builder.finalize();
+  model.body_mass[0] = 0;  // a massless leaf, as no builder call allows
+  std::fill(model.body_inertia.begin(), model.body_inertia.end(), 0);
+  for (const auto method : {ForwardDynamicsMethod::Crba, ForwardDynamicsMethod::Aba})
+    EXPECT_NOVAPHY_ERROR(eval_forward_dynamics(model, model.state(), model.control(), method),
+                         "articulation 0: mass matrix is not positive definite at dof 0 (joint 0 'wrist'");
+}
+
 TEST(ModelBuilderErrors, StateFromAnotherModelAndNonFiniteCoordinates) {
   ModelBuilder one, two;
   one.add_body(RigidBody::from_sphere(1, 0.1));

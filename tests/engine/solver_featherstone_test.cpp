@@ -281,6 +281,16 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
   EXPECT_EQ(scene.state.joint_q, before.joint_q);
   EXPECT_EQ(scene.state.body_q, before.body_q);
 
+  // a velocity no double can hold after the step: the step raises and leaves the state as it was
+  scene.control.joint_f[2] = 0;
+  scene.control.joint_f[3] = 1e308;
+  scene.state.joint_qd[3] = 1e308;
+  const State fast = scene.state;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1.0),
+                       "step produced a non-finite state");
+  EXPECT_EQ(scene.state.joint_q, fast.joint_q);
+  EXPECT_EQ(scene.state.joint_qd, fast.joint_qd);
+
   SolverFeatherstoneSettings bad;
   bad.friction_smoothing = -1;
   EXPECT_NOVAPHY_ERROR(SolverFeatherstone(scene.model, bad), "settings.friction_smoothing must be in [0, 1], got -1");

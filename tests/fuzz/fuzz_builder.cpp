@@ -1,0 +1,109 @@
+// libFuzzer target: a random sequence of ModelBuilder calls (valid and invalid arguments), then
+// finalize, forward dynamics and a few steps with contacts. Errors must be novaphy::Error; a crash,
+// a sanitizer report or any other exception is a finding.
+#include <cstdint>
+
+#include "engine/builder.h"
+#include "engine/dynamics.h"
+#include "engine/error.h"
+#include "engine/solver_featherstone.h"
+#include "fuzz_support.h"
+
+using namespace novaphy;
+
+namespace {
+
+void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
+  const int bodies = builder.body_count(), joints = builder.joint_count();
+  switch (data.ConsumeIntegralInRange(0, 7)) {
+    case 0: {
+      RigidBody body;
+      body.mass = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(0.1, 5) : fuzz::number(data);
+      body.com = data.ConsumeBool() ? Vec3::Zero() : fuzz::vec3(data);
+      if (data.ConsumeBool())
+        body.inertia = Vec3(fuzz::number(data), fuzz::number(data), fuzz::number(data)).asDiagonal();
+      builder.add_body(body, fuzz::transform(data));
+      break;
+    }
+    case 1: {
+      JointOptions options;
+      options.parent_xform = fuzz::transform(data);
+      options.child_xform = fuzz::transform(data);
+      options.dof.axis = data.ConsumeBool() ? Vec3::UnitZ() : fuzz::vec3(data);
+      if (data.ConsumeBool())
+        options.dof.limit_lower = fuzz::number(data), options.dof.limit_upper = fuzz::number(data);
+      if (data.ConsumeBool()) options.dof.damping = fuzz::number(data), options.dof.stiffness = fuzz::number(data);
+      if (data.ConsumeBool()) options.dof.target_ke = fuzz::number(data), options.dof.target_kd = fuzz::number(data);
+      const auto type = static_cast<JointType>(data.ConsumeIntegralInRange(0, 4));
+      builder.add_joint(type, data.ConsumeIntegralInRange(-2, bodies), data.ConsumeIntegralInRange(-1, bodies),
+                        options);
+      break;
+    }
+    case 2: {
+      ShapeOptions options;
+      options.xform = fuzz::transform(data);
+      if (data.ConsumeBool()) options.mu = fuzz::number(data), options.restitution = fuzz::number(data);
+      const int body = data.ConsumeIntegralInRange(-2, bodies);
+      const Scalar size = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(0.01, 1) : fuzz::number(data);
+      switch (data.ConsumeIntegralInRange(0, 2)) {
+        case 0: builder.add_shape_box(body, Vec3(size, size, fuzz::number(data)), options); break;
+        case 1: builder.add_shape_sphere(body, size, options); break;
+        default: builder.add_shape_capsule(body, size, fuzz::number(data), options); break;
+      }
+      break;
+    }
+    case 3: builder.add_plane(data.ConsumeBool() ? Vec3::UnitY() : fuzz::vec3(data), fuzz::number(data)); break;
+    case 4: {
+      const int first = data.ConsumeIntegralInRange(-1, joints);
+      std::vector<int> list;
+      for (int k = 0, n = data.ConsumeIntegralInRange(0, 4); k < n; ++k) list.push_back(first + k);
+      builder.add_articulation(list);
+      break;
+    }
+    case 5:
+      builder.add_motor(data.ConsumeIntegralInRange(-1, joints), fuzz::number(data), fuzz::number(data),
+                        fuzz::number(data));
+      break;
+    case 6: builder.set_gravity(fuzz::vec3(data)); break;
+    default: builder.add_ground_plane(fuzz::number(data)); break;
+  }
+}
+
+void simulate(FuzzedDataProvider& data, const Model& model) {
+  State state = model.state();
+  for (Scalar& q : state.joint_qd) q = data.ConsumeFloatingPointInRange<Scalar>(-5, 5);
+  Control control = model.control();
+  for (Scalar& f : control.joint_f) f = fuzz::number(data);
+  eval_forward_dynamics(model, state, control,
+                        data.ConsumeBool() ? ForwardDynamicsMethod::Aba : ForwardDynamicsMethod::Crba);
+  if (model.articulation_count == 0) return;
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  SolverFeatherstoneSettings settings;
+  settings.num_iterations = data.ConsumeIntegralInRange(-1, 30);
+  settings.erp = fuzz::number(data);
+  SolverFeatherstone solver(model);
+  solver.settings = settings;
+  for (int k = 0; k < 3; ++k) {
+    pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, data.ConsumeBool() ? 0.01 : fuzz::number(data));
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t size) {
+  FuzzedDataProvider data(bytes, size);
+  ModelBuilder builder;
+  for (int k = 0, n = data.ConsumeIntegralInRange(0, 40); k < n; ++k) {
+    try {
+      build_step(data, builder);
+    } catch (const Error&) {
+    }
+  }
+  try {
+    simulate(data, builder.finalize());
+  } catch (const Error&) {
+  }
+  return 0;
+}

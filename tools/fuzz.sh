@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang-14, ASan + UBSan) in ./build-fuzz and runs each for SECONDS
+# (default 60), keeping its corpus in build-fuzz/corpus/<target>. A finding stops the run with the
+# crashing input written next to the corpus; add it as a regression test.
+#   bash tools/fuzz.sh            # 60 s per target, as CI does
+#   bash tools/fuzz.sh 3600       # an hour per target
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -DNOVAPHY_FUZZ=ON -DNOVAPHY_BUILD_PYTHON=OFF \
+  -DNOVAPHY_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build-fuzz -j"$(nproc)"
+for target in fuzz_builder fuzz_mjcf; do
+  mkdir -p "build-fuzz/corpus/$target" "build-fuzz/findings/$target"
+  echo "fuzzing $target for $seconds s"
+  "build-fuzz/tests/fuzz/$target" -max_total_time="$seconds" -print_final_stats=1 \
+    -artifact_prefix="build-fuzz/findings/$target/" "build-fuzz/corpus/$target" 2>&1 | tail -n 12
+done
