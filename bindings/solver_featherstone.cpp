@@ -7,6 +7,10 @@ namespace novaphy::python {
 
 void bind_solver_featherstone(py::module_& m) {
   using Settings = SolverFeatherstoneSettings;
+  py::enum_<DivergencePolicy>(m, "DivergencePolicy", "What step does with an articulation that diverged.")
+      .value("Raise", DivergencePolicy::Raise, "step raises and writes nothing")
+      .value("Flag", DivergencePolicy::Flag, "the articulation keeps its previous state; solver.diverged marks it")
+      .value("Reset", DivergencePolicy::Reset, "the articulation restarts from the model's joint_q0 at rest");
   py::class_<Settings>(m, "SolverFeatherstoneSettings", "Every knob of SolverFeatherstone; checked at each step.")
       .def(py::init<>())
       .def_readwrite("num_iterations", &Settings::num_iterations, "PGS sweeps per step.")
@@ -26,7 +30,11 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("use_tile_gemm", &Settings::use_tile_gemm, "Mass matrix as sum J^T I J instead of CRBA.")
       .def_readwrite("fuse_cholesky", &Settings::fuse_cholesky, "Factor and forward-substitute in one pass.")
       .def_readwrite("num_threads", &Settings::num_threads,
-                     "OpenMP threads over articulations (0: all available); results are bit-identical for any count.");
+                     "OpenMP threads over articulations (0: all available); results are bit-identical for any count.")
+      .def_readwrite("on_divergence", &Settings::on_divergence,
+                     "DivergencePolicy for an articulation whose state went non-finite or too fast.")
+      .def_readwrite("divergence_speed", &Settings::divergence_speed,
+                     "A dof speed (m/s, rad/s) beyond which an articulation counts as diverged.");
 
   py::class_<JointSupportMatrix>(m, "JointSupportMatrix", "Which joint types a solver enforces.")
       .def("supports", &JointSupportMatrix::supports, py::arg("joint"))
@@ -59,7 +67,14 @@ void bind_solver_featherstone(py::module_& m) {
       .def("step", &SolverFeatherstone::step, py::arg("state_in"), py::arg("state_out"), py::arg("control"),
            py::arg("contacts"), py::arg("dt"), py::call_guard<py::gil_scoped_release>(),
            "Advances state_in by dt into state_out (they may be the same State).")
-      .def("joint_support", &SolverFeatherstone::joint_support);
+      .def("joint_support", &SolverFeatherstone::joint_support)
+      .def_property_readonly(
+          "diverged",
+          [](py::object self) {
+            auto& flags = const_cast<std::vector<std::uint8_t>&>(self.cast<const SolverFeatherstone&>().diverged());
+            return view(flags.data(), static_cast<int>(flags.size()), 1, self, false);
+          },
+          "Per articulation: 1 where the last step's divergence guard fired (a read-only view).");
 }
 
 }  // namespace novaphy::python

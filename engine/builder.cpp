@@ -319,7 +319,7 @@ Model ModelBuilder::finalize() const {
       model.joint_target_ke[qd + k] = dof.target_ke;
       model.joint_target_kd[qd + k] = dof.target_kd;
     }
-    Scalar* q0 = &model.joint_q0[q];
+    Scalar* q0 = model.joint_q0.data() + q;  // past the end for a joint without coordinates
     switch (joint.type) {
       case JointType::Revolute:
       case JointType::Prismatic: model.joint_q_ref[q] = dof.q_ref; break;
@@ -328,7 +328,7 @@ Model ModelBuilder::finalize() const {
         // start at the body's pose: J = X_p^-1 * body_xform * X_c
         const Transform J = joint.options.parent_xform.inverse() * body_xform_[joint.child] * joint.options.child_xform;
         J.to_array(q0);
-        J.to_array(&model.joint_q_ref[q]);
+        J.to_array(model.joint_q_ref.data() + q);
         break;
       }
       case JointType::Fixed: break;

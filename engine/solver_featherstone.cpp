@@ -29,7 +29,13 @@ void check_range(const char* name, Scalar value, Scalar lo, Scalar hi) {
   if (!(value >= lo && value <= hi)) fail("settings.", name, " must be in [", lo, ", ", hi, "], got ", value);
 }
 
-bool is_finite(const VecX& x) { return x.allFinite(); }
+bool in_finite(const State& state, const ArticulationView& art) {
+  for (int k = 0; k < art.coord_count(); ++k)
+    if (!std::isfinite(state.joint_q[art.q_begin() + k])) return false;
+  for (int k = 0; k < art.dof_count(); ++k)
+    if (!std::isfinite(state.joint_qd[art.qd_begin() + k])) return false;
+  return true;
+}
 
 }  // namespace
 
@@ -46,6 +52,7 @@ void SolverFeatherstoneSettings::check() const {
   check_range("restitution_threshold", restitution_threshold, 0, 1e6);
   check_range("angular_damping", angular_damping, 0, inf);
   check_range("friction_smoothing", friction_smoothing, 0, 1);
+  check_range("divergence_speed", divergence_speed, 0, inf);
   if (!std::isfinite(angular_damping)) fail("settings.angular_damping must be finite, got ", angular_damping);
 }
 
@@ -92,6 +99,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   rhs_.setZero(model.joint_dof_count);
   q_next_.setZero(model.joint_coord_count);
   factor_failure_.assign(model.articulation_count, -1);
+  diverged_.assign(model.articulation_count, 0);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
 }
@@ -358,21 +366,36 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
     const Vec3 n = Eigen::Map<const Vec3>(&contacts.contact_normal[3 * c]);
     Vec3 t1, t2;
     tangents(n, &t1, &t2);
-    Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) =
-        rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
+    const Vec3 impulse = rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
+    Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) = impulse.allFinite() ? impulse : Vec3::Zero();
   }
-  for (size_t k = 0; k < limit_row_.size(); ++k)
-    limit_impulse_[k] = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
+  for (size_t k = 0; k < limit_row_.size(); ++k) {
+    const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
+    limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
+  }
 }
 
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
+  // divergence guard: an articulation whose state went non-finite or beyond divergence_speed is
+  // flagged, and raised, kept as it was (Flag) or reset to the model's initial state (Reset)
   for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
-    integrate_joints(art, in.joint_q.data() + art.q_begin(), qd_.data() + art.qd_begin(), dt,
-                     q_next_.data() + art.q_begin());
+    const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();
+    integrate_joints(art, in.joint_q.data() + q0, qd_.data() + qd0, dt, q_next_.data() + q0);
+    const auto q = q_next_.segment(q0, nq);
+    const auto qd = qd_.segment(qd0, nv);
+    diverged_[a] =
+        !q.allFinite() || !qd.allFinite() || (nv > 0 && qd.cwiseAbs().maxCoeff() > settings.divergence_speed);
+    if (!diverged_[a] || settings.on_divergence == DivergencePolicy::Raise) return;
+    const bool keep = settings.on_divergence == DivergencePolicy::Flag && in_finite(in, art);
+    for (int k = 0; k < nq; ++k) q_next_[q0 + k] = keep ? in.joint_q[q0 + k] : model_.joint_q0[q0 + k];
+    for (int k = 0; k < nv; ++k) qd_[qd0 + k] = keep ? in.joint_qd[qd0 + k] : 0;
   });
-  if (!is_finite(q_next_) || !is_finite(qd_))
-    fail("step produced a non-finite state (dt ", dt, " too large for the model's stiffness or forces?)");
+  if (settings.on_divergence == DivergencePolicy::Raise)
+    for (size_t a = 0; a < art_.size(); ++a)
+      if (diverged_[a])
+        fail("step diverged in articulation ", a, " (a non-finite state or a speed beyond ", settings.divergence_speed,
+             "; dt ", dt, " too large for the model's stiffness or forces?)");
   std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
   std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
   if (&out != &in) out.body_f = in.body_f;

@@ -4,6 +4,7 @@
 //   joint-limit rows through M^-1 J^T -> semi-implicit integration -> forward kinematics
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,9 @@
 #include "kernels/pgs.h"
 
 namespace novaphy {
+
+// what step does with an articulation whose state went non-finite or too fast
+enum class DivergencePolicy : int { Raise = 0, Flag = 1, Reset = 2 };
 
 struct SolverFeatherstoneSettings {
   int num_iterations = 20;             // PGS sweeps
@@ -26,6 +30,10 @@ struct SolverFeatherstoneSettings {
   bool use_tile_gemm = false;           // H as sum J^T I J over link Jacobians instead of CRBA
   bool fuse_cholesky = true;            // factor and forward-substitute in one pass
   int num_threads = 0;                  // OpenMP threads over articulations; 0: all available
+  // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
+  // from the model's joint_q0 at rest; Raise: step throws and writes nothing
+  DivergencePolicy on_divergence = DivergencePolicy::Flag;
+  Scalar divergence_speed = 1e6;  // |qd| beyond this (m/s, rad/s) counts as diverged
 
   // throws Error naming the first setting out of range
   void check() const;
@@ -49,6 +57,8 @@ class SolverFeatherstone {
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
 
   JointSupportMatrix joint_support() const;
+  // per articulation: 1 where the last step's divergence guard fired
+  const std::vector<std::uint8_t>& diverged() const { return diverged_; }
   const Model& model() const { return model_; }
 
   SolverFeatherstoneSettings settings;
@@ -90,6 +100,7 @@ class SolverFeatherstone {
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
+  std::vector<std::uint8_t> diverged_;
   std::vector<int> factor_failure_;    // per articulation: first dof whose Cholesky pivot failed, -1
   std::vector<int> contact_row_;       // first row of each contact, -1
   std::vector<int> limit_row_;         // [dof][2] row of each active limit, -1

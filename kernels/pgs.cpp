@@ -26,8 +26,10 @@ void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scala
   for (int it = 0; it < settings.iterations; ++it) {
     for (int r = 0; r < row_count; ++r) {
       PgsRow& row = rows[r];
+      // a row touching a diverged articulation yields no impulse, so NaN does not spread through contacts
       if (row.kind == RowKind::Unilateral) {
         const Scalar lambda = std::max<Scalar>(0, row.lambda + step(row));
+        if (!std::isfinite(lambda)) continue;
         apply_impulse(row, MinvJT, lambda - row.lambda, qd);
         row.lambda = lambda;
         continue;
@@ -41,6 +43,10 @@ void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scala
       const Scalar scale = norm > limit ? limit / norm : 1;
       const Scalar s = settings.friction_smoothing;
       const Scalar new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
+      if (!std::isfinite(new1) || !std::isfinite(new2)) {
+        ++r;
+        continue;
+      }
       apply_impulse(row, MinvJT, new1 - row.lambda, qd);
       apply_impulse(second, MinvJT, new2 - second.lambda, qd);
       row.lambda = new1;

@@ -10,9 +10,10 @@ seconds=${1:-60}
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -DNOVAPHY_FUZZ=ON -DNOVAPHY_BUILD_PYTHON=OFF \
   -DNOVAPHY_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build-fuzz -j"$(nproc)"
+cd build-fuzz  # MuJoCo writes MUJOCO_LOG.TXT into the working directory
 for target in fuzz_builder fuzz_mjcf; do
-  mkdir -p "build-fuzz/corpus/$target" "build-fuzz/findings/$target"
+  mkdir -p "corpus/$target" "findings/$target"
   echo "fuzzing $target for $seconds s"
-  "build-fuzz/tests/fuzz/$target" -max_total_time="$seconds" -print_final_stats=1 \
-    -artifact_prefix="build-fuzz/findings/$target/" "build-fuzz/corpus/$target" 2>&1 | tail -n 12
+  "tests/fuzz/$target" -max_total_time="$seconds" -print_final_stats=1 -artifact_prefix="findings/$target/" \
+    "corpus/$target" 2>&1 | tail -n 12
 done

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "engine/dynamics.h"
+#include "engine/solver_featherstone.h"
 #include "test_support_errors.h"
 
 namespace novaphy {
@@ -118,6 +119,26 @@ TEST(ModelBuilderErrors, BadMotors) {
   control = model.control();
   control.actuator_ctrl[0] = kNaN;
   EXPECT_NOVAPHY_ERROR(eval_control_force(model, control), "actuator_ctrl[0] is not finite: nan");
+}
+
+// fuzz_builder finding: a model whose last joint has no coordinates (UB at finalize)
+TEST(ModelBuilder, FixedJointsOnlyModelSteps) {
+  ModelBuilder builder;
+  const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  builder.add_joint_fixed(-1, a);
+  builder.add_joint_fixed(a, b);
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.joint_coord_count, 0);
+  EXPECT_EQ(model.joint_dof_count, 0);
+  State state = model.state();
+  EXPECT_EQ(eval_forward_dynamics(model, state, model.control()).size(), 0);
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  SolverFeatherstone solver(model);
+  pipeline.collide(state, contacts);
+  solver.step(state, state, model.control(), contacts, 0.01);
+  EXPECT_EQ(state.body_q[7 + 3 + 3], 1);  // welded bodies stay put
 }
 
 TEST(ModelBuilderErrors, ParentOutOfRangeOrNotYetDefined) {

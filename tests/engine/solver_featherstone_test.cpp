@@ -286,8 +286,9 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
   scene.control.joint_f[3] = 1e308;
   scene.state.joint_qd[3] = 1e308;
   const State fast = scene.state;
+  scene.solver.settings.on_divergence = DivergencePolicy::Raise;
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1.0),
-                       "step produced a non-finite state");
+                       "step diverged in articulation 0");
   EXPECT_EQ(scene.state.joint_q, fast.joint_q);
   EXPECT_EQ(scene.state.joint_qd, fast.joint_qd);
 
@@ -389,6 +390,73 @@ TEST(Determinism, RestoredCheckpointContinuesIdentically) {
   const Model small = other.finalize();
   State wrong = small.state();
   EXPECT_NOVAPHY_ERROR(wrong.assign(scene.state), "assign: the other state belongs to a model with");
+}
+
+// ---- the divergence guard ----
+
+// four pendulums side by side; the third is thrown at a speed beyond divergence_speed
+ModelBuilder pendulums() {
+  ModelBuilder builder;
+  for (int k = 0; k < 4; ++k) {
+    const int link = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+    JointOptions options;
+    options.dof.axis = Vec3::UnitZ();
+    options.parent_xform.p = Vec3(k, 2, 0);
+    options.child_xform.p = Vec3(-0.25, 0, 0);
+    builder.add_joint_revolute(-1, link, options);
+  }
+  return builder;
+}
+
+TEST(DivergenceGuard, FlagsOnlyTheDivergedArticulationAndKeepsItsState) {
+  Scene calm(pendulums()), wild(pendulums());
+  wild.state.joint_qd[2] = 2e6;
+  const std::vector<Scalar> q_before(wild.state.joint_q), qd_before(wild.state.joint_qd);
+  calm.run(kDt);
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+  EXPECT_EQ(wild.state.joint_q[2], q_before[2]);  // kept as it was
+  EXPECT_EQ(wild.state.joint_qd[2], qd_before[2]);
+  for (const int k : {0, 1, 3}) {  // the others stepped exactly as without it
+    EXPECT_EQ(wild.state.joint_q[k], calm.state.joint_q[k]);
+    EXPECT_EQ(wild.state.joint_qd[k], calm.state.joint_qd[k]);
+  }
+  wild.state.joint_qd[2] = 0;
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 0, 0}));
+}
+
+TEST(DivergenceGuard, ResetRestartsFromTheInitialState) {
+  SolverFeatherstoneSettings settings;
+  settings.on_divergence = DivergencePolicy::Reset;
+  Scene wild(pendulums(), settings);
+  wild.run(0.5);
+  wild.state.joint_qd[2] = std::numeric_limits<Scalar>::max();
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged()[2], 1);
+  EXPECT_EQ(wild.state.joint_q[2], wild.model.joint_q0[2]);
+  EXPECT_EQ(wild.state.joint_qd[2], 0);
+  EXPECT_NE(wild.state.joint_q[1], wild.model.joint_q0[1]);  // the others went on swinging
+}
+
+// a body whose step overflows to infinity while it rests on another: no NaN crosses the contact
+TEST(DivergenceGuard, NoNanSpreadsThroughContacts) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  const int bottom = add_box(builder, Vec3(0, 0.2, 0));
+  const int top = add_box(builder, Vec3(0, 0.6, 0));
+  Scene scene(builder);
+  scene.run(0.5);
+  scene.state.joint_qd[6 + 4] = 1e308;  // the top box's Free dofs: [w; v]
+  scene.control.joint_f[6 + 4] = 1e308;
+  scene.pipeline.collide(scene.state, scene.contacts);
+  scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1.0);
+  EXPECT_EQ(scene.solver.diverged(), (std::vector<std::uint8_t>{0, 1}));
+  for (const Scalar x : scene.state.body_q) EXPECT_TRUE(std::isfinite(x));
+  for (int c = 0; c < 3 * scene.contacts.contact_count; ++c)
+    EXPECT_TRUE(std::isfinite(scene.contacts.contact_impulse[c]));
+  EXPECT_NEAR(scene.position(bottom).y(), 0.2, 0.01);
+  EXPECT_NEAR(scene.position(top).y(), 0.6, 0.01);
 }
 
 // ---- every setting changes the computation ----

@@ -167,3 +167,28 @@ def test_pd_drive_through_control_views():
         pipeline.collide(state, contacts)
         solver.step(state, state, control, contacts, 1.0 / 120.0)
     assert state.joint_q[0] == pytest.approx(0.5, rel=1e-3)
+
+
+def test_divergence_guard_flags_an_unstable_robot_among_stable_ones():
+    builder = novaphy.ModelBuilder()
+    for k in range(4):
+        link = builder.add_body(novaphy.RigidBody.from_box(1.0, [0.05, 0.25, 0.05]))
+        builder.add_joint_revolute(-1, link, axis=[0, 0, 1], parent_xform=novaphy.Transform([k, 2.0, 0.0]),
+                                   child_xform=novaphy.Transform([-0.25, 0.0, 0.0]))
+    model = builder.finalize()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    assert solver.settings.on_divergence == novaphy.solvers.DivergencePolicy.Flag
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts, state, control = pipeline.contacts(), model.state(), model.control()
+    state.joint_qd[1] = 5e6  # beyond settings.divergence_speed
+    pipeline.collide(state, contacts)
+    solver.step(state, state, control, contacts, 1.0 / 120.0)
+    np.testing.assert_array_equal(solver.diverged, [0, 1, 0, 0])
+    assert state.joint_qd[1] == 5e6 and np.all(np.isfinite(state.joint_q))
+    solver.settings.on_divergence = novaphy.solvers.DivergencePolicy.Reset
+    solver.step(state, state, control, contacts, 1.0 / 120.0)
+    assert state.joint_qd[1] == 0.0 and state.joint_q[1] == 0.0
+    solver.settings.on_divergence = novaphy.solvers.DivergencePolicy.Raise
+    state.joint_qd[1] = 5e6
+    with pytest.raises(ValueError, match="step diverged in articulation 1"):
+        solver.step(state, state, control, contacts, 1.0 / 120.0)

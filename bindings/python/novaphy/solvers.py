@@ -1,5 +1,5 @@
 """Solvers: novaphy.solvers.SolverFeatherstone(model, *, angular_damping=0.05, ...)."""
 
-from ._novaphy import JointSupportMatrix, SolverFeatherstone, SolverFeatherstoneSettings
+from ._novaphy import DivergencePolicy, JointSupportMatrix, SolverFeatherstone, SolverFeatherstoneSettings
 
-__all__ = ["JointSupportMatrix", "SolverFeatherstone", "SolverFeatherstoneSettings"]
+__all__ = ["DivergencePolicy", "JointSupportMatrix", "SolverFeatherstone", "SolverFeatherstoneSettings"]
