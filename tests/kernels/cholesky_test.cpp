@@ -25,6 +25,23 @@ TEST(Cholesky, FactorAndSolveMatchEigen) {
   }
 }
 
+// the fused kernel does the same arithmetic in another order of passes: identical bits
+TEST(Cholesky, FusedFactorSolveEqualsFactorThenSolve) {
+  const MatX A = MatX::Random(12, 12);
+  const MatX H = A * A.transpose() + MatX::Identity(12, 12);
+  const VecX b = VecX::Random(12);
+  MatX L_split = H, L_fused = H;
+  VecX x_split = b, x_fused = b;
+  ASSERT_EQ(cholesky_factor(L_split), -1);
+  cholesky_solve(L_split, x_split.data());
+  ASSERT_EQ(cholesky_factor_solve(L_fused, x_fused.data()), -1);
+  EXPECT_EQ(x_fused, x_split);
+  EXPECT_EQ(MatX(L_fused.triangularView<Eigen::Lower>()), MatX(L_split.triangularView<Eigen::Lower>()));
+  MatX bad = -MatX::Identity(3, 3);
+  VecX y = VecX::Ones(3);
+  EXPECT_EQ(cholesky_factor_solve(bad, y.data()), 0);
+}
+
 TEST(Cholesky, ReportsTheFirstPivotThatIsNotPositive) {
   MatX H = MatX::Identity(4, 4);
   H(2, 2) = 0;
