@@ -29,14 +29,6 @@ void check_range(const char* name, Scalar value, Scalar lo, Scalar hi) {
   if (!(value >= lo && value <= hi)) fail("settings.", name, " must be in [", lo, ", ", hi, "], got ", value);
 }
 
-bool in_finite(const State& state, const ArticulationView& art) {
-  for (int k = 0; k < art.coord_count(); ++k)
-    if (!std::isfinite(state.joint_q[art.q_begin() + k])) return false;
-  for (int k = 0; k < art.dof_count(); ++k)
-    if (!std::isfinite(state.joint_qd[art.qd_begin() + k])) return false;
-  return true;
-}
-
 }  // namespace
 
 void SolverFeatherstoneSettings::check() const {
@@ -387,7 +379,7 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
     diverged_[a] =
         !q.allFinite() || !qd.allFinite() || (nv > 0 && qd.cwiseAbs().maxCoeff() > settings.divergence_speed);
     if (!diverged_[a] || settings.on_divergence == DivergencePolicy::Raise) return;
-    const bool keep = settings.on_divergence == DivergencePolicy::Flag && in_finite(in, art);
+    const bool keep = settings.on_divergence == DivergencePolicy::Flag;  // the input state is finite
     for (int k = 0; k < nq; ++k) q_next_[q0 + k] = keep ? in.joint_q[q0 + k] : model_.joint_q0[q0 + k];
     for (int k = 0; k < nv; ++k) qd_[qd0 + k] = keep ? in.joint_qd[qd0 + k] : 0;
   });
