@@ -129,6 +129,16 @@ void bind_builder(py::module_& m) {
            py::arg("force_upper") = INFINITY, py::arg("name") = "",
            "Motor on a Revolute/Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range).")
       .def_property_readonly("actuator_count", &ModelBuilder::actuator_count)
+      .def_property_readonly("world_count", &ModelBuilder::world_count)
+      .def(
+          "add_builder",
+          [](ModelBuilder& self, const ModelBuilder& other, std::optional<Transform> xform, int world) {
+            self.add_builder(other, xform.value_or(Transform::identity()), world);
+          },
+          py::arg("other"), py::kw_only(), py::arg("xform") = py::none(), py::arg("world") = -1,
+          "Appends everything of other as world `world` (-1: a new world), placed by xform.")
+      .def("replicate", &ModelBuilder::replicate, py::arg("other"), py::arg("world_count"),
+           py::arg("spacing") = Vec3::Zero(), "world_count copies of other, copy i shifted by i * spacing.")
       .def(
           "add_ground_plane",
           [](ModelBuilder& self, Scalar y, Scalar mu, Scalar restitution, int group, int mask) {

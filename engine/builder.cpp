@@ -118,6 +118,8 @@ int ModelBuilder::add_body_checked(const RigidBody& body, const Transform& xform
   body_inertia_.push_back(0.5 * (body.inertia + body.inertia.transpose()));
   body_name_.push_back(name);
   body_joint_.push_back(-1);
+  body_world_.push_back(0);
+  world_count_ = std::max(world_count_, 1);
   return body_count() - 1;
 }
 
@@ -204,6 +206,7 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const S
   ShapeRecord shape{type, body, scale, options};
   shape.options.xform = checked_transform(item, "xform", options.xform);
   shapes_.push_back(shape);
+  shape_world_.push_back(body < 0 ? -1 : body_world_[body]);
   return shape_count() - 1;
 }
 
@@ -252,6 +255,69 @@ int ModelBuilder::add_shape_capsule(int body, Scalar radius, Scalar half_height,
   return add_shape(ShapeType::Capsule, body, Vec3(radius, half_height, radius), options);
 }
 
+ModelBuilder::JointRecord ModelBuilder::free_joint(int body) const {
+  JointRecord joint{JointType::Free, -1, body, {}};
+  joint.options.name = body_name_[body].empty() ? "" : body_name_[body] + "_free";
+  return joint;
+}
+
+void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform, int world) {
+  if (&other == this) fail("add_builder: a builder cannot be added to itself");
+  if (world < -1) fail("add_builder: world must be >= -1, got ", world);
+  const Transform place = checked_transform("add_builder", "xform", xform);
+  if (world < 0) world = world_count_;
+  const int body0 = body_count(), joint0 = joint_count();
+  for (int b = 0; b < other.body_count(); ++b) {
+    body_mass_.push_back(other.body_mass_[b]);
+    body_com_.push_back(other.body_com_[b]);
+    body_inertia_.push_back(other.body_inertia_[b]);
+    body_xform_.push_back(place * other.body_xform_[b]);
+    body_name_.push_back(other.body_name_[b]);
+    body_joint_.push_back(other.body_joint_[b] < 0 ? -1 : other.body_joint_[b] + joint0);
+    body_world_.push_back(world);
+  }
+  for (JointRecord joint : other.joints_) {
+    if (joint.parent < 0)
+      joint.options.parent_xform = place * joint.options.parent_xform;
+    else
+      joint.parent += body0;
+    joint.child += body0;
+    if (joint.articulation >= 0) joint.articulation += articulation_count_;
+    joints_.push_back(joint);
+  }
+  // the copy's free bodies get their Free joints now, so each world's joints stay together
+  for (int b = body0; b < body_count(); ++b) {
+    if (body_joint_[b] >= 0) continue;
+    joints_.push_back(free_joint(b));
+    body_joint_[b] = joint_count() - 1;
+  }
+  articulation_count_ += other.articulation_count_;
+  for (int s = 0; s < other.shape_count(); ++s) {
+    ShapeRecord shape = other.shapes_[s];
+    if (shape.body < 0)
+      shape.options.xform = place * shape.options.xform;
+    else
+      shape.body += body0;
+    shapes_.push_back(shape);
+    shape_world_.push_back(world);
+  }
+  for (MotorRecord motor : other.motors_) {
+    motor.joint += joint0;
+    motors_.push_back(motor);
+  }
+  world_count_ = std::max(world_count_, world + 1);
+}
+
+void ModelBuilder::replicate(const ModelBuilder& other, int world_count, const Vec3& spacing) {
+  if (world_count < 1) fail("replicate: world_count must be >= 1, got ", world_count);
+  check_finite("replicate", "spacing", spacing);
+  for (int w = 0; w < world_count; ++w) {
+    Transform place;
+    place.p = w * spacing;
+    add_builder(other, place);
+  }
+}
+
 Model ModelBuilder::finalize() const {
   // articulations: explicit ones keep their joints; the others follow their parent's
   // articulation or start a new one at a root; bodies without a joint get a Free joint each
@@ -263,9 +329,8 @@ Model ModelBuilder::finalize() const {
   }
   for (int b = 0; b < body_count(); ++b) {
     if (body_joint_[b] >= 0) continue;
-    JointRecord joint{JointType::Free, -1, b, {}, articulation_count++};
-    joint.options.name = body_name_[b].empty() ? "" : body_name_[b] + "_free";
-    joints.push_back(joint);
+    joints.push_back(free_joint(b));
+    joints.back().articulation = articulation_count++;
   }
 
   // articulations must be contiguous runs of joints; number them in joint order
@@ -346,6 +411,9 @@ Model ModelBuilder::finalize() const {
     Eigen::Map<Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&model.body_inertia[9 * b]) = body_inertia_[b];
   }
   model.body_name = body_name_;
+  model.world_count = std::max(world_count_, 1);
+  model.body_world = body_world_;
+  model.shape_world = shape_world_;
 
   for (int s = 0; s < shape_count(); ++s) {
     const ShapeRecord& shape = shapes_[s];

@@ -92,6 +92,13 @@ class ModelBuilder {
                 Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
                 Scalar force_upper = std::numeric_limits<Scalar>::infinity(), const std::string& name = "");
 
+  // appends everything of `other` (bodies, joints, articulations, shapes, motors) as world `world`
+  // (-1: a new world), its root joints, free bodies and static shapes placed by xform
+  void add_builder(const ModelBuilder& other, const Transform& xform = {}, int world = -1);
+  // world_count copies of `other`, copy i shifted by i * spacing, one world each
+  void replicate(const ModelBuilder& other, int world_count, const Vec3& spacing = Vec3::Zero());
+  int world_count() const { return world_count_; }
+
   // MJCF / URDF import through MuJoCo's parser (engine/mjcf_import.cpp): returns the warnings
   // for everything in the file the engine does not model, by name
   std::vector<std::string> add_mjcf(const std::string& path, const ImportOptions& options = {});
@@ -125,6 +132,8 @@ class ModelBuilder {
   // massless links are allowed for imported bodies that carry several MuJoCo joints
   int add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name, bool allow_massless);
   int add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options);
+  // the implicit Free joint of a body no joint names as its child
+  JointRecord free_joint(int body) const;
 
   Vec3 gravity_;
   std::vector<Scalar> body_mass_;
@@ -133,6 +142,9 @@ class ModelBuilder {
   std::vector<Transform> body_xform_;
   std::vector<std::string> body_name_;
   std::vector<int> body_joint_;  // joint whose child the body is, -1
+  std::vector<int> body_world_;
+  std::vector<int> shape_world_;  // -1: a static shape every world collides with
+  int world_count_ = 0;
   std::vector<JointRecord> joints_;
   std::vector<ShapeRecord> shapes_;
   struct MotorRecord {

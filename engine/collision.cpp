@@ -58,6 +58,8 @@ Contacts CollisionPipeline::contacts() const {
 bool CollisionPipeline::may_collide(int a, int b) const {
   const int ba = model_.shape_body[a], bb = model_.shape_body[b];
   if (ba == bb) return false;
+  const int wa = model_.shape_world[a], wb = model_.shape_world[b];
+  if (wa >= 0 && wb >= 0 && wa != wb) return false;
   if ((model_.shape_collision_group[a] & model_.shape_collision_mask[b]) == 0 ||
       (model_.shape_collision_group[b] & model_.shape_collision_mask[a]) == 0)
     return false;

@@ -18,6 +18,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, body_mass, body_count, 1)                   \
   X(Scalar, body_com, body_count, 3)                    \
   X(Scalar, body_inertia, body_count, 9)                \
+  X(int, body_world, body_count, 1)                     \
   X(int, joint_type, joint_count, 1)                    \
   X(int, joint_parent, joint_count, 1)                  \
   X(int, joint_child, joint_count, 1)                   \
@@ -46,6 +47,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, shape_restitution, shape_count, 1)          \
   X(int, shape_collision_group, shape_count, 1)         \
   X(int, shape_collision_mask, shape_count, 1)          \
+  X(int, shape_world, shape_count, 1)                   \
   X(int, actuator_joint, actuator_count, 1)             \
   X(Scalar, actuator_gear, actuator_count, 1)           \
   X(Scalar, actuator_ctrl_lower, actuator_count, 1)     \

@@ -141,6 +141,72 @@ TEST(ModelBuilder, FixedJointsOnlyModelSteps) {
   EXPECT_EQ(state.body_q[7 + 3 + 3], 1);  // welded bodies stay put
 }
 
+// a pendulum swinging against a box on the ground, as one world
+ModelBuilder pendulum_world() {
+  ModelBuilder world;
+  world.add_ground_plane();
+  const int link = world.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  world.add_shape_box(link, Vec3(0.05, 0.25, 0.05));
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.parent_xform.p = Vec3(0, 0.8, 0);
+  options.child_xform.p = Vec3(-0.25, 0, 0);
+  options.dof.limit_lower = -1.2;
+  world.add_joint_revolute(-1, world.add_body(RigidBody::from_sphere(0.1, 0.01)), {});
+  world.add_joint_revolute(-1, link, options);
+  Transform x;
+  x.p = Vec3(0.3, 0.1, 0);
+  world.add_shape_box(world.add_body(RigidBody::from_box(1, Vec3::Constant(0.1)), x), Vec3::Constant(0.1));
+  return world;
+}
+
+TEST(ModelBuilder, ReplicatedWorldsStepExactlyLikeOneWorldAlone) {
+  ModelBuilder batch;
+  batch.replicate(pendulum_world(), 5);  // all five on top of each other: worlds never collide
+  const Model model = batch.finalize();
+  const Model single = pendulum_world().finalize();
+  EXPECT_EQ(model.world_count, 5);
+  EXPECT_EQ(model.body_count, 5 * single.body_count);
+  EXPECT_EQ(model.body_world[single.body_count], 1);
+  EXPECT_EQ(model.shape_world[0], 0);  // each copy's ground plane belongs to its world
+  auto run = [](const Model& m, int steps) {
+    CollisionPipeline pipeline(m);
+    Contacts contacts = pipeline.contacts();
+    SolverFeatherstone solver(m);
+    State state = m.state();
+    const Control control = m.control();
+    for (int k = 0; k < steps; ++k) {
+      pipeline.collide(state, contacts);
+      solver.step(state, state, control, contacts, 1.0 / 120);
+    }
+    return state;
+  };
+  const State alone = run(single, 240), together = run(model, 240);
+  for (int w = 0; w < 5; ++w) {
+    const std::vector<Scalar> q(together.joint_q.begin() + w * single.joint_coord_count,
+                                together.joint_q.begin() + (w + 1) * single.joint_coord_count);
+    EXPECT_EQ(q, alone.joint_q) << "world " << w;
+  }
+}
+
+TEST(ModelBuilder, AddBuilderPlacesRootsFreeBodiesAndStaticShapes) {
+  ModelBuilder batch;
+  Transform x;
+  x.p = Vec3(10, 0, 0);
+  batch.add_builder(pendulum_world(), x, 3);
+  batch.replicate(pendulum_world(), 2, Vec3(0, 0, 5));
+  const Model model = batch.finalize();
+  EXPECT_EQ(model.world_count, 6);
+  const State state = model.state();
+  EXPECT_EQ(model.body_world[0], 3);
+  EXPECT_NEAR(state.body_q[7 * 2], 10.3, 1e-12);         // the free box, placed
+  EXPECT_NEAR(model.shape_transform[0], 10, 1e-12);      // the static plane, placed
+  EXPECT_NEAR(state.body_q[7 * (3 + 3) + 2], 5, 1e-12);  // the second copy's anchor body
+  EXPECT_NOVAPHY_ERROR(batch.add_builder(batch), "add_builder: a builder cannot be added to itself");
+  EXPECT_NOVAPHY_ERROR(batch.add_builder(pendulum_world(), {}, -2), "add_builder: world must be >= -1, got -2");
+  EXPECT_NOVAPHY_ERROR(batch.replicate(pendulum_world(), 0), "replicate: world_count must be >= 1, got 0");
+}
+
 TEST(ModelBuilderErrors, ParentOutOfRangeOrNotYetDefined) {
   ModelBuilder builder;
   const int a = builder.add_body(RigidBody::from_sphere(1, 0.1));

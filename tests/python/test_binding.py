@@ -184,3 +184,18 @@ def test_state_checkpoints():
     np.testing.assert_array_equal(restored.joint_f, 1.0)
     restored.assign(model.control())
     np.testing.assert_array_equal(restored.joint_f, 0.0)
+
+
+def test_replicate_and_add_builder():
+    robot = novaphy.ModelBuilder()
+    link = robot.add_body(novaphy.RigidBody.from_box(1.0, [0.05, 0.25, 0.05]))
+    robot.add_joint_revolute(-1, link, axis=[0, 0, 1], child_xform=novaphy.Transform([-0.25, 0, 0]))
+    robot.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1), xform=novaphy.Transform([0, 1, 0]))
+    batch = novaphy.ModelBuilder()
+    batch.replicate(robot, 3, spacing=[2.0, 0.0, 0.0])
+    batch.add_builder(robot, xform=novaphy.Transform([0, 0, 5]), world=7)
+    assert batch.world_count == 8
+    model = batch.finalize()
+    np.testing.assert_array_equal(model.body_world, [0, 0, 1, 1, 2, 2, 7, 7])
+    state = model.state()
+    np.testing.assert_allclose(state.body_q[[1, 3, 5, 7], :3], [[0, 1, 0], [2, 1, 0], [4, 1, 0], [0, 1, 5]])
