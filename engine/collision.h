@@ -48,6 +48,7 @@ struct CollisionOptions {
   bool self_collision = true;  // links of one articulation collide (never a parent with its child)
 };
 
+// keeps a reference to the model, which must outlive it
 class CollisionPipeline {
  public:
   explicit CollisionPipeline(const Model& model, const CollisionOptions& options = {});

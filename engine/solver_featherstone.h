@@ -49,6 +49,7 @@ struct JointSupportMatrix {
   std::string to_string() const;
 };
 
+// keeps a reference to the model, which must outlive it
 class SolverFeatherstone {
  public:
   explicit SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings = {});

@@ -55,7 +55,7 @@ Scalar relative_error(const MatX& a, const MatX& b) {
 
 void randomize_state(const Model& model, State& state, std::mt19937& rng, bool wrenches) {
   for (int j = 0; j < model.joint_count; ++j) {
-    Scalar* q = &state.joint_q[model.joint_q_start[j]];
+    Scalar* q = state.joint_q.data() + model.joint_q_start[j];  // past the end for a Fixed joint
     const auto type = static_cast<JointType>(model.joint_type[j]);
     if (type == JointType::Revolute) q[0] = uniform(rng, -M_PI, M_PI);
     if (type == JointType::Prismatic) q[0] = uniform(rng, -0.5, 0.5);

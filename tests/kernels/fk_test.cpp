@@ -17,8 +17,8 @@ Quat exp_quat(const Vec3& rotation) {
 std::vector<Scalar> advance(const Model& model, const State& state, Scalar h) {
   std::vector<Scalar> q = state.joint_q;
   for (int j = 0; j < model.joint_count; ++j) {
-    Scalar* x = &q[model.joint_q_start[j]];
-    const Scalar* v = &state.joint_qd[model.joint_qd_start[j]];
+    Scalar* x = q.data() + model.joint_q_start[j];  // past the end for a Fixed joint
+    const Scalar* v = state.joint_qd.data() + model.joint_qd_start[j];
     switch (static_cast<JointType>(model.joint_type[j])) {
       case JointType::Revolute:
       case JointType::Prismatic: x[0] += h * v[0]; break;

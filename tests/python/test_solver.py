@@ -192,3 +192,13 @@ def test_divergence_guard_flags_an_unstable_robot_among_stable_ones():
     state.joint_qd[1] = 5e6
     with pytest.raises(ValueError, match="step diverged in articulation 1"):
         solver.step(state, state, control, contacts, 1.0 / 120.0)
+
+
+def test_settings_object_on_its_own():
+    settings = novaphy.solvers.SolverFeatherstoneSettings()
+    assert settings.num_iterations == 20 and settings.erp == 0.2 and settings.fuse_cholesky
+    assert settings.on_divergence == novaphy.solvers.DivergencePolicy.Flag and settings.num_threads == 0
+    _, solver, *_ = falling_box()
+    settings.num_iterations = 7
+    solver.settings = settings
+    assert solver.settings.num_iterations == 7
