@@ -36,11 +36,18 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     body_parent_[model.joint_child[j]] = parent;
     body_articulation_[model.joint_child[j]] = model.joint_articulation[j];
   }
-  for (int s = 0; s < model.shape_count; ++s)
-    (model.shape_type[s] == static_cast<int>(ShapeType::Plane) ? planes_ : others_).push_back(s);
+  world_others_.resize(model.world_count);
+  for (int s = 0; s < model.shape_count; ++s) {
+    if (model.shape_type[s] == static_cast<int>(ShapeType::Plane)) {
+      planes_.push_back(s);
+      continue;
+    }
+    others_.push_back(s);
+    const int w = model.shape_world[s];
+    (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
+  }
   lower_.resize(3 * model.shape_count);
   upper_.resize(3 * model.shape_count);
-  order_ = others_;
 }
 
 Contacts CollisionPipeline::contacts() const {
@@ -114,28 +121,40 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   contacts.contact_count = 0;
   contacts.contact_dropped = 0;
 
-  // broad phase: sweep and prune along x, then every plane against every other shape
+  // broad phase per world: sweep and prune along x within each world, then the shapes every world
+  // shares against all, then each plane against the shapes of its world (all worlds for a shared one)
   for (const int s : others_)
     shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
-  std::sort(order_.begin(), order_.end(),
-            [&](int x, int y) { return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y); });
-  for (size_t i = 0; i < order_.size(); ++i) {
-    const int a = order_[i];
-    for (size_t j = i + 1; j < order_.size() && lower_[3 * order_[j]] <= upper_[3 * a]; ++j) {
-      const int b = order_[j];
-      if (lower_[3 * b + 1] > upper_[3 * a + 1] || lower_[3 * a + 1] > upper_[3 * b + 1] ||
-          lower_[3 * b + 2] > upper_[3 * a + 2] || lower_[3 * a + 2] > upper_[3 * b + 2])
-        continue;
-      if (may_collide(a, b)) narrow_phase(std::min(a, b), std::max(a, b), state, contacts);
-    }
+  auto overlap = [&](int a, int b) {
+    for (int k = 0; k < 3; ++k)
+      if (lower_[3 * b + k] > upper_[3 * a + k] || lower_[3 * a + k] > upper_[3 * b + k]) return false;
+    return true;
+  };
+  auto test_pair = [&](int a, int b) {
+    if (overlap(a, b) && may_collide(a, b)) narrow_phase(std::min(a, b), std::max(a, b), state, contacts);
+  };
+  for (std::vector<int>& order : world_others_) {
+    std::sort(order.begin(), order.end(),
+              [&](int x, int y) { return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y); });
+    for (size_t i = 0; i < order.size(); ++i)
+      for (size_t j = i + 1; j < order.size() && lower_[3 * order[j]] <= upper_[3 * order[i]]; ++j)
+        test_pair(order[i], order[j]);
   }
+  for (size_t i = 0; i < shared_others_.size(); ++i)
+    for (const int b : others_)
+      if (b != shared_others_[i] && (model_.shape_world[b] >= 0 || b > shared_others_[i]))
+        test_pair(shared_others_[i], b);
   for (const int p : planes_) {
     const Transform X = shape_pose(model_, state, p);
     const Vec3 n = X.q * Vec3::UnitY();
-    for (const int s : others_) {
-      const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
-      const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
-      if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, contacts);
+    const int w = model_.shape_world[p];
+    for (const std::vector<int>* shapes : {w < 0 ? &others_ : &world_others_[w], w < 0 ? nullptr : &shared_others_}) {
+      if (shapes == nullptr) continue;
+      for (const int s : *shapes) {
+        const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
+        const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
+        if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, contacts);
+      }
     }
   }
 }

@@ -1,4 +1,4 @@
-// CollisionPipeline: broad phase (sweep and prune per world, planes against everything) and the
+// CollisionPipeline: broad phase (sweep and prune per world, planes against their world) and the
 // narrow-phase kernels of kernels/collide, writing into a Contacts buffer allocated once.
 #pragma once
 
@@ -67,10 +67,11 @@ class CollisionPipeline {
   CollisionOptions options_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
-  std::vector<int> planes_, others_;  // shape indices
+  std::vector<int> planes_, others_;            // shape indices: planes, and every other shape
+  std::vector<std::vector<int>> world_others_;  // non-plane shapes of each world, sorted along x by collide
+  std::vector<int> shared_others_;              // non-plane shapes of no world: every world meets them
   // scratch
   std::vector<Scalar> lower_, upper_;  // [shape][3] world AABBs
-  std::vector<int> order_;
   std::vector<int> sort_index_;
 };
 
