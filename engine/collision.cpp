@@ -147,14 +147,19 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   for (const int p : planes_) {
     const Transform X = shape_pose(model_, state, p);
     const Vec3 n = X.q * Vec3::UnitY();
-    const int w = model_.shape_world[p];
-    for (const std::vector<int>* shapes : {w < 0 ? &others_ : &world_others_[w], w < 0 ? nullptr : &shared_others_}) {
-      if (shapes == nullptr) continue;
-      for (const int s : *shapes) {
+    auto against = [&](const std::vector<int>& shapes) {
+      for (const int s : shapes) {
         const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
         const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
         if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, contacts);
       }
+    };
+    const int w = model_.shape_world[p];
+    if (w < 0) {
+      against(others_);
+    } else {
+      against(world_others_[w]);
+      against(shared_others_);
     }
   }
 }

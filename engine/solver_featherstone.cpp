@@ -270,11 +270,14 @@ void SolverFeatherstone::add_point_jacobian(int body, const Vec3& p, const Vec3&
 }
 
 int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target) {
-  const int art_a = body_a < 0 ? -1 : body_articulation_[body_a];
-  const int art_b = body_b < 0 ? -1 : body_articulation_[body_b];
+  // a body of an articulation without dofs (welded to the world) is as static as the world
+  auto moving = [&](int body) {
+    return body >= 0 && art_[body_articulation_[body]].dof_count() > 0 ? body_articulation_[body] : -1;
+  };
+  const int art_a = moving(body_a), art_b = moving(body_b);
   const int r = begin_row(art_a, art_b, kind, target);
-  if (body_b >= 0) add_point_jacobian(body_b, p, d, 1, row_jacobian(r, art_b));
-  if (body_a >= 0) add_point_jacobian(body_a, p, d, -1, row_jacobian(r, art_a));
+  if (art_b >= 0) add_point_jacobian(body_b, p, d, 1, row_jacobian(r, art_b));
+  if (art_a >= 0) add_point_jacobian(body_a, p, d, -1, row_jacobian(r, art_a));
   finish_row(r);
   return r;
 }

@@ -211,6 +211,20 @@ TEST(SolverFeatherstone, QuadrupedSettlesWhereMujocoSettles) {
   EXPECT_GT(novaphy, 0.3);  // standing on its feet
 }
 
+// fuzz_builder finding: a contact with a body whose articulation has no dofs (UB in the row setup)
+TEST(SolverFeatherstone, WeldedBodiesActAsStatic) {
+  ModelBuilder builder;
+  const int table = builder.add_body(RigidBody::from_box(1, Vec3(1, 0.1, 1)));
+  builder.add_shape_box(table, Vec3(1, 0.1, 1));
+  builder.add_joint_fixed(-1, table);
+  const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), at(Vec3(0, 0.5, 0)));
+  builder.add_shape_sphere(ball, 0.1);
+  Scene scene(builder);
+  scene.run(2);
+  EXPECT_NEAR(scene.position(ball).y(), 0.2, scene.solver.settings.linear_slop + 1e-6);
+  EXPECT_EQ(scene.position(table), Vec3::Zero());
+}
+
 TEST(SolverFeatherstone, StateInMayBeStateOut) {
   ModelBuilder builder;
   builder.add_ground_plane();
