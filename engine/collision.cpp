@@ -101,8 +101,7 @@ void shape_bounds(const Model& model, const Transform& X, int s, Scalar margin, 
 
 void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   model_.check(state);
-  if (static_cast<const ModelCounts&>(contacts).body_count != model_.body_count ||
-      contacts.shape_count != model_.shape_count || contacts.contact_capacity != options_.contact_capacity)
+  if (!same_layout(contacts, model_) || contacts.contact_capacity != options_.contact_capacity)
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
 

@@ -135,8 +135,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   model_.check(in);
   model_.check(out);
   model_.check(control);
-  if (contacts.body_count != model_.body_count || contacts.shape_count != model_.shape_count ||
-      contacts.joint_count != model_.joint_count)
+  if (!same_layout(contacts, model_))
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   check_finite_state(in);
