@@ -26,11 +26,6 @@ Transform pose(const mjtNum* pos, const mjtNum* quat_wxyz_) {
   T.q = quat_wxyz(quat_wxyz_).normalized();
   return T;
 }
-Transform translation(const Vec3& p) {
-  Transform T;
-  T.p = p;
-  return T;
-}
 
 // MuJoCo capsules and plane normals run along local Z, NovaPhy's along local Y: rotate Y onto Z
 Transform y_to_z() {
@@ -130,14 +125,14 @@ class MjcfImporter {
             ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_->qpos0[qa], axis));
           else
             ref.p = -m_->qpos0[qa] * axis;
-          options.parent_xform = (k == 0 ? P : Transform::identity()) * translation(anchor) * ref;
-          options.child_xform = translation(anchor);
+          options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor} * ref;
+          options.child_xform = Transform{anchor};
           break;
         }
         case mjJNT_BALL:
           type = JointType::Ball;
-          options.parent_xform = (k == 0 ? P : Transform::identity()) * translation(anchor);
-          options.child_xform = translation(anchor);
+          options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor};
+          options.child_xform = Transform{anchor};
           if (m_->jnt_limited[j]) warn("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
           if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': ball joint stiffness is not modelled");
           break;

@@ -11,12 +11,6 @@
 namespace novaphy {
 namespace {
 
-Transform at(const Vec3& p) {
-  Transform T;
-  T.p = p;
-  return T;
-}
-
 std::set<std::pair<int, int>> touching_pairs(const Model& model, const CollisionOptions& options = {}) {
   CollisionPipeline pipeline(model, options);
   Contacts contacts = pipeline.contacts();
@@ -57,7 +51,7 @@ TEST(CollisionPipeline, GroupsAndMasks) {
   ShapeOptions options;
   std::vector<int> bodies;
   for (int k = 0; k < 3; ++k)
-    bodies.push_back(builder.add_body(RigidBody::from_sphere(1, 0.2), at(Vec3(0.1 * k, 0, 0))));
+    bodies.push_back(builder.add_body(RigidBody::from_sphere(1, 0.2), Transform{Vec3(0.1 * k, 0, 0)}));
   options.collision_group = 1, options.collision_mask = ~2;  // 0: skips group 2
   builder.add_shape_sphere(bodies[0], 0.2, options);
   options.collision_group = 2, options.collision_mask = -1;  // 1
@@ -74,7 +68,7 @@ TEST(CollisionPipeline, BroadPhaseMissesNoPair) {
   ModelBuilder builder;
   builder.add_ground_plane(-0.5);
   for (int k = 0; k < 60; ++k) {
-    Transform x = at(Vec3(u(rng), u(rng), u(rng)));
+    Transform x = Transform{Vec3(u(rng), u(rng), u(rng))};
     x.q = Quat(u(rng), u(rng), u(rng), u(rng)).normalized();
     const int body = builder.add_body(RigidBody::from_sphere(1, 0.1), x);
     if (k % 3 == 0) builder.add_shape_sphere(body, 0.1 + 0.1 * std::abs(u(rng)));
@@ -118,7 +112,7 @@ TEST(CollisionPipeline, CapacityOverflowIsCounted) {
   ModelBuilder builder;
   builder.add_ground_plane();
   for (int k = 0; k < 4; ++k)
-    builder.add_shape_box(builder.add_body(RigidBody(), at(Vec3(k, 0.1, 0))), Vec3::Constant(0.2));
+    builder.add_shape_box(builder.add_body(RigidBody(), Transform{Vec3(k, 0.1, 0)}), Vec3::Constant(0.2));
   const Model model = builder.finalize();
   CollisionOptions options;
   options.contact_capacity = 10;
@@ -132,7 +126,7 @@ TEST(CollisionPipeline, CapacityOverflowIsCounted) {
 TEST(CollisionPipeline, PreviousImpulsesAreFoundByFeature) {
   ModelBuilder builder;
   builder.add_ground_plane();
-  builder.add_shape_box(builder.add_body(RigidBody(), at(Vec3(0, 0.19, 0))), Vec3::Constant(0.2));
+  builder.add_shape_box(builder.add_body(RigidBody(), Transform{Vec3(0, 0.19, 0)}), Vec3::Constant(0.2));
   const Model model = builder.finalize();
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();

@@ -43,13 +43,6 @@ struct Scene {
   Control control;
 };
 
-Transform at(const Vec3& p, const Quat& q = Quat::Identity()) {
-  Transform T;
-  T.p = p;
-  T.q = q;
-  return T;
-}
-
 ShapeOptions material(Scalar mu, Scalar restitution = 0) {
   ShapeOptions options;
   options.mu = mu;
@@ -58,7 +51,7 @@ ShapeOptions material(Scalar mu, Scalar restitution = 0) {
 }
 
 int add_box(ModelBuilder& builder, const Vec3& position, Scalar half = 0.2, Scalar mass = 1, Scalar mu = 0.5) {
-  const int body = builder.add_body(RigidBody::from_box(mass, Vec3::Constant(half)), at(position));
+  const int body = builder.add_body(RigidBody::from_box(mass, Vec3::Constant(half)), Transform{position});
   builder.add_shape_box(body, Vec3::Constant(half), material(mu));
   return body;
 }
@@ -102,7 +95,7 @@ TEST(SolverFeatherstone, BoxOnSlopeSlidesAtCoulombAcceleration) {
   const Vec3 n = tilt * Vec3::UnitY(), down_slope = tilt * Vec3(-1, 0, 0);
   ModelBuilder builder;
   builder.add_plane(n, 0, material(mu));
-  const int box = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.2)), at(0.2 * n, tilt));
+  const int box = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.2)), Transform{0.2 * n, tilt});
   builder.add_shape_box(box, Vec3::Constant(0.2), material(mu));
   Scene scene(builder, no_damping());
   scene.run(0.5);
@@ -119,7 +112,7 @@ TEST(SolverFeatherstone, BoxOnSlopeWithEnoughFrictionStays) {
   const Vec3 n = tilt * Vec3::UnitY();
   ModelBuilder builder;
   builder.add_plane(n, 0, material(mu));
-  const int box = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.2)), at(0.2 * n, tilt));
+  const int box = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.2)), Transform{0.2 * n, tilt});
   builder.add_shape_box(box, Vec3::Constant(0.2), material(mu));
   Scene scene(builder);
   scene.run(3);
@@ -131,7 +124,7 @@ TEST(SolverFeatherstone, BounceHeightFollowsRestitution) {
   for (const Scalar e : {0.5, 0.8}) {
     ModelBuilder builder;
     builder.add_ground_plane(0, material(0.5, e));
-    const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), at(Vec3(0, 1.1, 0)));
+    const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(0, 1.1, 0)});
     builder.add_shape_sphere(ball, 0.1, material(0.5, e));
     SolverFeatherstoneSettings settings = no_damping();
     settings.restitution_threshold = 0.05;
@@ -217,7 +210,7 @@ TEST(SolverFeatherstone, WeldedBodiesActAsStatic) {
   const int table = builder.add_body(RigidBody::from_box(1, Vec3(1, 0.1, 1)));
   builder.add_shape_box(table, Vec3(1, 0.1, 1));
   builder.add_joint_fixed(-1, table);
-  const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), at(Vec3(0, 0.5, 0)));
+  const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(0, 0.5, 0)});
   builder.add_shape_sphere(ball, 0.1);
   Scene scene(builder);
   scene.run(2);
@@ -549,7 +542,7 @@ TEST(SolverFeatherstoneSettingsEffect, RestitutionThreshold) {
   for (const Scalar threshold : {0.2, 10.0}) {
     ModelBuilder builder;
     builder.add_ground_plane(0, material(0.5, 0.8));
-    const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), at(Vec3(0, 1.1, 0)));
+    const int ball = builder.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(0, 1.1, 0)});
     builder.add_shape_sphere(ball, 0.1, material(0.5, 0.8));
     SolverFeatherstoneSettings settings;
     settings.restitution_threshold = threshold;

@@ -8,27 +8,20 @@
 namespace novaphy {
 namespace {
 
-Transform at(const Vec3& p, const Quat& q = Quat::Identity()) {
-  Transform T;
-  T.p = p;
-  T.q = q;
-  return T;
-}
-
 Quat about(const Vec3& axis, Scalar angle) { return Quat(Eigen::AngleAxis<Scalar>(angle, axis.normalized())); }
 
 TEST(Collide, SphereOnPlane) {
   ContactPoint c[kMaxPairContacts];
-  ASSERT_EQ(collide_plane_sphere(at(Vec3::Zero()), Vec3(1, 0.4, 2), 0.5, 0.01, c), 1);
+  ASSERT_EQ(collide_plane_sphere(Transform{Vec3::Zero()}, Vec3(1, 0.4, 2), 0.5, 0.01, c), 1);
   EXPECT_NEAR(c[0].depth, 0.1, 1e-15);
   EXPECT_EQ(c[0].normal, Vec3::UnitY());
   EXPECT_LT((c[0].point - Vec3(1, -0.05, 2)).norm(), 1e-15);  // midway between the surfaces
-  EXPECT_EQ(collide_plane_sphere(at(Vec3::Zero()), Vec3(0, 0.52, 0), 0.5, 0.01, c), 0);
+  EXPECT_EQ(collide_plane_sphere(Transform{Vec3::Zero()}, Vec3(0, 0.52, 0), 0.5, 0.01, c), 0);
 }
 
 TEST(Collide, BoxRestingOnPlaneTouchesAtFourCorners) {
   ContactPoint c[kMaxPairContacts];
-  const int n = collide_plane_box(at(Vec3::Zero()), at(Vec3(0, 0.19, 0), about(Vec3::UnitY(), 0.3)),
+  const int n = collide_plane_box(Transform{Vec3::Zero()}, Transform{Vec3(0, 0.19, 0), about(Vec3::UnitY(), 0.3)},
                                   Vec3(0.2, 0.2, 0.2), 0.005, c);
   ASSERT_EQ(n, 4);
   std::set<int> features;
@@ -42,19 +35,19 @@ TEST(Collide, BoxRestingOnPlaneTouchesAtFourCorners) {
 TEST(Collide, StackedBoxesGiveFourPointsWithStableFeatures) {
   ContactPoint c[kMaxPairContacts], d[kMaxPairContacts];
   const Vec3 h(0.2, 0.2, 0.2);
-  const int n = collide_box_box(at(Vec3::Zero()), h, at(Vec3(0.05, 0.395, 0)), h, 0.01, c);
+  const int n = collide_box_box(Transform{Vec3::Zero()}, h, Transform{Vec3(0.05, 0.395, 0)}, h, 0.01, c);
   ASSERT_EQ(n, 4);
   for (int k = 0; k < n; ++k) {
     EXPECT_LT((c[k].normal - Vec3::UnitY()).norm(), 1e-12);
     EXPECT_NEAR(c[k].depth, 0.005, 1e-12);
   }
   // a small shift keeps the same features
-  ASSERT_EQ(collide_box_box(at(Vec3::Zero()), h, at(Vec3(0.051, 0.3951, 0)), h, 0.01, d), 4);
+  ASSERT_EQ(collide_box_box(Transform{Vec3::Zero()}, h, Transform{Vec3(0.051, 0.3951, 0)}, h, 0.01, d), 4);
   std::set<int> fc, fd;
   for (int k = 0; k < 4; ++k) fc.insert(c[k].feature), fd.insert(d[k].feature);
   EXPECT_EQ(fc, fd);
   // seen from the other box: same depths, opposite normals
-  ASSERT_EQ(collide_box_box(at(Vec3(0.05, 0.395, 0)), h, at(Vec3::Zero()), h, 0.01, d), 4);
+  ASSERT_EQ(collide_box_box(Transform{Vec3(0.05, 0.395, 0)}, h, Transform{Vec3::Zero()}, h, 0.01, d), 4);
   for (int k = 0; k < 4; ++k) EXPECT_LT((d[k].normal + Vec3::UnitY()).norm(), 1e-12);
 }
 
@@ -62,9 +55,9 @@ TEST(Collide, CrossedBoxEdgesTouchAtOnePoint) {
   ContactPoint c[kMaxPairContacts];
   // two long bars rotated 45 degrees about their axes, crossing at right angles, edges touching
   const Vec3 h(1, 0.1, 0.1);
-  const Transform a = at(Vec3::Zero(), about(Vec3::UnitX(), M_PI / 4));
-  const Transform b =
-      at(Vec3(0, 0.1 * std::sqrt(8.0) - 0.01, 0), about(Vec3::UnitY(), M_PI / 2) * about(Vec3::UnitX(), M_PI / 4));
+  const Transform a = Transform{Vec3::Zero(), about(Vec3::UnitX(), M_PI / 4)};
+  const Transform b = Transform{Vec3(0, 0.1 * std::sqrt(8.0) - 0.01, 0),
+                                about(Vec3::UnitY(), M_PI / 2) * about(Vec3::UnitX(), M_PI / 4)};
   ASSERT_EQ(collide_box_box(a, h, b, h, 0.001, c), 1);
   EXPECT_LT((c[0].normal - Vec3::UnitY()).norm(), 1e-9);
   EXPECT_NEAR(c[0].depth, 0.01, 1e-9);
@@ -74,8 +67,8 @@ TEST(Collide, CrossedBoxEdgesTouchAtOnePoint) {
 TEST(Collide, CapsuleLyingOnBoxTouchesAtBothEnds) {
   ContactPoint c[kMaxPairContacts];
   // capsule along x (local Y rotated onto x), resting on a wide box
-  const Transform capsule = at(Vec3(0, 0.145, 0), about(Vec3::UnitZ(), M_PI / 2));
-  const int n = collide_capsule_box(capsule, 0.05, 0.3, at(Vec3::Zero()), Vec3(1, 0.1, 1), 0.01, c);
+  const Transform capsule = Transform{Vec3(0, 0.145, 0), about(Vec3::UnitZ(), M_PI / 2)};
+  const int n = collide_capsule_box(capsule, 0.05, 0.3, Transform{Vec3::Zero()}, Vec3(1, 0.1, 1), 0.01, c);
   ASSERT_EQ(n, 2);
   for (int k = 0; k < n; ++k) {
     EXPECT_NEAR(c[k].depth, 0.005, 1e-9);
@@ -86,17 +79,17 @@ TEST(Collide, CapsuleLyingOnBoxTouchesAtBothEnds) {
 
 TEST(Collide, CapsulesCrossedAndParallel) {
   ContactPoint c[kMaxPairContacts];
-  const Transform a = at(Vec3::Zero(), about(Vec3::UnitZ(), M_PI / 2));
-  const Transform crossed = at(Vec3(0, 0.19, 0), about(Vec3::UnitX(), M_PI / 2));
+  const Transform a = Transform{Vec3::Zero(), about(Vec3::UnitZ(), M_PI / 2)};
+  const Transform crossed = Transform{Vec3(0, 0.19, 0), about(Vec3::UnitX(), M_PI / 2)};
   ASSERT_EQ(collide_capsule_capsule(a, 0.1, 0.5, crossed, 0.1, 0.5, 0.01, c), 1);
   EXPECT_NEAR(c[0].depth, 0.01, 1e-12);
-  const Transform parallel = at(Vec3(0, 0.19, 0), about(Vec3::UnitZ(), M_PI / 2));
+  const Transform parallel = Transform{Vec3(0, 0.19, 0), about(Vec3::UnitZ(), M_PI / 2)};
   EXPECT_EQ(collide_capsule_capsule(a, 0.1, 0.5, parallel, 0.1, 0.5, 0.01, c), 2);
 }
 
 TEST(Collide, SphereInsideBoxIsDeep) {
   ContactPoint c[kMaxPairContacts];
-  ASSERT_EQ(collide_sphere_box(Vec3(0, 0.15, 0), 0.1, at(Vec3::Zero()), Vec3(0.5, 0.2, 0.5), 0.01, c), 1);
+  ASSERT_EQ(collide_sphere_box(Vec3(0, 0.15, 0), 0.1, Transform{Vec3::Zero()}, Vec3(0.5, 0.2, 0.5), 0.01, c), 1);
   EXPECT_NEAR(c[0].depth, 0.15, 1e-12);                    // 0.05 inside the top face plus the radius
   EXPECT_LT((c[0].normal + Vec3::UnitY()).norm(), 1e-12);  // from the sphere into the box
 }
@@ -109,8 +102,9 @@ TEST(Collide, BoxBoxDepthMatchesSupportScan) {
   for (int trial = 0; trial < 200; ++trial) {
     const Vec3 ha(0.1 + 0.3 * std::abs(g(rng)), 0.1 + 0.3 * std::abs(g(rng)), 0.1 + 0.3 * std::abs(g(rng)));
     const Vec3 hb(0.1 + 0.3 * std::abs(g(rng)), 0.1 + 0.3 * std::abs(g(rng)), 0.1 + 0.3 * std::abs(g(rng)));
-    const Transform a = at(Vec3::Zero(), Quat(g(rng), g(rng), g(rng), g(rng)).normalized());
-    const Transform b = at(0.4 * Vec3(g(rng), g(rng), g(rng)), Quat(g(rng), g(rng), g(rng), g(rng)).normalized());
+    const Transform a = Transform{Vec3::Zero(), Quat(g(rng), g(rng), g(rng), g(rng)).normalized()};
+    const Transform b =
+        Transform{0.4 * Vec3(g(rng), g(rng), g(rng)), Quat(g(rng), g(rng), g(rng), g(rng)).normalized()};
     ContactPoint c[kMaxPairContacts];
     const int n = collide_box_box(a, ha, b, hb, 0, c);
     // minimum over many directions of the overlap of the two projections (>= the SAT minimum)
