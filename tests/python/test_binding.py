@@ -199,3 +199,26 @@ def test_replicate_and_add_builder():
     np.testing.assert_array_equal(model.body_world, [0, 0, 1, 1, 2, 2, 7, 7])
     state = model.state()
     np.testing.assert_allclose(state.body_q[[1, 3, 5, 7], :3], [[0, 1, 0], [2, 1, 0], [4, 1, 0], [0, 1, 5]])
+
+
+def test_world_views():
+    robot = novaphy.ModelBuilder()
+    a = robot.add_body(novaphy.RigidBody.from_box(1.0, [0.05, 0.25, 0.05]))
+    b = robot.add_body(novaphy.RigidBody.from_box(1.0, [0.05, 0.25, 0.05]))
+    robot.add_joint_ball(-1, a)
+    robot.add_joint_revolute(a, b, axis=[0, 0, 1])
+    batch = novaphy.ModelBuilder()
+    batch.replicate(robot, 3)
+    model = batch.finalize()
+    state = model.state()
+    q = novaphy.world_view(model, state.joint_q)
+    assert q.shape == (3, 5) and novaphy.world_view(model, state.body_q).shape == (3, 2, 7)
+    assert novaphy.world_view(model, state.joint_qd).shape == (3, 4)
+    q[2, 4] = 0.7  # world 2's hinge, written through the view
+    assert state.joint_q[14] == 0.7
+    uneven = novaphy.ModelBuilder()
+    uneven.replicate(robot, 2)
+    uneven.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))  # one more body in world 0
+    other = uneven.finalize()
+    with pytest.raises(ValueError, match="the worlds of this model differ in layout"):
+        novaphy.world_view(other, other.state().joint_q)

@@ -1,6 +1,7 @@
 """NovaPhy: batched articulated-body physics in reduced coordinates (Featherstone's algorithms)."""
 
 from . import solvers
+from .worlds import world_view
 from ._novaphy import (
     CollisionPipeline,
     Contacts,
@@ -52,4 +53,5 @@ __all__ = [
     "inverse_dynamics",
     "mass_matrix_crba",
     "solvers",
+    "world_view",
 ]
