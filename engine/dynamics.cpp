@@ -52,6 +52,11 @@ void check_finite_state(const State& state) {
   check_finite(state.body_f, "body_f");
 }
 
+void check_finite_control(const Control& control) {
+#define NOVAPHY_CHECK_FINITE_CONTROL(T, name, count, width) check_finite(control.name, #name);
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FINITE_CONTROL)
+}
+
 void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state) {
   for (int i = 0; i < art.link_count(); ++i) {
     const int b = art.body(i);
@@ -119,8 +124,7 @@ void control_force(const Model& model, const Control& control, Scalar* tau) {
 
 VecX eval_control_force(const Model& model, const Control& control) {
   model.check(control);
-  check_finite(control.joint_f, "joint_f");
-  check_finite(control.actuator_ctrl, "actuator_ctrl");
+  check_finite_control(control);
   VecX tau(model.joint_dof_count);
   control_force(model, control, tau.data());
   return tau;

@@ -34,5 +34,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
 
 // throws Error naming the first non-finite entry of state.joint_q / joint_qd / body_f
 void check_finite_state(const State& state);
+// throws Error naming the first non-finite entry of any control array
+void check_finite_control(const Control& control);
 
 }  // namespace novaphy

@@ -123,7 +123,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   row_count_ = 0;
   pool_size_ = 0;
   build_limit_rows(in, dt);
-  build_contact_rows(in, contacts, dt);
+  build_contact_rows(contacts, dt);
   solve_constraints(contacts);
   integrate(in, out, dt);
 }
@@ -139,10 +139,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   check_finite_state(in);
-  for (const auto* field : {&control.joint_f, &control.actuator_ctrl, &control.joint_target_pos,
-                            &control.joint_target_vel, &control.joint_target_ke, &control.joint_target_kd})
-    for (size_t k = 0; k < field->size(); ++k)
-      if (!std::isfinite((*field)[k])) fail("control value ", k, " is not finite: ", (*field)[k]);
+  check_finite_control(control);
 }
 
 void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt) {
@@ -306,7 +303,7 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
   }
 }
 
-void SolverFeatherstone::build_contact_rows(const State&, const Contacts& contacts, Scalar dt) {
+void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt) {
   contact_row_.assign(contacts.contact_count, -1);
   for (int c = 0; c < contacts.contact_count; ++c) {
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];

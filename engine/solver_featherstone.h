@@ -67,7 +67,7 @@ class SolverFeatherstone {
  private:
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt) const;
   void unconstrained_velocity(const State& in, const Control& control, Scalar dt);
-  void build_contact_rows(const State& in, const Contacts& contacts, Scalar dt);
+  void build_contact_rows(const Contacts& contacts, Scalar dt);
   void build_limit_rows(const State& in, Scalar dt);
   void solve_constraints(Contacts& contacts);
   void integrate(const State& in, State& out, Scalar dt);

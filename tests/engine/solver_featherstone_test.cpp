@@ -283,7 +283,7 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
   scene.solver.settings = {};
   scene.control.joint_f[2] = std::nan("");
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
-                       "control value 2 is not finite");
+                       "joint_f[2] is not finite: nan");
   // nothing was written by the failed steps
   EXPECT_EQ(scene.state.joint_q, before.joint_q);
   EXPECT_EQ(scene.state.body_q, before.body_q);
