@@ -15,6 +15,7 @@ void bind_builder(py::module_& m);
 void bind_dynamics(py::module_& m);
 void bind_collision(py::module_& m);
 void bind_solver_featherstone(py::module_& m);
+void bind_shard(py::module_& m);
 
 // a numpy view of `count` rows of `width` values owned by `owner` (no copy); width 1 gives a 1-D array
 template <typename T>

@@ -11,4 +11,5 @@ PYBIND11_MODULE(_novaphy, m) {
   novaphy::python::bind_dynamics(m);
   novaphy::python::bind_collision(m);
   novaphy::python::bind_solver_featherstone(m);
+  novaphy::python::bind_shard(m);
 }

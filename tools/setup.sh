@@ -6,7 +6,8 @@ cd "$(dirname "$0")/.."
 
 packages=(cmake g++ make libeigen3-dev libgtest-dev libbenchmark-dev libmujoco-dev libmujoco-samples
           pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pil python3-tqdm
-          python3-setuptools python3-pip clang-format clang-14 libclang-rt-14-dev libomp-14-dev)
+          python3-setuptools python3-pip clang-format clang-14 libclang-rt-14-dev libomp-14-dev
+          libopenmpi-dev openmpi-bin python3-mpi4py)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -19,5 +20,5 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=/usr/bin/python3 -DNOVAPHY_WITH_MPI=ON >/dev/null
 cmake --build build -j"$(nproc)"

@@ -8,3 +8,6 @@ execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE}/tests/consumer -B ${WORK}/
                 OUTPUT_QUIET)
 execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK}/build COMMAND_ERROR_IS_FATAL ANY OUTPUT_QUIET)
 execute_process(COMMAND ${WORK}/build/consumer COMMAND_ERROR_IS_FATAL ANY)
+if(EXISTS ${WORK}/build/consumer_mpi)
+  execute_process(COMMAND ${WORK}/build/consumer_mpi COMMAND_ERROR_IS_FATAL ANY)
+endif()

@@ -222,3 +222,35 @@ def test_world_views():
     other = uneven.finalize()
     with pytest.raises(ValueError, match="the worlds of this model differ in layout"):
         novaphy.world_view(other, other.state().joint_q)
+
+
+def test_shards_of_worlds():
+    ranges = [novaphy.shard_range(7, r, 3) for r in range(3)]
+    assert [(r.begin, r.end, r.count) for r in ranges] == [(0, 3, 3), (3, 5, 2), (5, 7, 2)]
+    with pytest.raises(ValueError, match=r"shard_range: rank must be in \[0, 3\), got 3"):
+        novaphy.shard_range(7, 3, 3)
+
+    def pendulum(builder, w):  # edits the builder it is given, which the engine keeps
+        link = builder.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
+        builder.add_joint_revolute(-1, link, parent_xform=novaphy.Transform([float(w), 0, 0]))
+
+    shared = novaphy.ModelBuilder()
+    shared.add_ground_plane(-1.0)
+    part = novaphy.build_worlds(shared, pendulum, ranges[1])
+    whole = novaphy.build_worlds(shared, pendulum, novaphy.shard_range(7, 0, 1))
+    assert part.world_count == 2 and part.shape_count == 1 and whole.world_count == 7
+    np.testing.assert_array_equal(part.joint_X_p, whole.joint_X_p[3:5])
+    layout = novaphy.world_layout(whole)
+    assert (layout.world_count, layout.body_count, layout.joint_dof_count, layout.articulation_count) == (7, 1, 1, 1)
+    assert (layout.joint_coord_count, layout.actuator_count) == (1, 0)
+
+    def uneven(builder, w):
+        for _ in range(w + 1):
+            builder.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
+
+    with pytest.raises(ValueError, match="world_layout: world 1 has 2 bodies, world 0 has 1"):
+        novaphy.world_layout(novaphy.build_worlds(novaphy.ModelBuilder(), uneven, ranges[0]))
+    with_bodies = novaphy.ModelBuilder()
+    with_bodies.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
+    with pytest.raises(ValueError, match="the shared builder holds 1 bodies; it may hold only static shapes"):
+        novaphy.build_worlds(with_bodies, pendulum, ranges[0])

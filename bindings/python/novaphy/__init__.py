@@ -1,4 +1,7 @@
-"""NovaPhy: batched articulated-body physics in reduced coordinates (Featherstone's algorithms)."""
+"""NovaPhy: batched articulated-body physics in reduced coordinates (Featherstone's algorithms).
+
+novaphy.mpi (worlds sharded over MPI ranks) needs mpi4py and is imported on its own.
+"""
 
 from . import solvers
 from .worlds import world_view
@@ -16,6 +19,9 @@ from ._novaphy import (
     ShapeType,
     State,
     Transform,
+    WorldLayout,
+    WorldRange,
+    build_worlds,
     eval_bias_forces,
     eval_control_force,
     eval_fk,
@@ -26,6 +32,8 @@ from ._novaphy import (
     forward_kinematics,
     inverse_dynamics,
     mass_matrix_crba,
+    shard_range,
+    world_layout,
 )
 
 __all__ = [
@@ -42,6 +50,9 @@ __all__ = [
     "ShapeType",
     "State",
     "Transform",
+    "WorldLayout",
+    "WorldRange",
+    "build_worlds",
     "eval_bias_forces",
     "eval_control_force",
     "eval_fk",
@@ -52,6 +63,8 @@ __all__ = [
     "forward_kinematics",
     "inverse_dynamics",
     "mass_matrix_crba",
+    "shard_range",
     "solvers",
+    "world_layout",
     "world_view",
 ]
