@@ -29,6 +29,9 @@ void bind_solver_featherstone(py::module_& m) {
                      "(friction opposes the slip direction smoothly); between: a blend.")
       .def_readwrite("use_tile_gemm", &Settings::use_tile_gemm, "Mass matrix as sum J^T I J instead of CRBA.")
       .def_readwrite("fuse_cholesky", &Settings::fuse_cholesky, "Factor and forward-substitute in one pass.")
+      .def_readwrite("aba_min_dofs", &Settings::aba_min_dofs,
+                     "Articulations with at least this many dofs use ABA (O(n), refactored every step) instead "
+                     "of CRBA + Cholesky.")
       .def_readwrite("num_threads", &Settings::num_threads,
                      "OpenMP threads over articulations (0: all available); results are bit-identical for any count.")
       .def_readwrite("on_divergence", &Settings::on_divergence,

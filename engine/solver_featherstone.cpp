@@ -7,6 +7,7 @@
 
 #include "engine/dynamics.h"
 #include "engine/error.h"
+#include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
 #include "kernels/fk.h"
@@ -35,6 +36,7 @@ void SolverFeatherstoneSettings::check() const {
   constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
   if (num_iterations < 0) fail("settings.num_iterations must be >= 0, got ", num_iterations);
   if (num_threads < 0) fail("settings.num_threads must be >= 0, got ", num_threads);
+  if (aba_min_dofs < 0) fail("settings.aba_min_dofs must be >= 0, got ", aba_min_dofs);
   if (update_mass_matrix_interval < 1)
     fail("settings.update_mass_matrix_interval must be >= 1, got ", update_mass_matrix_interval);
   check_range("linear_slop", linear_slop, 0, 1e3);
@@ -91,6 +93,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   rhs_.setZero(model.joint_dof_count);
   q_next_.setZero(model.joint_coord_count);
   factor_failure_.assign(model.articulation_count, -1);
+  factored_aba_.assign(model.articulation_count, 0);
   diverged_.assign(model.articulation_count, 0);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
@@ -182,9 +185,17 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
       }
     }
 
-    // M = H + diag, factored every update_mass_matrix_interval steps; qdd = M^-1 rhs
+    // M = H + diag; qdd = M^-1 rhs. ABA factors in O(n) every step; H is factored every
+    // update_mass_matrix_interval steps
     int bad = -1;
-    if (refactor) {
+    const bool use_aba = nv >= settings.aba_min_dofs;
+    if (use_aba) {
+      const int link = aba_factor(art, s.u.data(), s);
+      if (link < 0)
+        aba_solve(art, s, rhs);
+      else
+        bad = art.qd_start(link);
+    } else if (refactor || factored_aba_[a]) {
       if (settings.use_tile_gemm)
         mass_matrix_gemm(art, s);
       else
@@ -199,6 +210,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     } else {
       cholesky_solve(s.H, rhs);
     }
+    factored_aba_[a] = use_aba;
     factor_failure_[a] = bad < 0 ? -1 : qd0 + bad;
     qd_.segment(qd0, nv) = qd_in_.segment(qd0, nv) + dt * rhs_.segment(qd0, nv);
   });
@@ -248,10 +260,17 @@ void SolverFeatherstone::finish_row(int r) {
     Scalar* z = MinvJT_.data() + row.pool[s];
     const Scalar* J = J_.data() + row.pool[s];
     std::copy(J, J + row.dof_count[s], z);
-    cholesky_solve(scratch_[dof_articulation_[row.dof_begin[s]]].H, z);
+    solve_mass(dof_articulation_[row.dof_begin[s]], z);
     for (int k = 0; k < row.dof_count[s]; ++k) W += J[k] * z[k];
   }
   row.inv_mass = W + settings.cfm > 1e-12 ? 1 / (W + settings.cfm) : 0;
+}
+
+void SolverFeatherstone::solve_mass(int a, Scalar* x) {
+  if (factored_aba_[a])
+    aba_solve(art_[a], scratch_[a], x);
+  else
+    cholesky_solve(scratch_[a].H, x);
 }
 
 void SolverFeatherstone::add_point_jacobian(int body, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const {

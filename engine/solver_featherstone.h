@@ -29,7 +29,11 @@ struct SolverFeatherstoneSettings {
   Scalar friction_smoothing = 1.0;      // 0: box friction per tangent; 1: circular cone; between: blend
   bool use_tile_gemm = false;           // H as sum J^T I J over link Jacobians instead of CRBA
   bool fuse_cholesky = true;            // factor and forward-substitute in one pass
-  int num_threads = 0;                  // OpenMP threads over articulations; 0: all available
+  // articulations with at least this many dofs use ABA's O(n) factor and solves instead of CRBA +
+  // Cholesky (O(n^2) + O(n^3)); they refactor every step, whatever update_mass_matrix_interval says
+  // (32: where a chain steps faster on ABA, bench/chain_bench.cpp; branched trees of fewer dofs favour CRBA)
+  int aba_min_dofs = 32;
+  int num_threads = 0;  // OpenMP threads over articulations; 0: all available
   // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing
   DivergencePolicy on_divergence = DivergencePolicy::Flag;
@@ -82,6 +86,8 @@ class SolverFeatherstone {
   // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world)
   int add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target);
   void add_point_jacobian(int body, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const;
+  // x = M^-1 x for articulation a, with the factor of the last step (Cholesky or ABA)
+  void solve_mass(int a, Scalar* x);
 
   const Model& model_;
   std::vector<ArticulationView> art_;
@@ -102,10 +108,11 @@ class SolverFeatherstone {
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
   std::vector<std::uint8_t> diverged_;
-  std::vector<int> factor_failure_;    // per articulation: first dof whose Cholesky pivot failed, -1
-  std::vector<int> contact_row_;       // first row of each contact, -1
-  std::vector<int> limit_row_;         // [dof][2] row of each active limit, -1
-  std::vector<Scalar> limit_impulse_;  // [dof][2] impulses of the previous step's limit rows
+  std::vector<int> factor_failure_;         // per articulation: first dof whose factor failed, -1
+  std::vector<std::uint8_t> factored_aba_;  // per articulation: 1 where the factor is ABA's, 0 Cholesky's
+  std::vector<int> contact_row_;            // first row of each contact, -1
+  std::vector<int> limit_row_;              // [dof][2] row of each active limit, -1
+  std::vector<Scalar> limit_impulse_;       // [dof][2] impulses of the previous step's limit rows
 };
 
 }  // namespace novaphy

@@ -29,9 +29,7 @@ void ArticulationScratch::resize(const ArticulationView& art) {
   D_inv.resize(n);
   S.setZero(6, nv);
   U.setZero(6, nv);
-  H.setZero(nv, nv);
   u.setZero(nv);
-  link_jacobian.assign(n, Eigen::Matrix<Scalar, 6, Eigen::Dynamic>::Zero(6, nv));
   S_world.setZero(6, nv);
 }
 

@@ -56,7 +56,8 @@ struct ArticulationView {
   }
 };
 
-// per-articulation scratch: sized once by resize(), reused by every kernel call
+// per-articulation scratch: sized once by resize() (H and link_jacobian by their kernels), reused by
+// every kernel call
 struct ArticulationScratch {
   std::vector<Transform> X_up;     // pose of link i in its parent link (world for a root)
   std::vector<Transform> X_world;  // pose of link i in the world
@@ -69,7 +70,8 @@ struct ArticulationScratch {
   std::vector<Vec6> pA;            // articulated bias force (ABA)
   MatX U;                          // 6 x dof, IA S (ABA)
   std::vector<Mat6> D_inv;         // inverse of S^T IA S, top-left dof x dof block (ABA)
-  MatX H;                          // dof x dof joint-space inertia, then its Cholesky factor
+  // sized by their kernels on first use (O(n^2) memory, which an articulation on ABA never pays)
+  MatX H;  // joint-space inertia, then its Cholesky factor (crba)
   std::vector<Eigen::Matrix<Scalar, 6, Eigen::Dynamic>> link_jacobian;  // 6 x dof per link (mass_matrix_gemm)
   MatX S_world;                                                         // 6 x dof motion subspace in world coordinates
   VecX u;                                                               // dof work vector

@@ -10,7 +10,7 @@ void crba(const ArticulationView& art, ArticulationScratch& s) {
     if (p >= 0) s.IC[p] += s.Xup[i].transpose() * s.IC[i] * s.Xup[i];
   }
 
-  s.H.setZero();
+  s.H.setZero(art.dof_count(), art.dof_count());
   for (int i = 0; i < n; ++i) {
     const int d_i = art.dof(i);
     if (d_i == 0) continue;
@@ -37,7 +37,9 @@ void crba(const ArticulationView& art, ArticulationScratch& s) {
 
 void mass_matrix_gemm(const ArticulationView& art, ArticulationScratch& s) {
   const int n = art.link_count();
-  s.H.setZero();
+  s.H.setZero(art.dof_count(), art.dof_count());
+  s.link_jacobian.resize(n);
+  for (auto& J : s.link_jacobian) J.resize(6, art.dof_count());
   for (int i = 0; i < n; ++i) {
     // J_i = Xup_i J_parent + S_i in its own columns (link coordinates)
     auto& J = s.link_jacobian[i];
