@@ -32,6 +32,9 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("aba_min_dofs", &Settings::aba_min_dofs,
                      "Articulations with at least this many dofs use ABA (O(n), refactored every step) instead "
                      "of CRBA + Cholesky.")
+      .def_readwrite("coriolis_implicitness", &Settings::coriolis_implicitness,
+                     "0: explicit Coriolis forces; 0.5: linearised midpoint (energy kept to second order); 1: "
+                     "linearised backward Euler. Above 0 the dense path with an LU each step, O(n^3).")
       .def_readwrite("num_threads", &Settings::num_threads,
                      "OpenMP threads over articulations (0: all available); results are bit-identical for any count.")
       .def_readwrite("on_divergence", &Settings::on_divergence,

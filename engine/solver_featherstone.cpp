@@ -37,6 +37,7 @@ void SolverFeatherstoneSettings::check() const {
   if (num_iterations < 0) fail("settings.num_iterations must be >= 0, got ", num_iterations);
   if (num_threads < 0) fail("settings.num_threads must be >= 0, got ", num_threads);
   if (aba_min_dofs < 0) fail("settings.aba_min_dofs must be >= 0, got ", aba_min_dofs);
+  check_range("coriolis_implicitness", coriolis_implicitness, 0, 1);
   if (update_mass_matrix_interval < 1)
     fail("settings.update_mass_matrix_interval must be >= 1, got ", update_mass_matrix_interval);
   check_range("linear_slop", linear_slop, 0, 1e3);
@@ -94,6 +95,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   q_next_.setZero(model.joint_coord_count);
   factor_failure_.assign(model.articulation_count, -1);
   factored_aba_.assign(model.articulation_count, 0);
+  implicit_lu_.resize(model.articulation_count);
   diverged_.assign(model.articulation_count, 0);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
@@ -186,22 +188,31 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     }
 
     // M = H + diag; qdd = M^-1 rhs. ABA factors in O(n) every step; H is factored every
-    // update_mass_matrix_interval steps
+    // update_mass_matrix_interval steps. With implicit Coriolis forces qdd = (M + theta dt C)^-1 rhs
+    // (LU every step), and the constraint rows below still see M (its Cholesky factor).
     int bad = -1;
-    const bool use_aba = nv >= settings.aba_min_dofs;
+    const Scalar theta = settings.coriolis_implicitness;
+    const bool use_aba = theta == 0 && nv >= settings.aba_min_dofs;
     if (use_aba) {
       const int link = aba_factor(art, s.u.data(), s);
       if (link < 0)
         aba_solve(art, s, rhs);
       else
         bad = art.qd_start(link);
-    } else if (refactor || factored_aba_[a]) {
+    } else if (refactor || factored_aba_[a] || theta > 0) {
       if (settings.use_tile_gemm)
         mass_matrix_gemm(art, s);
       else
         crba(art, s);
       s.H.diagonal() += s.u;
-      if (settings.fuse_cholesky) {
+      if (theta > 0) {
+        bias_velocity_jacobian(art, qd, s, s.C);
+        s.C = s.H + theta * dt * s.C;
+        implicit_lu_[a].compute(s.C);
+        s.tau_step = Eigen::Map<const VecX>(rhs, nv);
+        Eigen::Map<VecX>(rhs, nv) = implicit_lu_[a].solve(s.tau_step);
+        bad = cholesky_factor(s.H);
+      } else if (settings.fuse_cholesky) {
         bad = cholesky_factor_solve(s.H, rhs);
       } else {
         bad = cholesky_factor(s.H);

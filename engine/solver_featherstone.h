@@ -4,6 +4,7 @@
 //   joint-limit rows through M^-1 J^T -> semi-implicit integration -> forward kinematics
 #pragma once
 
+#include <Eigen/LU>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -33,6 +34,11 @@ struct SolverFeatherstoneSettings {
   // Cholesky (O(n^2) + O(n^3)); they refactor every step, whatever update_mass_matrix_interval says
   // (32: where a chain steps faster on ABA, bench/chain_bench.cpp; branched trees of fewer dofs favour CRBA)
   int aba_min_dofs = 32;
+  // how implicitly the Coriolis and centrifugal forces are integrated: 0 explicit (semi-implicit
+  // Euler); 0.5 the linearised midpoint rule (energy kept to second order, no blow-up on fast spins
+  // or whipping chains); 1 linearised backward Euler (damps). Above 0 every articulation takes the
+  // dense path (CRBA, d bias/d qd by 2n RNEAs, an LU of M + theta dt C each step): O(n^3)
+  Scalar coriolis_implicitness = 0;
   int num_threads = 0;  // OpenMP threads over articulations; 0: all available
   // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing
@@ -108,11 +114,12 @@ class SolverFeatherstone {
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
   std::vector<std::uint8_t> diverged_;
-  std::vector<int> factor_failure_;         // per articulation: first dof whose factor failed, -1
-  std::vector<std::uint8_t> factored_aba_;  // per articulation: 1 where the factor is ABA's, 0 Cholesky's
-  std::vector<int> contact_row_;            // first row of each contact, -1
-  std::vector<int> limit_row_;              // [dof][2] row of each active limit, -1
-  std::vector<Scalar> limit_impulse_;       // [dof][2] impulses of the previous step's limit rows
+  std::vector<int> factor_failure_;                     // per articulation: first dof whose factor failed, -1
+  std::vector<std::uint8_t> factored_aba_;              // per articulation: 1 where the factor is ABA's, 0 Cholesky's
+  std::vector<Eigen::PartialPivLU<MatX>> implicit_lu_;  // per articulation: M + theta dt C (coriolis_implicitness)
+  std::vector<int> contact_row_;                        // first row of each contact, -1
+  std::vector<int> limit_row_;                          // [dof][2] row of each active limit, -1
+  std::vector<Scalar> limit_impulse_;                   // [dof][2] impulses of the previous step's limit rows
 };
 
 }  // namespace novaphy

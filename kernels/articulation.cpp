@@ -30,6 +30,9 @@ void ArticulationScratch::resize(const ArticulationView& art) {
   S.setZero(6, nv);
   U.setZero(6, nv);
   u.setZero(nv);
+  qd_step.setZero(nv);
+  qdd_zero.setZero(nv);
+  tau_step.setZero(nv);
   S_world.setZero(6, nv);
 }
 

@@ -75,6 +75,8 @@ struct ArticulationScratch {
   std::vector<Eigen::Matrix<Scalar, 6, Eigen::Dynamic>> link_jacobian;  // 6 x dof per link (mass_matrix_gemm)
   MatX S_world;                                                         // 6 x dof motion subspace in world coordinates
   VecX u;                                                               // dof work vector
+  VecX qd_step, qdd_zero, tau_step;                                     // dof work vectors of bias_velocity_jacobian
+  MatX C;  // d bias / d qd (bias_velocity_jacobian, sized there)
 
   void resize(const ArticulationView& art);
 };

@@ -1,5 +1,7 @@
 #include "kernels/rnea.h"
 
+#include "kernels/fk.h"
+
 namespace novaphy {
 
 Vec6 link_external_force(const ArticulationView& art, const ArticulationScratch& s, const Scalar* body_f, int i) {
@@ -39,6 +41,24 @@ void rnea(const ArticulationView& art, const Scalar* qdd, const Vec3& gravity, c
     const int p = art.parent(i);
     if (p >= 0) s.f[p] += s.Xup[i].transpose() * s.f[i];
   }
+}
+
+void bias_velocity_jacobian(const ArticulationView& art, const Scalar* qd, ArticulationScratch& s, MatX& C) {
+  const int nv = art.dof_count();
+  C.resize(nv, nv);
+  s.qd_step = Eigen::Map<const VecX>(qd, nv);
+  s.qdd_zero.setZero(nv);
+  for (int k = 0; k < nv; ++k) {
+    s.qd_step[k] = qd[k] + 1;
+    forward_velocity(art, s.qd_step.data(), s);
+    rnea(art, s.qdd_zero.data(), Vec3::Zero(), nullptr, s, C.col(k).data());
+    s.qd_step[k] = qd[k] - 1;
+    forward_velocity(art, s.qd_step.data(), s);
+    rnea(art, s.qdd_zero.data(), Vec3::Zero(), nullptr, s, s.tau_step.data());
+    C.col(k) = 0.5 * (C.col(k) - s.tau_step);
+    s.qd_step[k] = qd[k];
+  }
+  forward_velocity(art, qd, s);
 }
 
 void passive_force(const ArticulationView& art, const Scalar* q, const Scalar* qd, Scalar* tau_passive) {

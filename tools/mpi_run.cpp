@@ -6,7 +6,6 @@
 //                               [--no-exchange] [--no-progress] [--output file]
 // --output writes the final joint_q and joint_qd of all worlds (raw doubles) for comparison.
 #include <mpi.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +17,7 @@
 
 #include "engine/error.h"
 #include "engine/sharded_batch.h"
+#include "tools/progress.h"
 
 namespace {
 
@@ -60,14 +60,6 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-// a text progress bar on a terminal
-void show_progress(int done, int total) {
-  const int width = 40, filled = total > 0 ? width * done / total : width;
-  std::fprintf(stderr, "\r[%s%s] %d/%d steps", std::string(filled, '#').c_str(),
-               std::string(width - filled, ' ').c_str(), done, total);
-  if (done == total) std::fprintf(stderr, "\n");
-}
-
 int run(const Options& o) {
   // world w: the scene's robot at its place in a square grid, 0.3 m above the ground
   const int side = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(o.worlds)))));
@@ -92,7 +84,7 @@ int run(const Options& o) {
   std::vector<std::uint8_t> flags(root ? o.worlds : 0);
   double step_seconds = 0, exchange_seconds = 0;
   long diverged = 0;
-  const bool bar = o.progress && root && isatty(STDERR_FILENO);
+  novaphy::ProgressBar bar(o.steps, "steps", o.progress && root);
   MPI_Barrier(MPI_COMM_WORLD);
   const double start = MPI_Wtime();
   for (int s = 0; s < o.steps; ++s) {
@@ -112,7 +104,7 @@ int run(const Options& o) {
       for (std::uint8_t f : flags) diverged += f;
     }
     exchange_seconds += (t1 - t0) + (MPI_Wtime() - t2);
-    if (bar && (s + 1) % std::max(1, o.steps / 100) == 0) show_progress(s + 1, o.steps);
+    bar.update(s + 1);
   }
   MPI_Barrier(MPI_COMM_WORLD);
   const double wall = MPI_Wtime() - start;

@@ -758,22 +758,58 @@ TEST(Extremes, ConservativeDoublePendulumEnergy) {
 }
 
 // 100 rad/s about the intermediate axis, 20 000 steps of 0.1 ms without gravity: the spin flips
-// (Dzhanibekov), but the explicit gyroscopic term gains 7.6 % energy (the issue asks 1 %: not met)
-TEST(Extremes, SpinAboutTheIntermediateAxisFlips) {
+// (Dzhanibekov) either way; its energy drifts by the given share at the given coriolis_implicitness
+Scalar spin_energy_drift(Scalar implicitness, Scalar* lowest_spin) {
   ModelBuilder builder(Vec3::Zero());
   builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.1, 0.2)));  // y: the intermediate axis
-  Scene scene(builder, no_damping());
+  SolverFeatherstoneSettings settings = no_damping();
+  settings.coriolis_implicitness = implicitness;
+  Scene scene(builder, settings);
   scene.state.joint_qd[0] = 0.01;
   scene.state.joint_qd[1] = 100;
   const Scalar e0 = energy(scene.model, scene.state);
-  Scalar worst = 0, lowest = 100;
+  Scalar worst = 0;
+  *lowest_spin = 100;
   scene.run(2, 1e-4, [&] {
     worst = std::max(worst, std::abs(energy(scene.model, scene.state) / e0 - 1));
     const Transform X = Transform::from_array(&scene.state.body_q[0]);
-    lowest = std::min(lowest, (X.q.conjugate() * Eigen::Map<const Vec3>(&scene.state.joint_qd[0])).y());
+    *lowest_spin = std::min(*lowest_spin, (X.q.conjugate() * Eigen::Map<const Vec3>(&scene.state.joint_qd[0])).y());
   });
+  return worst;
+}
+
+// explicit: 7.6 % energy gained; the linearised midpoint: 9e-6 (measured); asserted: 1 %
+TEST(Extremes, SpinAboutTheIntermediateAxisFlipsAndKeepsItsEnergy) {
+  Scalar lowest = 0;
+  EXPECT_LT(spin_energy_drift(0.5, &lowest), 0.01);
   EXPECT_LT(lowest, -90);  // the body-frame spin turned over
-  EXPECT_LT(worst, 0.1);
+  EXPECT_GT(spin_energy_drift(0, &lowest), 0.05);
+  EXPECT_LT(lowest, -90);
+}
+
+// the 15-link chain (bench/scenes/chain15.xml, no floor) falling from horizontal for 10 s at
+// dt = 1/120 s: its whipping tip blows up with explicit Coriolis forces (the guard flags it), and
+// stays finite with the linearised midpoint
+int chain_diverged_steps(Scalar implicitness, Scalar* energy_change) {
+  ModelBuilder builder;
+  ImportOptions options;
+  options.static_shapes = false;
+  import_mjcf(builder, NOVAPHY_SCENE_DIR "/chain15.xml", options);
+  SolverFeatherstoneSettings settings = no_damping();
+  settings.coriolis_implicitness = implicitness;
+  Scene scene(builder, settings);
+  const Scalar e0 = energy(scene.model, scene.state);
+  int diverged = 0;
+  scene.run(10, 1.0 / 120, [&] { diverged += scene.solver.diverged()[0]; });
+  *energy_change = energy(scene.model, scene.state) - e0;
+  return diverged;
+}
+
+TEST(Extremes, WhippingChainAtLargeSteps) {
+  Scalar change = 0;
+  EXPECT_GT(chain_diverged_steps(0, &change), 0);
+  EXPECT_EQ(chain_diverged_steps(0.5, &change), 0);
+  EXPECT_LT(change, 0);  // joint damping (0.05 in the file) only takes energy out
 }
 
 TEST(Extremes, QuaternionNormsAfterAMillionSteps) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/dynamics.h"
+#include "kernels/fk.h"
 #include "test_support.h"
 
 namespace novaphy {
@@ -61,6 +62,41 @@ TEST(Rnea, PassiveForcesAreDampingAndSprings) {
   EXPECT_NEAR(eval_bias_forces(model, state)[0], 3 * 0.75, 1e-14);
   state.joint_qd[0] = 2.0;
   EXPECT_NEAR(eval_bias_forces(model, state)[0], 3 * 0.75 + 0.7 * 2.0, 1e-14);
+}
+
+// d bias / d qd against two independent facts: the velocity part of the bias is homogeneous of
+// degree 2 in qd, so C qd = 2 (bias(qd) - bias(0)) (Euler); and a forward difference with a small
+// step agrees to its own truncation error
+TEST(Rnea, BiasVelocityJacobian) {
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Model model = test::random_builder_tree(rng, 1 + trial % 8, 1);
+    State state = model.state();
+    test::randomize_state(model, state, rng, true);
+    const ArticulationView art = model.articulation(0);
+    const int nv = art.dof_count();
+    if (nv == 0) continue;
+    ArticulationScratch s;
+    s.resize(art);
+    const Scalar* q = state.joint_q.data() + art.q_begin();
+    const Scalar* qd = state.joint_qd.data() + art.qd_begin();
+    auto bias = [&](const VecX& v) {
+      VecX tau(nv);
+      const VecX zero = VecX::Zero(nv);
+      forward_velocity(art, v.data(), s);
+      rnea(art, zero.data(), model.gravity, state.body_f.data(), s, tau.data());
+      return tau;
+    };
+    forward_kinematics(art, q, s);
+    MatX C;
+    bias_velocity_jacobian(art, qd, s, C);
+    const VecX v = Eigen::Map<const VecX>(qd, nv);
+    EXPECT_LT(test::relative_error(C * v, 2 * (bias(v) - bias(VecX::Zero(nv)))), 1e-10) << "trial " << trial;
+    const Scalar h = 1e-6;
+    MatX forward(nv, nv);
+    for (int k = 0; k < nv; ++k) forward.col(k) = (bias(v + h * VecX::Unit(nv, k)) - bias(v)) / h;
+    EXPECT_LT(test::relative_error(C, forward), 1e-5) << "trial " << trial;
+  }
 }
 
 }  // namespace
