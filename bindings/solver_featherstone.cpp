@@ -35,6 +35,8 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("coriolis_implicitness", &Settings::coriolis_implicitness,
                      "0: explicit Coriolis forces; 0.5: linearised midpoint (energy kept to second order); 1: "
                      "linearised backward Euler. Above 0 the dense path with an LU each step, O(n^3).")
+      .def_readwrite("profile_stages", &Settings::profile_stages,
+                     "Accumulate each stage's wall time into solver.stage_seconds.")
       .def_readwrite("num_threads", &Settings::num_threads,
                      "OpenMP threads over articulations (0: all available); results are bit-identical for any count.")
       .def_readwrite("on_divergence", &Settings::on_divergence,
@@ -74,6 +76,21 @@ void bind_solver_featherstone(py::module_& m) {
            py::arg("contacts"), py::arg("dt"), py::call_guard<py::gil_scoped_release>(),
            "Advances state_in by dt into state_out (they may be the same State).")
       .def("joint_support", &SolverFeatherstone::joint_support)
+      .def_property_readonly(
+          "stage_seconds",
+          [](const SolverFeatherstone& self) {
+            const SolverStageSeconds& t = self.stage_seconds();
+            py::dict d;
+            d["dynamics"] = t.dynamics;
+            d["limit_rows"] = t.limit_rows;
+            d["contact_rows"] = t.contact_rows;
+            d["solve"] = t.solve;
+            d["integrate"] = t.integrate;
+            d["steps"] = t.steps;
+            return d;
+          },
+          "Seconds spent in each stage of step while settings.profile_stages is on, and the steps timed.")
+      .def("reset_stage_seconds", &SolverFeatherstone::reset_stage_seconds, "Zeroes stage_seconds.")
       .def_property_readonly(
           "diverged",
           [](py::object self) {

@@ -38,6 +38,8 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
   }
   world_others_.resize(model.world_count);
   for (int s = 0; s < model.shape_count; ++s) {
+    // a shape with an empty group or mask never collides: the broad phase never sees it
+    if (model.shape_collision_group[s] == 0 || model.shape_collision_mask[s] == 0) continue;
     if (model.shape_type[s] == static_cast<int>(ShapeType::Plane)) {
       planes_.push_back(s);
       continue;

@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -82,6 +83,9 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     const auto type = static_cast<JointType>(model.joint_type[j]);
     const int dof = model.joint_qd_start[j];
     if (type == JointType::Revolute) rotational_dof_.push_back(dof);
+    if ((type == JointType::Revolute || type == JointType::Prismatic) &&
+        (std::isfinite(model.joint_limit_lower[dof]) || std::isfinite(model.joint_limit_upper[dof])))
+      limited_joints_.push_back(j);
     if (type == JointType::Ball || type == JointType::Free)
       for (int k = 0; k < 3; ++k) rotational_dof_.push_back(dof + k);
   }
@@ -124,13 +128,28 @@ void SolverFeatherstone::for_each_articulation(F&& f) {
 
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
   check_step(in, out, control, contacts, dt);
+  // each stage, timed into stage_seconds_ when profiling
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point mark = settings.profile_stages ? Clock::now() : Clock::time_point{};
+  auto lap = [&](double& total) {
+    if (!settings.profile_stages) return;
+    const Clock::time_point now = Clock::now();
+    total += std::chrono::duration<double>(now - mark).count();
+    mark = now;
+  };
   unconstrained_velocity(in, control, dt);
+  lap(stage_seconds_.dynamics);
   row_count_ = 0;
   pool_size_ = 0;
   build_limit_rows(in, dt);
+  lap(stage_seconds_.limit_rows);
   build_contact_rows(contacts, dt);
+  lap(stage_seconds_.contact_rows);
   solve_constraints(contacts);
+  lap(stage_seconds_.solve);
   integrate(in, out, dt);
+  lap(stage_seconds_.integrate);
+  stage_seconds_.steps += settings.profile_stages;
 }
 
 void SolverFeatherstone::check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
@@ -309,10 +328,11 @@ int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec
 }
 
 void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
-  std::fill(limit_row_.begin(), limit_row_.end(), -1);
-  for (int j = 0; j < model_.joint_count; ++j) {
-    const auto type = static_cast<JointType>(model_.joint_type[j]);
-    if (type != JointType::Revolute && type != JointType::Prismatic) continue;
+  for (const int j : limited_joints_) {
+    const int g = model_.joint_qd_start[j];
+    limit_row_[2 * g] = limit_row_[2 * g + 1] = -1;
+  }
+  for (const int j : limited_joints_) {
     const int g = model_.joint_qd_start[j];
     const Scalar q = in.joint_q[model_.joint_q_start[j]];
     for (int side = 0; side < 2; ++side) {
@@ -390,10 +410,11 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
     const Vec3 impulse = rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
     Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) = impulse.allFinite() ? impulse : Vec3::Zero();
   }
-  for (size_t k = 0; k < limit_row_.size(); ++k) {
-    const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
-    limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
-  }
+  for (const int j : limited_joints_)
+    for (int k = 2 * model_.joint_qd_start[j]; k < 2 * model_.joint_qd_start[j] + 2; ++k) {
+      const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
+      limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
+    }
 }
 
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {

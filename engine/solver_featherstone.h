@@ -39,7 +39,8 @@ struct SolverFeatherstoneSettings {
   // or whipping chains); 1 linearised backward Euler (damps). Above 0 every articulation takes the
   // dense path (CRBA, d bias/d qd by 2n RNEAs, an LU of M + theta dt C each step): O(n^3)
   Scalar coriolis_implicitness = 0;
-  int num_threads = 0;  // OpenMP threads over articulations; 0: all available
+  int num_threads = 0;          // OpenMP threads over articulations; 0: all available
+  bool profile_stages = false;  // accumulate each stage's wall time into stage_seconds()
   // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing
   DivergencePolicy on_divergence = DivergencePolicy::Flag;
@@ -47,6 +48,16 @@ struct SolverFeatherstoneSettings {
 
   // throws Error naming the first setting out of range
   void check() const;
+};
+
+// wall time of each stage of step, accumulated while settings.profile_stages is on
+struct SolverStageSeconds {
+  double dynamics = 0;      // FK, RNEA, mass matrix and its factor, unconstrained velocity
+  double limit_rows = 0;    // joint-limit rows (with their M^-1 J^T)
+  double contact_rows = 0;  // contact rows (with their M^-1 J^T)
+  double solve = 0;         // warm start and PGS sweeps
+  double integrate = 0;     // divergence guard, joint integration, FK into body_q/body_qd
+  int steps = 0;
 };
 
 struct JointSupportMatrix {
@@ -71,6 +82,8 @@ class SolverFeatherstone {
   // per articulation: 1 where the last step's divergence guard fired
   const std::vector<std::uint8_t>& diverged() const { return diverged_; }
   const Model& model() const { return model_; }
+  const SolverStageSeconds& stage_seconds() const { return stage_seconds_; }
+  void reset_stage_seconds() { stage_seconds_ = {}; }
 
   SolverFeatherstoneSettings settings;
 
@@ -118,8 +131,10 @@ class SolverFeatherstone {
   std::vector<std::uint8_t> factored_aba_;              // per articulation: 1 where the factor is ABA's, 0 Cholesky's
   std::vector<Eigen::PartialPivLU<MatX>> implicit_lu_;  // per articulation: M + theta dt C (coriolis_implicitness)
   std::vector<int> contact_row_;                        // first row of each contact, -1
+  std::vector<int> limited_joints_;                     // Revolute and Prismatic joints with a finite limit
   std::vector<int> limit_row_;                          // [dof][2] row of each active limit, -1
   std::vector<Scalar> limit_impulse_;                   // [dof][2] impulses of the previous step's limit rows
+  SolverStageSeconds stage_seconds_;
 };
 
 }  // namespace novaphy

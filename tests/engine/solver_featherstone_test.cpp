@@ -888,3 +888,43 @@ TEST(Extremes, HeavyBoxOnALightOne) {
 
 }  // namespace
 }  // namespace novaphy
+
+namespace novaphy {
+namespace {
+
+TEST(SolverFeatherstoneSettingsEffect, ProfileStagesTimesEachStageOnlyWhenOn) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  add_box(builder, Vec3(0, 0.19, 0));
+  Scene scene(builder);
+  scene.run(0.1);
+  EXPECT_EQ(scene.solver.stage_seconds().steps, 0);
+  EXPECT_EQ(scene.solver.stage_seconds().dynamics, 0);
+  scene.solver.settings.profile_stages = true;
+  scene.run(0.1);
+  const SolverStageSeconds& t = scene.solver.stage_seconds();
+  EXPECT_EQ(t.steps, 12);
+  for (const double seconds : {t.dynamics, t.contact_rows, t.solve, t.integrate}) EXPECT_GT(seconds, 0);
+  scene.solver.reset_stage_seconds();
+  EXPECT_EQ(scene.solver.stage_seconds().steps, 0);
+}
+
+// shapes with an empty collision group or mask are left out of the broad phase and never collide
+TEST(CollisionPipelineFiltering, VisualOnlyShapesNeverCollide) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  const int box = add_box(builder, Vec3(0, 0.1, 0));  // overlapping the ground by 0.1
+  ShapeOptions visual;
+  visual.collision_group = 0;
+  builder.add_shape_sphere(box, 0.5, visual);
+  visual.collision_group = 1;
+  visual.collision_mask = 0;
+  builder.add_shape_sphere(box, 0.5, visual);
+  Scene scene(builder);
+  scene.pipeline.collide(scene.state, scene.contacts);
+  EXPECT_EQ(scene.contacts.contact_count, 4);  // the box's corners only
+  for (int c = 0; c < scene.contacts.contact_count; ++c) EXPECT_EQ(scene.contacts.contact_shape_b[c], 1);
+}
+
+}  // namespace
+}  // namespace novaphy

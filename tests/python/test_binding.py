@@ -254,3 +254,28 @@ def test_shards_of_worlds():
     with_bodies.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
     with pytest.raises(ValueError, match="the shared builder holds 1 bodies; it may hold only static shapes"):
         novaphy.build_worlds(with_bodies, pendulum, ranges[0])
+
+
+def test_stage_seconds_and_implicit_coriolis_settings():
+    builder = novaphy.ModelBuilder()
+    builder.add_ground_plane()
+    box = builder.add_body(novaphy.RigidBody.from_box(1.0, [0.2, 0.2, 0.2]), xform=novaphy.Transform([0, 0.19, 0]))
+    builder.add_shape_box(box, [0.2, 0.2, 0.2])
+    model = builder.finalize()
+    state, control = model.state(), model.control()
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.profile_stages = True
+    solver.settings.coriolis_implicitness = 0.5
+    solver.settings.aba_min_dofs = 0
+    for _ in range(5):
+        pipeline.collide(state, contacts)
+        solver.step(state, state, control, contacts, 0.01)
+    t = solver.stage_seconds
+    assert t["steps"] == 5 and all(t[k] > 0 for k in ("dynamics", "contact_rows", "solve", "integrate"))
+    solver.reset_stage_seconds()
+    assert solver.stage_seconds["steps"] == 0
+    solver.settings.coriolis_implicitness = 1.5
+    with pytest.raises(ValueError, match="coriolis_implicitness"):
+        solver.step(state, state, control, contacts, 0.01)

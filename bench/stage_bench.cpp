@@ -1,0 +1,103 @@
+// Where a step's time goes, per scene, and what unused features cost: collide plus each solver stage
+// (settings.profile_stages) as microseconds per step, and a scene against the same scene carrying
+// features it does not use.
+//   novaphy_bench_stage --benchmark_format=json
+// BM_Stages arguments: scene (0 chain15, 1 quadruped without a floor, 2 quadruped standing,
+// 3 the 100-robot grid). BM_UnusedFeatures arguments: 0 the 15-link chain, 1 the same chain with a
+// visual-only shape on every link (collision group 0), which the broad phase never sees.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+
+#include "engine/mjcf_import.h"
+#include "engine/shard.h"
+#include "engine/solver_featherstone.h"
+
+namespace novaphy {
+namespace {
+
+Model scene(int index) {
+  if (index == 3) {
+    ModelBuilder shared(Vec3(0, 0, -9.81));
+    shared.add_plane(Vec3(0, 0, 1), 0);
+    return build_worlds(shared,
+                        [](ModelBuilder& builder, int w) {
+                          ImportOptions options;
+                          options.xform.p = Vec3(1.5 * (w % 10), 1.5 * (w / 10), 0);
+                          options.static_shapes = false;
+                          import_mjcf(builder, NOVAPHY_SCENE_DIR "/quadruped.xml", options);
+                        },
+                        {0, 100});
+  }
+  ModelBuilder builder;
+  ImportOptions options;
+  options.static_shapes = index == 2;
+  import_mjcf(builder, index == 0 ? NOVAPHY_SCENE_DIR "/chain15.xml" : NOVAPHY_SCENE_DIR "/quadruped.xml", options);
+  return builder.finalize();
+}
+
+void BM_Stages(benchmark::State& bm) {
+  const Model model = scene(static_cast<int>(bm.range(0)));
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  SolverFeatherstoneSettings settings;
+  settings.num_threads = 1;
+  settings.profile_stages = true;
+  SolverFeatherstone solver(model, settings);
+  State state = model.state();
+  const Control control = model.control();
+  for (int k = 0; k < 50; ++k) {  // settle
+    pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, 0.005);
+  }
+  solver.reset_stage_seconds();
+  double collide = 0;
+  for (auto _ : bm) {
+    const auto t0 = std::chrono::steady_clock::now();
+    pipeline.collide(state, contacts);
+    collide += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    solver.step(state, state, control, contacts, 0.005);
+  }
+  const SolverStageSeconds& t = solver.stage_seconds();
+  const double per_step = 1e6 / std::max(1, t.steps);
+  bm.counters["collide_us"] = collide * per_step;
+  bm.counters["dynamics_us"] = t.dynamics * per_step;
+  bm.counters["limit_rows_us"] = t.limit_rows * per_step;
+  bm.counters["contact_rows_us"] = t.contact_rows * per_step;
+  bm.counters["solve_us"] = t.solve * per_step;
+  bm.counters["integrate_us"] = t.integrate * per_step;
+  bm.counters["contacts"] = contacts.contact_count;
+}
+
+void BM_UnusedFeatures(benchmark::State& bm) {
+  ModelBuilder builder;
+  ImportOptions options;
+  options.static_shapes = false;
+  import_mjcf(builder, NOVAPHY_SCENE_DIR "/chain15.xml", options);
+  if (bm.range(0) == 1) {
+    ShapeOptions visual;
+    visual.collision_group = 0;  // drawn, never collided
+    for (int b = 0; b < builder.body_count(); ++b) builder.add_shape_sphere(b, 0.01, visual);
+  }
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  SolverFeatherstoneSettings settings;
+  settings.num_threads = 1;
+  SolverFeatherstone solver(model, settings);
+  State state = model.state();
+  const Control control = model.control();
+  for (auto _ : bm) {
+    pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, 0.005);
+  }
+  bm.SetLabel(bm.range(0) == 0 ? "chain15" : "chain15 + a visual-only shape per link");
+}
+
+BENCHMARK(BM_Stages)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UnusedFeatures)->DenseRange(0, 1)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace novaphy
+
+BENCHMARK_MAIN();
