@@ -41,7 +41,7 @@ void BM_ChainStep(benchmark::State& bm) {
   bm.SetLabel(bm.range(1) == 0 ? "ABA" : "CRBA+Cholesky");
 }
 
-BENCHMARK(BM_ChainStep)->ArgsProduct({{8, 16, 32, 64, 128, 1000}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ChainStep)->ArgsProduct({{8, 10, 16, 32, 64, 100, 128, 1000}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace novaphy
