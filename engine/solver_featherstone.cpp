@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 #include "engine/dynamics.h"
@@ -100,6 +101,16 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   factor_failure_.assign(model.articulation_count, -1);
   factored_aba_.assign(model.articulation_count, 0);
   implicit_lu_.resize(model.articulation_count);
+  factored_diag_.resize(model.articulation_count);
+  constant_H_.resize(model.articulation_count);  // filled by the first step
+  constant_mass_.assign(model.articulation_count, 0);
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView& art = art_[a];
+    bool constant = art.dof_count() > 0;
+    for (int i = 0; i < art.link_count(); ++i)
+      constant &= art.type(i) == JointType::Prismatic || art.type(i) == JointType::Fixed;
+    constant_mass_[a] = constant;
+  }
   diverged_.assign(model.articulation_count, 0);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
@@ -212,18 +223,31 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     int bad = -1;
     const Scalar theta = settings.coriolis_implicitness;
     const bool use_aba = theta == 0 && nv >= settings.aba_min_dofs;
+    // a constant H (Prismatic and Fixed joints only) is computed once; its factor is kept while
+    // the implicit diagonal stays the same
+    const bool constant = constant_mass_[a];
+    const bool keep_factor =
+        constant && theta == 0 && !factored_aba_[a] && factored_diag_[a].size() == nv && s.u == factored_diag_[a];
     if (use_aba) {
       const int link = aba_factor(art, s.u.data(), s);
       if (link < 0)
         aba_solve(art, s, rhs);
       else
         bad = art.qd_start(link);
-    } else if (refactor || factored_aba_[a] || theta > 0) {
-      if (settings.use_tile_gemm)
-        mass_matrix_gemm(art, s);
-      else
-        crba(art, s);
+    } else if (keep_factor || (!constant && !refactor && !factored_aba_[a] && theta == 0)) {
+      cholesky_solve(s.H, rhs);
+    } else {
+      if (constant && constant_H_[a].size() > 0) {
+        s.H = constant_H_[a];
+      } else {
+        if (settings.use_tile_gemm)
+          mass_matrix_gemm(art, s);
+        else
+          crba(art, s);
+        if (constant) constant_H_[a] = s.H;
+      }
       s.H.diagonal() += s.u;
+      factored_diag_[a] = s.u;
       if (theta > 0) {
         bias_velocity_jacobian(art, qd, s, s.C);
         s.C = s.H + theta * dt * s.C;
@@ -237,8 +261,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
         bad = cholesky_factor(s.H);
         if (bad < 0) cholesky_solve(s.H, rhs);
       }
-    } else {
-      cholesky_solve(s.H, rhs);
+      if (bad >= 0) factored_diag_[a].resize(0);  // no factor to keep
     }
     factored_aba_[a] = use_aba;
     factor_failure_[a] = bad < 0 ? -1 : qd0 + bad;
@@ -323,7 +346,6 @@ int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec
   const int r = begin_row(art_a, art_b, kind, target);
   if (art_b >= 0) add_point_jacobian(body_b, p, d, 1, row_jacobian(r, art_b));
   if (art_a >= 0) add_point_jacobian(body_a, p, d, -1, row_jacobian(r, art_a));
-  finish_row(r);
   return r;
 }
 
@@ -346,7 +368,6 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
       const int a = model_.joint_articulation[j];
       const int r = begin_row(a, -1, RowKind::Unilateral, target);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
-      finish_row(r);
       if (settings.use_warmstarting) rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[2 * g + side];
       limit_row_[2 * g + side] = r;
     }
@@ -393,13 +414,48 @@ void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt)
   }
 }
 
+void SolverFeatherstone::group_islands() {
+  // articulations joined by rows (union-find), then each island's rows in row order
+  island_parent_.resize(art_.size());
+  std::iota(island_parent_.begin(), island_parent_.end(), 0);
+  auto find = [&](int a) {
+    while (island_parent_[a] != a) a = island_parent_[a] = island_parent_[island_parent_[a]];
+    return a;
+  };
+  auto art_of = [&](const PgsRow& row, int side) { return dof_articulation_[row.dof_begin[side]]; };
+  for (int r = 0; r < row_count_; ++r)
+    if (rows_[r].side_count == 2) {
+      const int x = find(art_of(rows_[r], 0)), y = find(art_of(rows_[r], 1));
+      island_parent_[std::max(x, y)] = std::min(x, y);
+    }
+  island_of_row_.resize(row_count_);
+  island_start_.assign(art_.size() + 1, 0);
+  for (int r = 0; r < row_count_; ++r) {
+    island_of_row_[r] = rows_[r].side_count > 0 ? find(art_of(rows_[r], 0)) : 0;  // a row of no dofs does nothing
+    ++island_start_[island_of_row_[r] + 1];
+  }
+  for (size_t a = 0; a < art_.size(); ++a) island_start_[a + 1] += island_start_[a];
+  island_rows_.resize(row_count_);
+  island_fill_.assign(island_start_.begin(), island_start_.end() - 1);
+  for (int r = 0; r < row_count_; ++r) island_rows_[island_fill_[island_of_row_[r]]++] = r;
+}
+
 void SolverFeatherstone::solve_constraints(Contacts& contacts) {
-  for (int r = 0; r < row_count_; ++r) apply_impulse(rows_[r], MinvJT_, rows_[r].lambda, qd_.data());
+  // islands of articulations joined by rows are independent: each one's rows get M^-1 J^T, their
+  // warm start and the PGS sweeps in row order on one thread, islands in parallel (the same bits
+  // as one sweep over all rows)
+  group_islands();
   PgsSettings pgs;
   pgs.iterations = settings.num_iterations;
   pgs.cfm = settings.cfm;
   pgs.friction_smoothing = settings.friction_smoothing;
-  pgs_solve(rows_, row_count_, J_, MinvJT_, pgs, qd_.data());
+  for_each_articulation([&](int island) {
+    const int begin = island_start_[island], count = island_start_[island + 1] - begin;
+    const int* order = island_rows_.data() + begin;
+    for (int k = 0; k < count; ++k) finish_row(order[k]);
+    for (int k = 0; k < count; ++k) apply_impulse(rows_[order[k]], MinvJT_, rows_[order[k]].lambda, qd_.data());
+    pgs_solve(rows_, order, count, J_, MinvJT_, pgs, qd_.data());
+  });
 
   // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
   for (int c = 0; c < contacts.contact_count; ++c) {

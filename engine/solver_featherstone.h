@@ -53,9 +53,9 @@ struct SolverFeatherstoneSettings {
 // wall time of each stage of step, accumulated while settings.profile_stages is on
 struct SolverStageSeconds {
   double dynamics = 0;      // FK, RNEA, mass matrix and its factor, unconstrained velocity
-  double limit_rows = 0;    // joint-limit rows (with their M^-1 J^T)
-  double contact_rows = 0;  // contact rows (with their M^-1 J^T)
-  double solve = 0;         // warm start and PGS sweeps
+  double limit_rows = 0;    // joint-limit rows and their Jacobians
+  double contact_rows = 0;  // contact rows, their Jacobians and targets
+  double solve = 0;         // per island of articulations joined by rows: M^-1 J^T, warm start, PGS sweeps
   double integrate = 0;     // divergence guard, joint integration, FK into body_q/body_qd
   int steps = 0;
 };
@@ -92,13 +92,14 @@ class SolverFeatherstone {
   void unconstrained_velocity(const State& in, const Control& control, Scalar dt);
   void build_contact_rows(const Contacts& contacts, Scalar dt);
   void build_limit_rows(const State& in, Scalar dt);
+  void group_islands();
   void solve_constraints(Contacts& contacts);
   void integrate(const State& in, State& out, Scalar dt);
   template <typename F>
   void for_each_articulation(F&& f);
 
   // a row over the dofs of up to two articulations (-1: none), J zeroed; finish_row computes
-  // M^-1 J^T and the effective mass once J is filled in
+  // M^-1 J^T and the effective mass once J is filled in (solve_constraints, per island)
   int begin_row(int art_a, int art_b, RowKind kind, Scalar target);
   Scalar* row_jacobian(int row, int art);
   void finish_row(int row);
@@ -124,12 +125,18 @@ class SolverFeatherstone {
   // constraint rows and their pools
   std::vector<PgsRow> rows_;
   int row_count_ = 0;
+  // islands (articulations joined by rows, named by their lowest articulation): rows of island i are
+  // island_rows_[island_start_[i] .. island_start_[i + 1])
+  std::vector<int> island_parent_, island_of_row_, island_start_, island_fill_, island_rows_;
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
   std::vector<std::uint8_t> diverged_;
   std::vector<int> factor_failure_;                     // per articulation: first dof whose factor failed, -1
   std::vector<std::uint8_t> factored_aba_;              // per articulation: 1 where the factor is ABA's, 0 Cholesky's
   std::vector<Eigen::PartialPivLU<MatX>> implicit_lu_;  // per articulation: M + theta dt C (coriolis_implicitness)
+  std::vector<VecX> factored_diag_;                     // per articulation: the implicit diagonal in s.H's factor
+  std::vector<std::uint8_t> constant_mass_;             // per articulation: 1 for Prismatic and Fixed joints only
+  std::vector<MatX> constant_H_;                        // per articulation: its H once computed, where constant
   std::vector<int> contact_row_;                        // first row of each contact, -1
   std::vector<int> limited_joints_;                     // Revolute and Prismatic joints with a finite limit
   std::vector<int> limit_row_;                          // [dof][2] row of each active limit, -1

@@ -17,14 +17,15 @@ void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar 
     for (int k = 0; k < row.dof_count[s]; ++k) qd[row.dof_begin[s] + k] += MinvJT[row.pool[s] + k] * impulse;
 }
 
-void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scalar>& J,
+void pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
                const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd) {
   // unconstrained step of one row: the impulse that would bring J qd to its target
   auto step = [&](const PgsRow& row) {
     return -(row_velocity(row, J, qd) - row.target + settings.cfm * row.lambda) * row.inv_mass;
   };
   for (int it = 0; it < settings.iterations; ++it) {
-    for (int r = 0; r < row_count; ++r) {
+    for (int k = 0; k < count; ++k) {
+      const int r = order[k];
       PgsRow& row = rows[r];
       // a row touching a diverged articulation yields no impulse, so NaN does not spread through contacts
       if (row.kind == RowKind::Unilateral) {
@@ -43,15 +44,12 @@ void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scala
       const Scalar scale = norm > limit ? limit / norm : 1;
       const Scalar s = settings.friction_smoothing;
       const Scalar new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
-      if (!std::isfinite(new1) || !std::isfinite(new2)) {
-        ++r;
-        continue;
-      }
+      ++k;  // the second tangent
+      if (!std::isfinite(new1) || !std::isfinite(new2)) continue;
       apply_impulse(row, MinvJT, new1 - row.lambda, qd);
       apply_impulse(second, MinvJT, new2 - second.lambda, qd);
       row.lambda = new1;
       second.lambda = new2;
-      ++r;
     }
   }
 }

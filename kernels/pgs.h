@@ -36,9 +36,10 @@ Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scala
 // qd += M^-1 J^T * impulse for one row
 void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar impulse, Scalar* qd);
 
+// sweeps the rows order[0 .. count) in that order (a friction pair's second row follows its first)
 // inputs:  rows with lambda as the warm start (already applied to qd), the pools
 // outputs: rows[].lambda, qd
-void pgs_solve(std::vector<PgsRow>& rows, int row_count, const std::vector<Scalar>& J,
+void pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
                const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd);
 
 }  // namespace novaphy
