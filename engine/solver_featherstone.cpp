@@ -440,7 +440,7 @@ void SolverFeatherstone::group_islands() {
   for (int r = 0; r < row_count_; ++r) island_rows_[island_fill_[island_of_row_[r]]++] = r;
 }
 
-void SolverFeatherstone::solve_constraints(Contacts& contacts) {
+void SolverFeatherstone::solve_islands() {
   // islands of articulations joined by rows are independent: each one's rows get M^-1 J^T, their
   // warm start and the PGS sweeps in row order on one thread, islands in parallel (the same bits
   // as one sweep over all rows)
@@ -456,6 +456,10 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
     for (int k = 0; k < count; ++k) apply_impulse(rows_[order[k]], MinvJT_, rows_[order[k]].lambda, qd_.data());
     pgs_solve(rows_, order, count, J_, MinvJT_, pgs, qd_.data());
   });
+}
+
+void SolverFeatherstone::solve_constraints(Contacts& contacts) {
+  if (row_count_ > 0) solve_islands();  // nothing to solve without rows
 
   // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
   for (int c = 0; c < contacts.contact_count; ++c) {

@@ -93,6 +93,7 @@ class SolverFeatherstone {
   void build_contact_rows(const Contacts& contacts, Scalar dt);
   void build_limit_rows(const State& in, Scalar dt);
   void group_islands();
+  void solve_islands();
   void solve_constraints(Contacts& contacts);
   void integrate(const State& in, State& out, Scalar dt);
   template <typename F>
