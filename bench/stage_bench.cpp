@@ -4,7 +4,8 @@
 //   novaphy_bench_stage --benchmark_format=json
 // BM_Stages arguments: scene (0 chain15, 1 quadruped without a floor, 2 quadruped standing,
 // 3 the 100-robot grid). BM_UnusedFeatures arguments: 0 the 15-link chain, 1 the same chain with a
-// visual-only shape on every link (collision group 0), which the broad phase never sees.
+// visual-only shape on every link (collision group 0), which the broad phase never sees, 2 with a
+// small body bolted to every link by a Fixed joint (welded into the link), 3 the same not welded.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -74,16 +75,25 @@ void BM_UnusedFeatures(benchmark::State& bm) {
   ImportOptions options;
   options.static_shapes = false;
   import_mjcf(builder, NOVAPHY_SCENE_DIR "/chain15.xml", options);
-  if (bm.range(0) == 1) {
+  const int variant = static_cast<int>(bm.range(0));
+  const int links = builder.body_count();
+  if (variant == 1) {
     ShapeOptions visual;
     visual.collision_group = 0;  // drawn, never collided
-    for (int b = 0; b < builder.body_count(); ++b) builder.add_shape_sphere(b, 0.01, visual);
+    for (int b = 0; b < links; ++b) builder.add_shape_sphere(b, 0.01, visual);
+  }
+  if (variant >= 2) {
+    JointOptions bolted;
+    bolted.parent_xform.p = Vec3(0.1, 0.03, 0);
+    for (int b = 0; b < links; ++b)
+      builder.add_joint_fixed(b, builder.add_body(RigidBody::from_sphere(0.01, 0.01)), bolted);
   }
   const Model model = builder.finalize();
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   SolverFeatherstoneSettings settings;
   settings.num_threads = 1;
+  settings.weld_fixed_joints = variant != 3;
   SolverFeatherstone solver(model, settings);
   State state = model.state();
   const Control control = model.control();
@@ -91,11 +101,13 @@ void BM_UnusedFeatures(benchmark::State& bm) {
     pipeline.collide(state, contacts);
     solver.step(state, state, control, contacts, 0.005);
   }
-  bm.SetLabel(bm.range(0) == 0 ? "chain15" : "chain15 + a visual-only shape per link");
+  const char* labels[] = {"chain15", "chain15 + a visual-only shape per link", "chain15 + a Fixed sensor per link",
+                          "chain15 + a Fixed sensor per link, not welded"};
+  bm.SetLabel(labels[variant]);
 }
 
 BENCHMARK(BM_Stages)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_UnusedFeatures)->DenseRange(0, 1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UnusedFeatures)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace novaphy

@@ -35,6 +35,9 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("coriolis_implicitness", &Settings::coriolis_implicitness,
                      "0: explicit Coriolis forces; 0.5: linearised midpoint (energy kept to second order); 1: "
                      "linearised backward Euler. Above 0 the dense path with an LU each step, O(n^3).")
+      .def_readwrite("weld_fixed_joints", &Settings::weld_fixed_joints,
+                     "Merge bodies held by Fixed joints into their parent's link so they cost nothing in the dynamics "
+                     "(read when the solver is made).")
       .def_readwrite("profile_stages", &Settings::profile_stages,
                      "Accumulate each stage's wall time into solver.stage_seconds.")
       .def_readwrite("num_threads", &Settings::num_threads,

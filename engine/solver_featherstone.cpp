@@ -67,20 +67,30 @@ std::string JointSupportMatrix::to_string() const {
 }
 
 SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
-    : settings(settings_), model_(model) {
+    : settings(settings_), model_(model), welded_(weld_fixed_joints(model, settings_.weld_fixed_joints)) {
   settings.check();
   if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
+  const Model& kernel_model = welded_.model;
   for (int a = 0; a < model.articulation_count; ++a) {
-    art_.push_back(model.articulation(a));
+    art_.push_back(kernel_model.articulation(a));
     scratch_.emplace_back();
     scratch_.back().resize(art_.back());
   }
   body_articulation_.assign(model.body_count, -1);
   body_link_.assign(model.body_count, -1);
+  for (int j = 0; j < kernel_model.joint_count; ++j) {
+    const int a = kernel_model.joint_articulation[j];
+    body_articulation_[kernel_model.joint_child[j]] = a;
+    body_link_[kernel_model.joint_child[j]] = j - kernel_model.articulation_start[a];
+  }
+  welded_into_.resize(model.articulation_count);
+  for (const int b : welded_.welded_bodies) {
+    body_articulation_[b] = body_articulation_[welded_.link_body[b]];
+    body_link_[b] = body_link_[welded_.link_body[b]];
+    welded_into_[body_articulation_[b]].push_back(b);
+  }
+  if (!welded_.welded_bodies.empty()) link_f_.assign(6 * model.body_count, 0);
   for (int j = 0; j < model.joint_count; ++j) {
-    const int a = model.joint_articulation[j];
-    body_articulation_[model.joint_child[j]] = a;
-    body_link_[model.joint_child[j]] = j - model.articulation_start[a];
     const auto type = static_cast<JointType>(model.joint_type[j]);
     const int dof = model.joint_qd_start[j];
     if (type == JointType::Revolute) rotational_dof_.push_back(dof);
@@ -199,7 +209,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     // rhs = tau - bias + springs, dampers and drives evaluated at the end of the step (implicit):
     // (H + dt D + dt^2 K) qdd = tau - bias - K_s (q + dt qd - q_ref) - D_s qd + ke (q_t - q - dt qd) + kd (v_t - qd)
     Scalar* rhs = rhs_.data() + qd0;
-    rnea(art, zero_.data() + qd0, model_.gravity, in.body_f.data(), s, s.u.data());
+    rnea(art, zero_.data() + qd0, model_.gravity, link_wrenches(a, in.body_f.data()), s, s.u.data());
     for (int k = 0; k < nv; ++k) rhs[k] -= s.u[k];
     for (int i = 0; i < art.link_count(); ++i) {
       const JointType type = art.type(i);
@@ -504,8 +514,49 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   for_each_articulation([&](int a) {
     forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), scratch_[a]);
     forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), scratch_[a]);
-    store_body_state(art_[a], scratch_[a], out);
+    store_bodies(a, out);
   });
+}
+
+void SolverFeatherstone::store_bodies(int a, State& out) const {
+  // body_qd = [velocity of the body's own centre of mass; angular velocity], world frame
+  const ArticulationView& art = art_[a];
+  const ArticulationScratch& s = scratch_[a];
+  auto store = [&](int b, int link, const Transform& offset) {
+    const Transform& X = s.X_world[link];
+    (X * offset).to_array(out.body_q.data() + 7 * b);
+    const Vec3 w = s.v[link].head<3>();
+    const Vec3 v_com = s.v[link].tail<3>() + w.cross(offset.apply(Eigen::Map<const Vec3>(&model_.body_com[3 * b])));
+    const Mat3 R = X.rotation();
+    Eigen::Map<Vec6>(out.body_qd.data() + 6 * b) << R * v_com, R * w;
+  };
+  for (int i = 0; i < art.link_count(); ++i) store(art.body(i), i, Transform::identity());
+  for (const int b : welded_into_[a]) store(b, body_link_[b], welded_.offset[b]);
+}
+
+const Scalar* SolverFeatherstone::link_wrenches(int a, const Scalar* body_f) {
+  if (welded_into_[a].empty()) return body_f;
+  const ArticulationView& art = art_[a];
+  const ArticulationScratch& s = scratch_[a];
+  auto pushed = [&](int b) { return Eigen::Map<const Vec6>(body_f + 6 * b).any(); };
+  bool any = false;
+  for (int i = 0; i < art.link_count() && !any; ++i) any = pushed(art.body(i));
+  for (size_t k = 0; k < welded_into_[a].size() && !any; ++k) any = pushed(welded_into_[a][k]);
+  if (!any) return body_f;
+  // a wrench [f at the body's centre of mass; torque] moves to the link's merged centre of mass
+  auto add = [&](int b, int link, const Transform& offset) {
+    const Transform& X = s.X_world[link];
+    const Vec3 c_body = X.apply(offset.apply(Eigen::Map<const Vec3>(&model_.body_com[3 * b])));
+    const Vec3 c_link = X.apply(art.com(link));
+    const Vec3 f = Eigen::Map<const Vec3>(body_f + 6 * b);
+    Scalar* out = link_f_.data() + 6 * art.body(link);
+    Eigen::Map<Vec3>(out) += f;
+    Eigen::Map<Vec3>(out + 3) += Eigen::Map<const Vec3>(body_f + 6 * b + 3) + (c_body - c_link).cross(f);
+  };
+  for (int i = 0; i < art.link_count(); ++i) std::fill_n(link_f_.data() + 6 * art.body(i), 6, 0);
+  for (int i = 0; i < art.link_count(); ++i) add(art.body(i), i, Transform::identity());
+  for (const int b : welded_into_[a]) add(b, body_link_[b], welded_.offset[b]);
+  return link_f_.data();
 }
 
 }  // namespace novaphy

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/collision.h"
+#include "engine/weld.h"
 #include "kernels/pgs.h"
 
 namespace novaphy {
@@ -41,6 +42,9 @@ struct SolverFeatherstoneSettings {
   Scalar coriolis_implicitness = 0;
   int num_threads = 0;          // OpenMP threads over articulations; 0: all available
   bool profile_stages = false;  // accumulate each stage's wall time into stage_seconds()
+  // bodies held to a parent body by a Fixed joint are merged into the parent's link, so they cost
+  // nothing in the dynamics (read when the solver is made)
+  bool weld_fixed_joints = true;
   // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing
   DivergencePolicy on_divergence = DivergencePolicy::Flag;
@@ -110,7 +114,15 @@ class SolverFeatherstone {
   // x = M^-1 x for articulation a, with the factor of the last step (Cholesky or ABA)
   void solve_mass(int a, Scalar* x);
 
+  // body_q and body_qd of articulation a's bodies, welded ones included, from its scratch
+  void store_bodies(int a, State& out) const;
+  // applied wrenches of articulation a's bodies gathered onto its links (welded bodies' onto theirs)
+  const Scalar* link_wrenches(int a, const Scalar* body_f);
+
   const Model& model_;
+  WeldedModel welded_;                         // what the kernels see: art_ views its arrays
+  std::vector<std::vector<int>> welded_into_;  // per articulation: its welded bodies
+  std::vector<Scalar> link_f_;                 // [body][6] link_wrenches' output
   std::vector<ArticulationView> art_;
   std::vector<ArticulationScratch> scratch_;
   std::vector<int> body_articulation_, body_link_;
