@@ -70,7 +70,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     : settings(settings_), model_(model), welded_(weld_fixed_joints(model, settings_.weld_fixed_joints)) {
   settings.check();
   if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
-  const Model& kernel_model = welded_.model;
+  const Model& kernel_model = welded_.welded_bodies.empty() ? model : welded_.model;
   for (int a = 0; a < model.articulation_count; ++a) {
     art_.push_back(kernel_model.articulation(a));
     scratch_.emplace_back();

@@ -38,11 +38,15 @@ MassProperties combine(const MassProperties& a, const MassProperties& b) {
 
 WeldedModel weld_fixed_joints(const Model& model, bool weld) {
   WeldedModel w;
-  w.model = model;
-  Model& m = w.model;
   w.link_body.resize(model.body_count);
   for (int b = 0; b < model.body_count; ++b) w.link_body[b] = b;
   w.offset.assign(model.body_count, Transform::identity());
+  bool any = false;
+  for (int j = 0; j < model.joint_count && weld; ++j)
+    any |= static_cast<JointType>(model.joint_type[j]) == JointType::Fixed && model.joint_parent[j] >= 0;
+  if (!any) return w;
+  w.model = model;
+  Model& m = w.model;
 
   std::vector<MassProperties> merged(model.body_count);
   for (int b = 0; b < model.body_count; ++b) merged[b] = body_in_link(model, b, Transform::identity());
@@ -64,7 +68,6 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
     new_index[j] = static_cast<int>(kept.size());
     kept.push_back(j);
   }
-  if (w.welded_bodies.empty()) return w;
 
   for (int b = 0; b < model.body_count; ++b) {
     m.body_mass[b] = merged[b].mass;

@@ -11,7 +11,8 @@
 namespace novaphy {
 
 struct WeldedModel {
-  Model model;                     // joints without the welded Fixed joints; merged link inertias
+  Model model;                     // joints without the welded Fixed joints; merged link inertias (empty
+                                   // when nothing is welded: the original model is the one to use)
   std::vector<int> link_body;      // per body: the body whose link carries it (itself unless welded)
   std::vector<Transform> offset;   // per body: its pose in link_body's frame (identity unless welded)
   std::vector<int> welded_bodies;  // the bodies merged into another
