@@ -40,6 +40,9 @@ void bind_dynamics(py::module_& m) {
         "Fills state.body_q and state.body_qd from state.joint_q and state.joint_qd.");
   m.def("eval_mass_matrix", &eval_mass_matrix, py::arg("model"), py::arg("state"), release,
         "Dense (joint_dof_count, joint_dof_count) mass matrix, block diagonal over articulations.");
+  m.def("eval_energy", &eval_energy, py::arg("model"), py::arg("state"), release,
+        "Kinetic energy 1/2 qd^T H qd plus the gravitational potential energy of every body's centre of mass, at "
+        "state.body_q.");
   m.def("eval_bias_forces", &eval_bias_forces, py::arg("model"), py::arg("state"), release,
         "bias = C qd + g - tau_passive - J^T body_f, so that H qdd = tau - bias.");
   m.def("eval_inverse_dynamics", &eval_inverse_dynamics, py::arg("model"), py::arg("state"), py::arg("qdd"), release,

@@ -57,18 +57,18 @@ void check_finite_control(const Control& control) {
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FINITE_CONTROL)
 }
 
+void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state) {
+  const Transform& X = s.X_world[link];
+  (X * offset).to_array(state.body_q.data() + 7 * b);
+  // body_qd = [velocity of the centre of mass; angular velocity], world frame
+  const Vec3 w = s.v[link].head<3>();
+  const Vec3 v_com = s.v[link].tail<3>() + w.cross(offset.apply(com));
+  const Mat3 R = X.rotation();
+  Eigen::Map<Vec6>(state.body_qd.data() + 6 * b) << R * v_com, R * w;
+}
+
 void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state) {
-  for (int i = 0; i < art.link_count(); ++i) {
-    const int b = art.body(i);
-    const Transform& X = s.X_world[i];
-    X.to_array(state.body_q.data() + 7 * b);
-    // body_qd = [velocity of the centre of mass; angular velocity], world frame
-    const Mat3 R = X.rotation();
-    const Vec3 w = s.v[i].head<3>();
-    const Vec3 v_com = s.v[i].tail<3>() + w.cross(art.com(i));
-    Eigen::Map<Vec6> qd(state.body_qd.data() + 6 * b);
-    qd << R * v_com, R * w;
-  }
+  for (int i = 0; i < art.link_count(); ++i) store_body(s, i, Transform::identity(), art.com(i), art.body(i), state);
 }
 
 void eval_fk(const Model& model, State& state) {
@@ -90,6 +90,16 @@ MatX eval_mass_matrix(const Model& model, const State& state) {
     H.block(art.qd_begin(), art.qd_begin(), art.dof_count(), art.dof_count()) = s.H;
   }
   return H;
+}
+
+Scalar eval_energy(const Model& model, const State& state) {
+  const VecX qd = Eigen::Map<const VecX>(state.joint_qd.data(), model.joint_dof_count);
+  Scalar e = 0.5 * qd.dot(eval_mass_matrix(model, state) * qd);
+  for (int b = 0; b < model.body_count; ++b) {
+    const Transform X = Transform::from_array(&state.body_q[7 * b]);
+    e -= model.body_mass[b] * model.gravity.dot(X.p + X.q * Eigen::Map<const Vec3>(&model.body_com[3 * b]));
+  }
+  return e;
 }
 
 VecX eval_bias_forces(const Model& model, const State& state) {

@@ -18,6 +18,10 @@ MatX eval_mass_matrix(const Model& model, const State& state);
 
 VecX eval_bias_forces(const Model& model, const State& state);
 
+// kinetic energy 1/2 qd^T H qd plus the potential energy of every body's centre of mass in gravity,
+// at state.body_q (after eval_fk or a step)
+Scalar eval_energy(const Model& model, const State& state);
+
 // tau = H qdd + bias
 VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd);
 
@@ -25,7 +29,10 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
 VecX eval_control_force(const Model& model, const Control& control);
 void control_force(const Model& model, const Control& control, Scalar* tau);  // into joint_dof_count entries
 
-// body_q / body_qd of the articulation's bodies from scratch after forward_kinematics + forward_velocity
+// body_q / body_qd of body b, riding on link `link` at `offset` (its pose in the link frame) with its
+// centre of mass at `com` (body frame), from scratch after forward_kinematics + forward_velocity
+void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state);
+// store_body for every link body of the articulation
 void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state);
 
 // qdd from tau = eval_control_force(model, control); CRBA + Cholesky or ABA

@@ -519,19 +519,12 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
 }
 
 void SolverFeatherstone::store_bodies(int a, State& out) const {
-  // body_qd = [velocity of the body's own centre of mass; angular velocity], world frame
+  // each body at its own centre of mass (the model's, not the merged link's)
   const ArticulationView& art = art_[a];
-  const ArticulationScratch& s = scratch_[a];
-  auto store = [&](int b, int link, const Transform& offset) {
-    const Transform& X = s.X_world[link];
-    (X * offset).to_array(out.body_q.data() + 7 * b);
-    const Vec3 w = s.v[link].head<3>();
-    const Vec3 v_com = s.v[link].tail<3>() + w.cross(offset.apply(Eigen::Map<const Vec3>(&model_.body_com[3 * b])));
-    const Mat3 R = X.rotation();
-    Eigen::Map<Vec6>(out.body_qd.data() + 6 * b) << R * v_com, R * w;
-  };
-  for (int i = 0; i < art.link_count(); ++i) store(art.body(i), i, Transform::identity());
-  for (const int b : welded_into_[a]) store(b, body_link_[b], welded_.offset[b]);
+  auto com = [&](int b) { return Vec3(Eigen::Map<const Vec3>(&model_.body_com[3 * b])); };
+  for (int i = 0; i < art.link_count(); ++i)
+    store_body(scratch_[a], i, Transform::identity(), com(art.body(i)), art.body(i), out);
+  for (const int b : welded_into_[a]) store_body(scratch_[a], body_link_[b], welded_.offset[b], com(b), b, out);
 }
 
 const Scalar* SolverFeatherstone::link_wrenches(int a, const Scalar* body_f) {

@@ -638,21 +638,24 @@ TEST(SolverFeatherstoneSettingsEffect, AbaMinDofsGivesTheSameTrajectory) {
   EXPECT_LT(max_difference(crba, aba), 1e-8);
 }
 
-// a chain of n revolute links 0.1 m long, horizontal at q = 0, no XML
-ModelBuilder long_chain(int n) {
+// a chain of revolute box links (one per mass) about Z, joined end to end, horizontal at q = 0, no XML
+ModelBuilder revolute_chain(const std::vector<Scalar>& masses, const Vec3& half_extents) {
   ModelBuilder builder;
   int parent = -1;
-  for (int i = 0; i < n; ++i) {
-    const int link = builder.add_body(RigidBody::from_box(0.1, Vec3(0.05, 0.01, 0.01)));
+  for (const Scalar m : masses) {
+    const int link = builder.add_body(RigidBody::from_box(m, half_extents));
     JointOptions options;
     options.dof.axis = Vec3::UnitZ();
-    options.parent_xform.p = parent < 0 ? Vec3::Zero() : Vec3(0.05, 0, 0);
-    options.child_xform.p = Vec3(-0.05, 0, 0);
+    options.parent_xform.p = parent < 0 ? Vec3::Zero() : Vec3(half_extents.x(), 0, 0);
+    options.child_xform.p = Vec3(-half_extents.x(), 0, 0);
     builder.add_joint_revolute(parent, link, options);
     parent = link;
   }
   return builder;
 }
+
+// n links 0.1 m long of 0.1 kg
+ModelBuilder long_chain(int n) { return revolute_chain(std::vector<Scalar>(n, 0.1), Vec3(0.05, 0.01, 0.01)); }
 
 // 1000 links: the solver takes ABA (O(n)) by default and agrees with CRBA + Cholesky (O(n^3)) over
 // ten steps; half a second later the chain has fallen, finite
@@ -702,38 +705,16 @@ TEST(SolverFeatherstoneSettingsEffect, FrictionSmoothing) {
 namespace novaphy {
 namespace {
 
-// kinetic energy from H plus the potential energy of every body's centre of mass
-Scalar energy(const Model& model, const State& state) {
-  const VecX qd = Eigen::Map<const VecX>(state.joint_qd.data(), model.joint_dof_count);
-  Scalar e = 0.5 * qd.dot(eval_mass_matrix(model, state) * qd);
-  for (int b = 0; b < model.body_count; ++b) {
-    const Transform X = Transform::from_array(&state.body_q[7 * b]);
-    e -= model.body_mass[b] * model.gravity.dot(X.p + X.q * Eigen::Map<const Vec3>(&model.body_com[3 * b]));
-  }
-  return e;
-}
-
 // a pendulum of links 0.5 m long with the given masses, horizontal at q = 0, no damping
 ModelBuilder pendulum_chain(const std::vector<Scalar>& masses) {
-  ModelBuilder builder;
-  int parent = -1;
-  for (const Scalar m : masses) {
-    const int link = builder.add_body(RigidBody::from_box(m, Vec3(0.25, 0.02, 0.02)));
-    JointOptions options;
-    options.dof.axis = Vec3::UnitZ();
-    options.parent_xform.p = parent < 0 ? Vec3::Zero() : Vec3(0.25, 0, 0);
-    options.child_xform.p = Vec3(-0.25, 0, 0);
-    builder.add_joint_revolute(parent, link, options);
-    parent = link;
-  }
-  return builder;
+  return revolute_chain(masses, Vec3(0.25, 0.02, 0.02));
 }
 
 // largest |E(t) - E(0)| over a run, relative to the energy scale m g l of the first link
 Scalar energy_drift(Scene& scene, Scalar seconds, Scalar dt) {
-  const Scalar e0 = energy(scene.model, scene.state), scale = scene.model.body_mass[0] * 9.81 * 0.5;
+  const Scalar e0 = eval_energy(scene.model, scene.state), scale = scene.model.body_mass[0] * 9.81 * 0.5;
   Scalar worst = 0;
-  scene.run(seconds, dt, [&] { worst = std::max(worst, std::abs(energy(scene.model, scene.state) - e0)); });
+  scene.run(seconds, dt, [&] { worst = std::max(worst, std::abs(eval_energy(scene.model, scene.state) - e0)); });
   return worst / scale;
 }
 
@@ -767,11 +748,11 @@ Scalar spin_energy_drift(Scalar implicitness, Scalar* lowest_spin) {
   Scene scene(builder, settings);
   scene.state.joint_qd[0] = 0.01;
   scene.state.joint_qd[1] = 100;
-  const Scalar e0 = energy(scene.model, scene.state);
+  const Scalar e0 = eval_energy(scene.model, scene.state);
   Scalar worst = 0;
   *lowest_spin = 100;
   scene.run(2, 1e-4, [&] {
-    worst = std::max(worst, std::abs(energy(scene.model, scene.state) / e0 - 1));
+    worst = std::max(worst, std::abs(eval_energy(scene.model, scene.state) / e0 - 1));
     const Transform X = Transform::from_array(&scene.state.body_q[0]);
     *lowest_spin = std::min(*lowest_spin, (X.q.conjugate() * Eigen::Map<const Vec3>(&scene.state.joint_qd[0])).y());
   });
@@ -798,10 +779,10 @@ int chain_diverged_steps(Scalar implicitness, Scalar* energy_change) {
   SolverFeatherstoneSettings settings = no_damping();
   settings.coriolis_implicitness = implicitness;
   Scene scene(builder, settings);
-  const Scalar e0 = energy(scene.model, scene.state);
+  const Scalar e0 = eval_energy(scene.model, scene.state);
   int diverged = 0;
   scene.run(10, 1.0 / 120, [&] { diverged += scene.solver.diverged()[0]; });
-  *energy_change = energy(scene.model, scene.state) - e0;
+  *energy_change = eval_energy(scene.model, scene.state) - e0;
   return diverged;
 }
 

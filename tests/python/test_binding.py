@@ -279,3 +279,15 @@ def test_stage_seconds_and_implicit_coriolis_settings():
     solver.settings.coriolis_implicitness = 1.5
     with pytest.raises(ValueError, match="coriolis_implicitness"):
         solver.step(state, state, control, contacts, 0.01)
+
+
+def test_eval_energy():
+    builder = novaphy.ModelBuilder(gravity=[0.0, -9.81, 0.0])
+    ball = builder.add_body(novaphy.RigidBody.from_sphere(2.0, 0.1), xform=novaphy.Transform([0, 3.0, 0]))
+    model = builder.finalize()
+    state = model.state()
+    assert novaphy.eval_energy(model, state) == pytest.approx(2.0 * 9.81 * 3.0, rel=1e-12)
+    state.joint_qd[3:6] = [1.0, 0.0, 0.0]  # the free joint's linear velocity (after the angular)
+    novaphy.eval_fk(model, state)
+    assert novaphy.eval_energy(model, state) == pytest.approx(2.0 * 9.81 * 3.0 + 0.5 * 2.0, rel=1e-12)
+    assert ball == 0
