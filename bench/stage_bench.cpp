@@ -13,23 +13,13 @@
 #include "engine/mjcf_import.h"
 #include "engine/shard.h"
 #include "engine/solver_featherstone.h"
+#include "tools/robot_grid.h"
 
 namespace novaphy {
 namespace {
 
 Model scene(int index) {
-  if (index == 3) {
-    ModelBuilder shared(Vec3(0, 0, -9.81));
-    shared.add_plane(Vec3(0, 0, 1), 0);
-    return build_worlds(shared,
-                        [](ModelBuilder& builder, int w) {
-                          ImportOptions options;
-                          options.xform.p = Vec3(1.5 * (w % 10), 1.5 * (w / 10), 0);
-                          options.static_shapes = false;
-                          import_mjcf(builder, NOVAPHY_SCENE_DIR "/quadruped.xml", options);
-                        },
-                        {0, 100});
-  }
+  if (index == 3) return build_worlds(grid_ground(), robot_grid(NOVAPHY_SCENE_DIR "/quadruped.xml", 10, 0), {0, 100});
   ModelBuilder builder;
   ImportOptions options;
   options.static_shapes = index == 2;

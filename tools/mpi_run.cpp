@@ -18,6 +18,7 @@
 #include "engine/error.h"
 #include "engine/sharded_batch.h"
 #include "tools/progress.h"
+#include "tools/robot_grid.h"
 
 namespace {
 
@@ -63,17 +64,10 @@ Options parse(int argc, char** argv) {
 int run(const Options& o) {
   // world w: the scene's robot at its place in a square grid, 0.3 m above the ground
   const int side = std::max(1, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(o.worlds)))));
-  novaphy::ModelBuilder shared(novaphy::Vec3(0, 0, -9.81));
-  shared.add_plane(novaphy::Vec3(0, 0, 1), 0);
-  const auto build_world = [&](novaphy::ModelBuilder& builder, int w) {
-    novaphy::ImportOptions options;
-    options.xform.p = novaphy::Vec3(1.5 * (w % side), 1.5 * (w / side), 0.3);
-    options.static_shapes = false;
-    builder.add_mjcf(o.scene, options);
-  };
   novaphy::SolverFeatherstoneSettings settings;
   settings.num_threads = o.threads;
-  novaphy::ShardedBatch batch(MPI_COMM_WORLD, o.worlds, shared, build_world, settings);
+  novaphy::ShardedBatch batch(MPI_COMM_WORLD, o.worlds, novaphy::grid_ground(), novaphy::robot_grid(o.scene, side, 0.3),
+                              settings);
   const novaphy::WorldRange range = batch.range();
   const novaphy::WorldLayout& layout = batch.layout();
   const int nq = layout.joint_coord_count, nv = layout.joint_dof_count;

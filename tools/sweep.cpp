@@ -26,9 +26,9 @@
 #include "engine/dynamics.h"
 #include "engine/error.h"
 #include "engine/mjcf_import.h"
-#include "engine/shard.h"
 #include "engine/solver_featherstone.h"
 #include "tools/progress.h"
+#include "tools/robot_grid.h"
 
 namespace novaphy {
 namespace {
@@ -76,46 +76,34 @@ Scene scene_of(const Options& o) {
           o.contacts, 0};
 }
 
-Model build(const Scene& scene) {
-  if (scene.side == 0) {
-    ModelBuilder builder;
-    ImportOptions options;
-    options.static_shapes = scene.contacts;
-    import_mjcf(builder, scene.path, options);
-    return builder.finalize();
-  }
-  // the 100-robot grid (or one robot of it): each robot its own world, 0.3 m above one shared ground
-  ModelBuilder shared(Vec3(0, 0, -9.81));
-  shared.add_plane(Vec3(0, 0, 1), 0);
-  return build_worlds(shared,
-                      [&](ModelBuilder& builder, int w) {
-                        ImportOptions options;
-                        options.xform.p = Vec3(1.5 * (w % scene.side), 1.5 * (w / scene.side), 0.3);
-                        options.static_shapes = false;
-                        import_mjcf(builder, scene.path, options);
-                      },
-                      {0, scene.side * scene.side});
-}
+// a scene's model and its first state; for a single file also MuJoCo's model of it and the map
+// from MuJoCo's coordinates to NovaPhy's (the file is parsed once)
+struct Loaded {
+  Model model;
+  State start;
+  std::unique_ptr<mjModel, void (*)(mjModel*)> mujoco{nullptr, mj_deleteModel};
+  MujocoImport import;
+};
 
-// the state the scene starts from: MuJoCo's qpos0 for a single file, the builder's otherwise
-State initial_state(const Model& model, const Scene& scene) {
-  State state = model.state();
-  if (scene.side > 0) return state;
-  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(scene.path), mj_deleteModel);
-  ModelBuilder scratch;
-  import_mujoco_model(scratch, m.get()).to_joint_q(m.get(), m->qpos0, state.joint_q.data());
-  eval_fk(model, state);
-  return state;
-}
-
-Scalar energy(const Model& model, const State& state) {
-  const VecX qd = Eigen::Map<const VecX>(state.joint_qd.data(), model.joint_dof_count);
-  Scalar e = 0.5 * qd.dot(eval_mass_matrix(model, state) * qd);
-  for (int b = 0; b < model.body_count; ++b) {
-    const Transform X = Transform::from_array(&state.body_q[7 * b]);
-    e -= model.body_mass[b] * model.gravity.dot(X.p + X.q * Eigen::Map<const Vec3>(&model.body_com[3 * b]));
+Loaded load(const Scene& scene) {
+  Loaded loaded;
+  if (scene.side > 0) {
+    // the 100-robot grid (or one robot of it): each robot its own world, 0.3 m above one shared ground
+    loaded.model = build_worlds(grid_ground(), robot_grid(scene.path, scene.side, 0.3), {0, scene.side * scene.side});
+    loaded.start = loaded.model.state();
+    return loaded;
   }
-  return e;
+  // a single file starts from MuJoCo's qpos0
+  loaded.mujoco.reset(load_mujoco_model(scene.path));
+  ModelBuilder builder;
+  ImportOptions options;
+  options.static_shapes = scene.contacts;
+  loaded.import = import_mujoco_model(builder, loaded.mujoco.get(), options);
+  loaded.model = builder.finalize();
+  loaded.start = loaded.model.state();
+  loaded.import.to_joint_q(loaded.mujoco.get(), loaded.mujoco->qpos0, loaded.start.joint_q.data());
+  eval_fk(loaded.model, loaded.start);
+  return loaded;
 }
 
 int steps_to(double seconds, double dt) { return static_cast<int>(std::lround(seconds / dt)); }
@@ -180,7 +168,7 @@ Result run(const Model& model, const Scene& scene, const State& start, const Set
     }
     bar.update(++done);
   }
-  result.energy = energy(model, state);
+  result.energy = eval_energy(model, state);
   int robots = 0;
   for (int a = 0; a < model.articulation_count; ++a) robots += model.articulation(a).dof_count() > 0;
   result.robot_steps_per_s = busy > 0 ? robots * steps / busy : 0;
@@ -188,11 +176,8 @@ Result run(const Model& model, const Scene& scene, const State& start, const Set
 }
 
 // MuJoCo's RK4 on the same MJCF at dt, contacts off: joint_q (NovaPhy's coordinates) at each sample time
-std::vector<std::vector<Scalar>> mujoco_rk4(const Model& model, const Scene& scene, double dt,
-                                            const std::vector<double>& seconds) {
-  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(scene.path), mj_deleteModel);
-  ModelBuilder scratch;
-  const MujocoImport import = import_mujoco_model(scratch, m.get());
+std::vector<std::vector<Scalar>> mujoco_rk4(const Loaded& loaded, double dt, const std::vector<double>& seconds) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(mj_copyModel(nullptr, loaded.mujoco.get()), mj_deleteModel);
   m->opt.integrator = mjINT_RK4;
   m->opt.timestep = dt;
   m->opt.disableflags |= mjDSBL_CONTACT;
@@ -201,8 +186,8 @@ std::vector<std::vector<Scalar>> mujoco_rk4(const Model& model, const Scene& sce
   int done = 0;
   for (const double t : seconds) {
     for (; done < steps_to(t, dt); ++done) mj_step(m.get(), d.get());
-    q.emplace_back(model.joint_coord_count);
-    import.to_joint_q(m.get(), d->qpos, q.back().data());
+    q.emplace_back(loaded.model.joint_coord_count);
+    loaded.import.to_joint_q(m.get(), d->qpos, q.back().data());
   }
   return q;
 }
@@ -296,8 +281,9 @@ std::string seconds_name(double t) {
 
 int sweep(const Options& o) {
   const Scene scene = scene_of(o);
-  const Model model = build(scene);
-  const State start = initial_state(model, scene);
+  const Loaded loaded = load(scene);
+  const Model& model = loaded.model;
+  const State& start = loaded.start;
   std::vector<Setting> settings = settings_to_sweep();
   Setting reference;
   reference.dt = settings[0].dt;
@@ -311,7 +297,7 @@ int sweep(const Options& o) {
   ProgressBar bar(total, "novaphy_sweep " + scene.name + ": steps", o.progress);
   const Result ref = run(model, scene, start, reference, o, bar, done);
   std::vector<std::vector<Scalar>> mujoco;
-  if (!scene.contacts) mujoco = mujoco_rk4(model, scene, reference.dt, o.seconds);
+  if (!scene.contacts) mujoco = mujoco_rk4(loaded, reference.dt, o.seconds);
 
   Scalar total_mass = 0;
   for (const Scalar m : model.body_mass) total_mass += m;

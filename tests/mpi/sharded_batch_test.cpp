@@ -9,25 +9,13 @@
 #include <cmath>
 
 #include "test_support_errors.h"
+#include "tools/robot_grid.h"
 
 namespace novaphy {
 namespace {
 
 // world w: a quadruped of the grid (bench/scenes/quadruped.xml) 0.3 m above the shared ground
-WorldBuilder quadrupeds() {
-  return [](ModelBuilder& builder, int w) {
-    ImportOptions options;
-    options.xform.p = Vec3(1.5 * (w % 3), 1.5 * (w / 3), 0.3);
-    options.static_shapes = false;
-    builder.add_mjcf(NOVAPHY_SCENE_DIR "/quadruped.xml", options);
-  };
-}
-
-ModelBuilder ground() {
-  ModelBuilder shared(Vec3(0, 0, -9.81));
-  shared.add_plane(Vec3(0, 0, 1), 0);
-  return shared;
-}
+WorldBuilder quadrupeds() { return robot_grid(NOVAPHY_SCENE_DIR "/quadruped.xml", 3, 0.3); }
 
 // deterministic actions for every world and dof
 std::vector<Scalar> actions(int world_count, int dofs, int step) {
@@ -39,13 +27,13 @@ std::vector<Scalar> actions(int world_count, int dofs, int step) {
 TEST(ShardedBatch, StepsEveryWorldBitIdenticallyToOneProcess) {
   const int worlds = 5, steps = 150;  // 3 + 2 worlds on two ranks
   const Scalar dt = 0.005;
-  ShardedBatch batch(MPI_COMM_WORLD, worlds, ground(), quadrupeds());
+  ShardedBatch batch(MPI_COMM_WORLD, worlds, grid_ground(), quadrupeds());
   ASSERT_EQ(batch.size(), 2) << "run under mpirun -np 2";
   EXPECT_EQ(batch.range().count(), batch.rank() == 0 ? 3 : 2);
   const int nq = batch.layout().joint_coord_count, nv = batch.layout().joint_dof_count;
 
   // the reference: all worlds in this process, the same model as build_worlds makes on one rank
-  const Model all = build_worlds(ground(), quadrupeds(), {0, worlds});
+  const Model all = build_worlds(grid_ground(), quadrupeds(), {0, worlds});
   CollisionPipeline pipeline(all);
   Contacts contacts = pipeline.contacts();
   SolverFeatherstone solver(all);
@@ -70,7 +58,7 @@ TEST(ShardedBatch, StepsEveryWorldBitIdenticallyToOneProcess) {
 
 TEST(ShardedBatch, GatherAndScatterPlaceEachWorldsValuesInWorldOrder) {
   const int worlds = 7;
-  ShardedBatch batch(MPI_COMM_WORLD, worlds, ground(), quadrupeds());
+  ShardedBatch batch(MPI_COMM_WORLD, worlds, grid_ground(), quadrupeds());
   const WorldRange range = batch.range();
   std::vector<int> local(2 * range.count());
   for (int w = range.begin; w < range.end; ++w) {
@@ -98,24 +86,24 @@ TEST(ShardedBatch, GatherAndScatterPlaceEachWorldsValuesInWorldOrder) {
 }
 
 TEST(ShardedBatch, AnErrorOnOneRankIsRaisedOnEveryRankAndNoStateChanges) {
-  ShardedBatch batch(MPI_COMM_WORLD, 4, ground(), quadrupeds());
+  ShardedBatch batch(MPI_COMM_WORLD, 4, grid_ground(), quadrupeds());
   const State before = batch.state();
   if (batch.rank() == 1) batch.control().joint_f[20] = NAN;  // world 3's third dof
   EXPECT_NOVAPHY_ERROR(batch.step(0.005), "rank 1: joint_f[20] is not finite");
   EXPECT_EQ(batch.state().joint_q, before.joint_q);
   batch.control().joint_f[20] = 0;
   EXPECT_NOVAPHY_ERROR(batch.step(-1), "rank 0: dt must be finite and > 0, got -1");
-  EXPECT_NOVAPHY_ERROR(ShardedBatch(MPI_COMM_WORLD, 1, ground(), quadrupeds()),
+  EXPECT_NOVAPHY_ERROR(ShardedBatch(MPI_COMM_WORLD, 1, grid_ground(), quadrupeds()),
                        "rank 0: ShardedBatch: world_count must be at least the number of ranks (2), got 1");
   const WorldBuilder uneven = [](ModelBuilder& builder, int w) {
     for (int k = 0; k <= w / 2; ++k) builder.add_body(RigidBody::from_sphere(1, 0.1));  // rank 1 builds more
   };
-  EXPECT_NOVAPHY_ERROR(ShardedBatch(MPI_COMM_WORLD, 4, ground(), uneven),
+  EXPECT_NOVAPHY_ERROR(ShardedBatch(MPI_COMM_WORLD, 4, grid_ground(), uneven),
                        "ShardedBatch: worlds differ between ranks: 1 to 2 bodies per world");
 }
 
 TEST(ShardedBatch, DivergedWorldsAreFlaggedAndGatheredWithoutDisturbingTheOthers) {
-  ShardedBatch batch(MPI_COMM_WORLD, 6, ground(), quadrupeds());
+  ShardedBatch batch(MPI_COMM_WORLD, 6, grid_ground(), quadrupeds());
   const int nq = batch.layout().joint_coord_count, nv = batch.layout().joint_dof_count;
   if (batch.rank() == 1) batch.state().joint_qd[nv + 8] = 1e7;  // world 4, beyond divergence_speed
   const State before = batch.state();
