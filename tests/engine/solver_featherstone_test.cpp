@@ -282,6 +282,14 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
                        "settings.update_mass_matrix_interval must be >= 1, got 0");
   scene.solver.settings = {};
+  scene.solver.settings.aba_min_dofs = -1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.aba_min_dofs must be >= 0, got -1");
+  scene.solver.settings = {};
+  scene.solver.settings.coriolis_implicitness = 1.5;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.coriolis_implicitness must be in [0, 1], got 1.5");
+  scene.solver.settings = {};
   scene.control.joint_f[2] = std::nan("");
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
                        "joint_f[2] is not finite: nan");
