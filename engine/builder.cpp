@@ -99,6 +99,12 @@ RigidBody RigidBody::from_capsule(Scalar mass, Scalar radius, Scalar half_height
 
 ModelBuilder::ModelBuilder(const Vec3& gravity) { set_gravity(gravity); }
 
+void ModelBuilder::set_precision(Precision precision) {
+  if (precision != Precision::Float64 && precision != Precision::Float32)
+    fail("builder: precision must be Float64 or Float32, got ", static_cast<int>(precision));
+  precision_ = precision;
+}
+
 void ModelBuilder::set_gravity(const Vec3& gravity) {
   check_finite("builder", "gravity", gravity);
   gravity_ = gravity;
@@ -346,6 +352,7 @@ Model ModelBuilder::finalize() const {
     model.joint_dof_count += joint_dof_count(joint.type);
   }
   model.gravity = gravity_;
+  model.precision = precision_;
   model.allocate();
 
   std::vector<int> child_joint(body_count(), -1);

@@ -60,6 +60,9 @@ class ModelBuilder {
 
   void set_gravity(const Vec3& gravity);
   const Vec3& gravity() const { return gravity_; }
+  // the precision the solver's batched kernels step the finalized model in (default Float64)
+  void set_precision(Precision precision);
+  Precision precision() const { return precision_; }
 
   // xform: the body's initial pose in the world; used for free bodies and Free joints
   int add_body(const RigidBody& body, const Transform& xform = Transform::identity(), const std::string& name = "");
@@ -136,6 +139,7 @@ class ModelBuilder {
   JointRecord free_joint(int body) const;
 
   Vec3 gravity_;
+  Precision precision_ = Precision::Float64;
   std::vector<Scalar> body_mass_;
   std::vector<Vec3> body_com_;
   std::vector<Mat3> body_inertia_;

@@ -15,6 +15,14 @@ const char* shape_type_name(ShapeType type) {
   return "Unknown";
 }
 
+const char* precision_name(Precision precision) {
+  switch (precision) {
+    case Precision::Float64: return "float64";
+    case Precision::Float32: return "float32";
+  }
+  return "unknown";
+}
+
 bool same_layout(const ModelCounts& a, const ModelCounts& b) {
   return a.world_count == b.world_count && a.body_count == b.body_count && a.joint_count == b.joint_count &&
          a.joint_coord_count == b.joint_coord_count && a.joint_dof_count == b.joint_dof_count &&

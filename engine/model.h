@@ -11,6 +11,11 @@
 namespace novaphy {
 
 enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
+
+// the precision the batched kernels step a model in (State, Control and Model arrays stay double;
+// with Float32 the stepped state is rounded to float each step)
+enum class Precision : int { Float64 = 0, Float32 = 1 };
+const char* precision_name(Precision precision);
 const char* shape_type_name(ShapeType type);
 
 // X(type, name, count, width): `count` is an expression over the Model's counts
@@ -101,6 +106,7 @@ struct Control : ModelCounts {
 
 struct Model : ModelCounts {
   Vec3 gravity = Vec3(0, -9.81, 0);
+  Precision precision = Precision::Float64;
   NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
 #undef NOVAPHY_DECLARE
   std::vector<std::string> body_name;

@@ -73,9 +73,8 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   const Model& kernel_model = welded_.welded_bodies.empty() ? model : welded_.model;
   for (int a = 0; a < model.articulation_count; ++a) {
     art_.push_back(kernel_model.articulation(a));
-    scratch_.emplace_back();
-    scratch_.back().resize(art_.back());
   }
+  scratch_.resize(model.articulation_count);
   body_articulation_.assign(model.body_count, -1);
   body_link_.assign(model.body_count, -1);
   for (int j = 0; j < kernel_model.joint_count; ++j) {
@@ -110,6 +109,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   q_next_.setZero(model.joint_coord_count);
   factor_failure_.assign(model.articulation_count, -1);
   factored_aba_.assign(model.articulation_count, 0);
+  factored_batch_.assign(model.articulation_count, 0);
   implicit_lu_.resize(model.articulation_count);
   factored_diag_.resize(model.articulation_count);
   constant_H_.resize(model.articulation_count);  // filled by the first step
@@ -122,6 +122,10 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     constant_mass_[a] = constant;
   }
   diverged_.assign(model.articulation_count, 0);
+  std::vector<std::uint8_t> batchable(model.articulation_count, 0);
+  for (int a = 0; a < model.articulation_count; ++a) batchable[a] = art_[a].dof_count() > 0 && welded_into_[a].empty();
+  if (std::count(batchable.begin(), batchable.end(), 1) > 0)
+    batches_ = ArticulationBatches::make(kernel_model, art_, batchable, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
 }
@@ -136,6 +140,24 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
            {"Distance", false},
            {"D6", false},
            {"Cable", false}}};
+}
+
+ArticulationScratch& SolverFeatherstone::scratch(int a) {
+  if (scratch_[a].X_up.empty()) scratch_[a].resize(art_[a]);
+  return scratch_[a];
+}
+
+std::size_t SolverFeatherstone::memory_bytes() const {
+  std::size_t n = batches_ ? batches_->bytes() : 0;
+  auto bytes = [](const auto& m) { return static_cast<std::size_t>(m.size()) * sizeof(Scalar); };
+  for (const ArticulationScratch& s : scratch_) {
+    n += (s.X_up.size() + s.X_world.size()) * sizeof(Transform) +
+         (s.Xup.size() + s.I.size() + s.IC.size() + s.D_inv.size()) * sizeof(Mat6) +
+         (s.c.size() + s.v.size() + s.a.size() + s.f.size() + s.pA.size()) * sizeof(Vec6);
+    n += bytes(s.S) + bytes(s.U) + bytes(s.H) + bytes(s.S_world) + bytes(s.u) + bytes(s.C);
+  }
+  n += bytes(qd_) + bytes(qd_in_) + bytes(q_next_) + bytes(rhs_) + bytes(zero_);
+  return n;
 }
 
 template <typename F>
@@ -193,10 +215,23 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
   if (refactor) factored_dt_ = dt;
   qd_in_ = Eigen::Map<const VecX>(in.joint_qd.data(), model_.joint_dof_count);
   control_force(model_, control, rhs_.data());
+  std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
+
+  batch_step_ =
+      batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0 && !settings.use_tile_gemm;
+  if (batch_step_) {
+    batches_->enable(settings.aba_min_dofs);
+    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, qd_.data(),
+                       factor_failure_.data(), settings.num_threads);
+  }
 
   for_each_articulation([&](int a) {
+    if (on_batch(a)) {
+      factored_batch_[a] = 1;
+      return;
+    }
     const ArticulationView& art = art_[a];
-    ArticulationScratch& s = scratch_[a];
+    ArticulationScratch& s = scratch(a);
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nv = art.dof_count();
     const Scalar* q = in.joint_q.data() + q0;
     const Scalar* qd = in.joint_qd.data() + qd0;
@@ -244,7 +279,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
         aba_solve(art, s, rhs);
       else
         bad = art.qd_start(link);
-    } else if (keep_factor || (!constant && !refactor && !factored_aba_[a] && theta == 0)) {
+    } else if (keep_factor || (!constant && !refactor && !factored_aba_[a] && !factored_batch_[a] && theta == 0)) {
       cholesky_solve(s.H, rhs);
     } else {
       if (constant && constant_H_[a].size() > 0) {
@@ -274,6 +309,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
       if (bad >= 0) factored_diag_[a].resize(0);  // no factor to keep
     }
     factored_aba_[a] = use_aba;
+    factored_batch_[a] = 0;
     factor_failure_[a] = bad < 0 ? -1 : qd0 + bad;
     qd_.segment(qd0, nv) = qd_in_.segment(qd0, nv) + dt * rhs_.segment(qd0, nv);
   });
@@ -330,7 +366,9 @@ void SolverFeatherstone::finish_row(int r) {
 }
 
 void SolverFeatherstone::solve_mass(int a, Scalar* x) {
-  if (factored_aba_[a])
+  if (on_batch(a))
+    batches_->solve_mass(a, x);
+  else if (factored_aba_[a])
     aba_solve(art_[a], scratch_[a], x);
   else
     cholesky_solve(scratch_[a].H, x);
@@ -339,6 +377,7 @@ void SolverFeatherstone::solve_mass(int a, Scalar* x) {
 void SolverFeatherstone::add_point_jacobian(int body, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const {
   // J qd = d . (velocity of the body-fixed point at p) = sum over ancestor dofs of d . S_lin + (p x d) . S_ang
   const int a = body_articulation_[body];
+  if (on_batch(a)) return batches_->point_jacobian(a, body_link_[body], p, d, sign, J);
   const ArticulationView& art = art_[a];
   const MatX& S = scratch_[a].S_world;
   const Vec3 pxd = p.cross(d);
@@ -490,10 +529,11 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   // divergence guard: an articulation whose state went non-finite or beyond divergence_speed is
   // flagged, and raised, kept as it was (Flag) or reset to the model's initial state (Reset)
+  if (batch_step_) batches_->integrate(in, qd_.data(), dt, q_next_.data(), settings.num_threads);
   for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();
-    integrate_joints(art, in.joint_q.data() + q0, qd_.data() + qd0, dt, q_next_.data() + q0);
+    if (!on_batch(a)) integrate_joints(art, in.joint_q.data() + q0, qd_.data() + qd0, dt, q_next_.data() + q0);
     const auto q = q_next_.segment(q0, nq);
     const auto qd = qd_.segment(qd0, nv);
     diverged_[a] =
@@ -511,7 +551,10 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
   std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
   if (&out != &in) out.body_f = in.body_f;
+  if (batch_step_) batches_->store_bodies(out, settings.num_threads);
   for_each_articulation([&](int a) {
+    if (on_batch(a)) return;
+    scratch(a);
     forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), scratch_[a]);
     forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), scratch_[a]);
     store_bodies(a, out);

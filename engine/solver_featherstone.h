@@ -6,9 +6,11 @@
 
 #include <Eigen/LU>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "engine/articulation_batches.h"
 #include "engine/collision.h"
 #include "engine/weld.h"
 #include "kernels/pgs.h"
@@ -45,6 +47,10 @@ struct SolverFeatherstoneSettings {
   // bodies held to a parent body by a Fixed joint are merged into the parent's link, so they cost
   // nothing in the dynamics (read when the solver is made)
   bool weld_fixed_joints = true;
+  // articulations that share joints, frames and axes (replicated worlds) are stepped a SIMD block of
+  // worlds at a time by the batched kernels, in the model's precision (engine/articulation_batches.h);
+  // off, or while coriolis_implicitness > 0 or use_tile_gemm, every articulation takes the scalar kernels
+  bool use_batch_kernels = true;
   // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing
   DivergencePolicy on_divergence = DivergencePolicy::Flag;
@@ -88,6 +94,10 @@ class SolverFeatherstone {
   const Model& model() const { return model_; }
   const SolverStageSeconds& stage_seconds() const { return stage_seconds_; }
   void reset_stage_seconds() { stage_seconds_ = {}; }
+  // bytes the solver holds for its articulations: batched blocks, scalar scratch, step vectors
+  std::size_t memory_bytes() const;
+  // the batches the articulations were grouped into (nullptr when none is batched)
+  const ArticulationBatches* batches() const { return batches_.get(); }
 
   SolverFeatherstoneSettings settings;
 
@@ -102,6 +112,10 @@ class SolverFeatherstone {
   void integrate(const State& in, State& out, Scalar dt);
   template <typename F>
   void for_each_articulation(F&& f);
+  // true when articulation a is stepped by the batched kernels this step
+  bool on_batch(int a) const { return batch_step_ && batches_->active(a); }
+  // articulation a's scalar scratch, sized on first use
+  ArticulationScratch& scratch(int a);
 
   // a row over the dofs of up to two articulations (-1: none), J zeroed; finish_row computes
   // M^-1 J^T and the effective mass once J is filled in (solve_constraints, per island)
@@ -125,6 +139,8 @@ class SolverFeatherstone {
   std::vector<Scalar> link_f_;                 // [body][6] link_wrenches' output
   std::vector<ArticulationView> art_;
   std::vector<ArticulationScratch> scratch_;
+  std::unique_ptr<ArticulationBatches> batches_;
+  bool batch_step_ = false;
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;
   std::vector<int> rotational_dof_;  // dofs scaled by angular damping
@@ -146,6 +162,7 @@ class SolverFeatherstone {
   std::vector<std::uint8_t> diverged_;
   std::vector<int> factor_failure_;                     // per articulation: first dof whose factor failed, -1
   std::vector<std::uint8_t> factored_aba_;              // per articulation: 1 where the factor is ABA's, 0 Cholesky's
+  std::vector<std::uint8_t> factored_batch_;            // per articulation: 1 where the last factor is a batch's
   std::vector<Eigen::PartialPivLU<MatX>> implicit_lu_;  // per articulation: M + theta dt C (coriolis_implicitness)
   std::vector<VecX> factored_diag_;                     // per articulation: the implicit diagonal in s.H's factor
   std::vector<std::uint8_t> constant_mass_;             // per articulation: 1 for Prismatic and Fixed joints only

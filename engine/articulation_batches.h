@@ -1,0 +1,53 @@
+// Articulation batches: the articulations that share joints, frames and axes (every world of a
+// replicated robot) are grouped, kLanes<T> worlds to a block, and stepped by the batched kernels
+// (kernels/batch.h) in the model's precision. Per-world parameters (masses, inertias, armature,
+// damping, springs; gains and targets from the Control) stay per lane, so a randomised batch keeps
+// the batched path. Blocks are spread over OpenMP threads with a static schedule; each thread
+// owns its scratch, and a step allocates nothing.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "engine/model.h"
+
+namespace novaphy {
+
+class ArticulationBatches {
+ public:
+  virtual ~ArticulationBatches() = default;
+
+  // batches over the articulations a with batched[a] != 0, in precision `precision`; `model`
+  // holds the arrays the views `art` point into
+  static std::unique_ptr<ArticulationBatches> make(const Model& model, const std::vector<ArticulationView>& art,
+                                                   const std::vector<std::uint8_t>& batched, Precision precision);
+
+  // 1 where articulation a is stepped here while batches with at least `max_dofs` dofs are off
+  // (those take the solver's ABA path)
+  virtual void enable(int max_dofs) = 0;
+  virtual bool active(int a) const = 0;
+
+  // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =
+  // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. H is recomputed and
+  // factored when `refactor` (else the last factor is reused). factor_failure[a] = the dof whose
+  // pivot failed, or left alone
+  virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt, bool refactor, bool fuse,
+                        Scalar* qd_out, int* factor_failure, int threads) = 0;
+  // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations)
+  virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) = 0;
+  // body_q / body_qd of active articulations from out.joint_q / out.joint_qd
+  virtual void store_bodies(State& out, int threads) = 0;
+  // x = M^-1 x with the last factor of articulation a
+  virtual void solve_mass(int a, Scalar* x) const = 0;
+  // J += sign * (row of d . velocity of the point p riding on `link`), over articulation a's dofs
+  virtual void point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const = 0;
+
+  virtual int group_count() const = 0;
+  virtual int block_count() const = 0;
+  virtual int lanes() const = 0;
+  // bytes held: per-world parameters, H and its factor, motion subspaces, thread scratch
+  virtual std::size_t bytes() const = 0;
+};
+
+}  // namespace novaphy

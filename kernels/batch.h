@@ -1,0 +1,125 @@
+// Batched kernels: one articulation topology, one world per SIMD lane (AoSoA: a block holds
+// kLanes<T> worlds and every per-world quantity is one Lanes<T> per component). Templated on the
+// precision (float or double): one code path for both. Their reference twins are the scalar
+// kernels fk, rnea, crba and cholesky; tests/kernels/batch_test.cpp compares them.
+//
+// Spatial quantities here are in world axes about a point o per world (the root link's origin),
+// so no Plücker transforms are needed between links: a composite inertia is a sum, H_kj = s_j . (I_k s_k).
+// An inertia is kept as 10 numbers (m, h = m c, J = rotational inertia about o); H is packed lower
+// triangular and factored H = L^T L in place with the tree's sparsity (Featherstone's LTL, RBDA 6.5):
+// entry (k, j) is only touched when dof j is dof k or one of its ancestors, so a quadruped's legs
+// cost nothing against each other.
+#pragma once
+
+#include <vector>
+
+#include "kernels/articulation.h"
+#include "kernels/lanes.h"
+
+namespace novaphy {
+
+// the joints, frames and axes every world of a batch shares, in precision T
+template <typename T>
+struct BatchTopology {
+  struct Link {
+    JointType type = JointType::Fixed;
+    int parent = -1;
+    int q_start = 0, qd_start = 0, dof = 0;
+    T P0[4], P1[4];         // rotation in the parent link [x, y, z, w]: Revolute cos(q/2) P0 + sin(q/2) P1, else P0
+    T Qp[4], Qci[4];        // rotations of X_p and of X_c^-1 (Ball, Free)
+    T Rp[9];                // rotation of X_p, row-major
+    T tp[3];                // translation of X_p
+    T T0[3], T1[3], T2[3];  // translation in the parent: Revolute T0 + sin q T1 + (1 - cos q) T2, Prismatic T0 + q T1
+    T b[3];                 // translation of X_c^-1 (Ball, Free)
+    T tc[3];                // origin of the child joint frame in the link
+    T Rc[9];                // axes of the child joint frame in the link (rotation of X_c, row-major)
+    T ac[3];                // joint axis in link coordinates (Revolute, Prismatic)
+  };
+  std::vector<Link> link;
+  std::vector<int> dof_parent;      // per dof: the next dof up the tree, -1 past the root
+  std::vector<int> dof_rotational;  // per dof: 1 where angular_damping applies
+  int coord_count = 0;
+  int dof_count = 0;
+
+  explicit BatchTopology(const ArticulationView& art);
+  int packed_size() const { return dof_count * (dof_count + 1) / 2; }
+};
+
+// H's packed lower triangle: entry (i, j), j <= i
+inline int packed_index(int i, int j) { return i * (i + 1) / 2 + j; }
+
+// one block's per-world parameters (read from the model when the solver is made)
+template <typename T>
+struct BatchParams {
+  const Lanes<T>* mass;       // [link]
+  const Lanes<T>* com;        // [link][3] body frame
+  const Lanes<T>* inertia;    // [link][6] xx yy zz xy xz yz about the centre of mass, body frame
+  const Lanes<T>* armature;   // [dof]
+  const Lanes<T>* damping;    // [dof]
+  const Lanes<T>* stiffness;  // [dof]
+  const Lanes<T>* q_ref;      // [dof] spring rest position (Revolute, Prismatic)
+};
+
+// one block's kinematics and per-link work, sized for a topology (a thread's scratch)
+template <typename T>
+struct BatchWork {
+  std::vector<Lanes<T>> Q, p, R;   // [link][4], [link][3], [link][9]: link pose in the world
+  std::vector<Lanes<T>> v, a, f;   // [link][6] velocity, acceleration, force about o
+  std::vector<Lanes<T>> I;         // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
+  std::vector<Lanes<T>> vrel;      // [link][3] Free joints: linear velocity in the parent, world axes
+  std::vector<Lanes<T>> q, qd, x;  // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
+  std::vector<Lanes<T>> q_next;    // [coord] coordinates after the step
+  std::vector<Lanes<T>> tau;       // [dof] bias forces
+  std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
+  std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
+
+  void resize(const BatchTopology<T>& topo);
+};
+
+// link poses from coordinates q [coord]; o [3] = the root link's origin
+template <typename T>
+void batch_kinematics(const BatchTopology<T>& topo, const Lanes<T>* q, BatchWork<T>& w, Lanes<T>* o);
+
+// motion subspace S [dof][6] in world axes about o, from batch_kinematics' poses
+template <typename T>
+void batch_subspace(const BatchTopology<T>& topo, const BatchWork<T>& w, const Lanes<T>* o, Lanes<T>* S);
+
+// link velocities v from qd [dof]; Free joints' relative linear velocity into w.vrel
+template <typename T>
+void batch_velocity(const BatchTopology<T>& topo, const Lanes<T>* S, const Lanes<T>* qd, BatchWork<T>& w);
+
+// link spatial inertias about o, world axes, into w.I
+template <typename T>
+void batch_link_inertia(const BatchTopology<T>& topo, const BatchParams<T>& params, const Lanes<T>* o, BatchWork<T>& w);
+
+// RNEA with qdd = 0: tau [dof] = bias forces (gravity a_g [3] world, Coriolis, centrifugal) minus the
+// applied wrenches f_ext [link][6] about o (nullptr: none); needs batch_velocity and batch_link_inertia
+template <typename T>
+void batch_bias(const BatchTopology<T>& topo, const Lanes<T>* S, const Lanes<T>* gravity, const Lanes<T>* f_ext,
+                BatchWork<T>& w, Lanes<T>* tau);
+
+// CRBA: H [packed] with armature; turns w.I into composite inertias
+template <typename T>
+void batch_mass_matrix(const BatchTopology<T>& topo, const BatchParams<T>& params, const Lanes<T>* S, BatchWork<T>& w,
+                       Lanes<T>* H);
+
+// H = L^T L in place; with x (not nullptr) solves L^T y = x in the same pass (fused). Returns per
+// lane the dof whose pivot was not positive (-1: none)
+template <typename T>
+IntLanes<T> batch_factor(const BatchTopology<T>& topo, Lanes<T>* H, Lanes<T>* x);
+
+// x = H^-1 x from the factor; after batch_factor(.., x) only the second half (L x = y) is left
+template <typename T>
+void batch_solve(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>* x);
+template <typename T>
+void batch_solve_lower(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>* x);
+
+// x = H^-1 x for the world in one lane (the constraint rows' M^-1 J^T), in double
+template <typename T>
+void batch_solve_lane(const BatchTopology<T>& topo, const Lanes<T>* L, int lane, double* x);
+
+// semi-implicit step of the coordinates: q_out = q (+) dt qd, quaternions by the exponential map
+template <typename T>
+void batch_integrate(const BatchTopology<T>& topo, const Lanes<T>* q, const Lanes<T>* qd, T dt, Lanes<T>* q_out);
+
+}  // namespace novaphy

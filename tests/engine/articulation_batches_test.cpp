@@ -1,0 +1,189 @@
+#include "engine/articulation_batches.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+#include "engine/mjcf_import.h"
+#include "engine/solver_featherstone.h"
+#include "test_support.h"
+
+namespace novaphy {
+namespace {
+
+constexpr Scalar kDt = 0.005;
+
+ModelBuilder quadruped(bool floor) {
+  ModelBuilder robot;
+  ImportOptions options;
+  options.static_shapes = floor;
+  import_mjcf(robot, NOVAPHY_SCENE_DIR "/quadruped.xml", options);
+  return robot;
+}
+
+ModelBuilder scene(const char* name) {
+  ModelBuilder robot;
+  import_mjcf(robot, std::string(NOVAPHY_SCENE_DIR "/") + name);
+  return robot;
+}
+
+// the robot replicated into `worlds` worlds at one place (worlds do not touch each other), in `precision`
+Model replicated(const ModelBuilder& robot, int worlds, Precision precision) {
+  ModelBuilder batch(robot.gravity());
+  batch.set_precision(precision);
+  batch.replicate(robot, worlds);
+  return batch.finalize();
+}
+
+// world w's masses and inertias scaled by its own factor, its coordinates nudged: every world differs
+Scalar world_scale(int w) { return 1 + 0.4 * std::sin(1.7 * w); }
+void randomize_world(Model& model, State& state, int w, int first_body, int body_count, int first_coord,
+                     int coord_count) {
+  for (int b = first_body; b < first_body + body_count; ++b) {
+    model.body_mass[b] *= world_scale(w);
+    for (int k = 0; k < 9; ++k) model.body_inertia[9 * b + k] *= world_scale(w);
+  }
+  for (int c = 0; c < coord_count; ++c) state.joint_q[first_coord + c] += 0.05 * std::cos(0.3 * w + c);
+}
+
+// `steps` steps of the model from `state`, with collisions when `collide`
+void step(const Model& model, State& state, int steps, const SolverFeatherstoneSettings& settings = {},
+          bool collide = true) {
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  SolverFeatherstone solver(model, settings);
+  const Control control = model.control();
+  for (int k = 0; k < steps; ++k) {
+    if (collide) pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, kDt);
+  }
+}
+
+Scalar max_relative_difference(const std::vector<Scalar>& a, const std::vector<Scalar>& b) {
+  Scalar worst = 0, scale = 1;
+  for (size_t k = 0; k < b.size(); ++k) scale = std::max(scale, std::abs(b[k]));
+  for (size_t k = 0; k < b.size(); ++k) worst = std::max(worst, std::abs(a[k] - b[k]));
+  return worst / scale;
+}
+
+// the batched kernels against the scalar ones, step for step, without contacts (the order of
+// contacts found in a tie follows the rounding of the poses, and PGS sweeps rows in that order)
+Scalar batched_against_scalar(const Model& model, int steps) {
+  State batched = model.state(), scalar = model.state();
+  std::mt19937 rng(7);
+  test::randomize_state(model, batched, rng, true);
+  scalar.assign(batched);
+  SolverFeatherstoneSettings settings;
+  step(model, batched, steps, settings, false);
+  settings.use_batch_kernels = false;
+  step(model, scalar, steps, settings, false);
+  return std::max({max_relative_difference(batched.joint_q, scalar.joint_q),
+                   max_relative_difference(batched.joint_qd, scalar.joint_qd),
+                   max_relative_difference(batched.body_q, scalar.body_q),
+                   max_relative_difference(batched.body_qd, scalar.body_qd)});
+}
+Scalar batched_against_scalar(const ModelBuilder& robot, int worlds, Precision precision, int steps) {
+  return batched_against_scalar(replicated(robot, worlds, precision), steps);
+}
+
+TEST(ArticulationBatches, GroupsReplicatedWorldsIntoBlocks) {
+  const Model model = replicated(quadruped(false), 37, Precision::Float64);
+  SolverFeatherstone solver(model);
+  ASSERT_NE(solver.batches(), nullptr);
+  EXPECT_EQ(solver.batches()->group_count(), 1);
+  const int lanes = solver.batches()->lanes();
+  EXPECT_EQ(solver.batches()->block_count(), (37 + lanes - 1) / lanes);
+  for (int a = 0; a < model.articulation_count; ++a) EXPECT_TRUE(solver.batches()->active(a));
+}
+
+TEST(ArticulationBatches, Float64MatchesTheScalarKernels) {
+  // limits on (the quadruped's), drives and springs, applied wrenches
+  EXPECT_LT(batched_against_scalar(scene("chain15.xml"), 5, Precision::Float64, 200), 1e-10);
+  EXPECT_LT(batched_against_scalar(scene("ball_chain30.xml"), 3, Precision::Float64, 200), 1e-10);
+  EXPECT_LT(batched_against_scalar(quadruped(false), 5, Precision::Float64, 200), 1e-10);
+  // every joint type, rotated joint frames, offset centres of mass, applied wrenches; one world per
+  // block with its other lanes padded
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Model tree = test::random_builder_tree(rng, 2 + trial, 1 + trial % 3);
+    EXPECT_LT(batched_against_scalar(tree, 50), 1e-9) << "trial " << trial;
+  }
+}
+
+TEST(ArticulationBatches, Float32StaysCloseToFloat64) {
+  EXPECT_LT(batched_against_scalar(scene("chain15.xml"), 5, Precision::Float32, 100), 1e-3);
+  EXPECT_LT(batched_against_scalar(quadruped(false), 5, Precision::Float32, 100), 1e-3);
+}
+
+// torso height of the quadruped standing on its floor after `seconds`
+Scalar standing_height(Precision precision, bool batched, Scalar seconds) {
+  const Model model = replicated(quadruped(true), 3, precision);
+  State state = model.state();
+  SolverFeatherstoneSettings settings;
+  settings.use_batch_kernels = batched;
+  step(model, state, static_cast<int>(seconds / kDt), settings);
+  return state.body_q[2];  // body 0 (torso), z up
+}
+
+TEST(ArticulationBatches, QuadrupedStandsWhereTheScalarKernelsStandIt) {
+  const Scalar scalar = standing_height(Precision::Float64, false, 2);
+  EXPECT_GT(scalar, 0.3);
+  EXPECT_NEAR(standing_height(Precision::Float64, true, 2), scalar, 1e-6);
+  EXPECT_NEAR(standing_height(Precision::Float32, true, 2), scalar, 1e-4);
+}
+
+std::string first_difference(const State& batch, int w, const State& alone, int nq, int nv, int nb) {
+  auto same = [](const Scalar* a, const Scalar* b, int n) { return std::memcmp(a, b, n * sizeof(Scalar)) == 0; };
+  if (!same(&batch.joint_q[w * nq], alone.joint_q.data(), nq)) return "joint_q";
+  if (!same(&batch.joint_qd[w * nv], alone.joint_qd.data(), nv)) return "joint_qd";
+  if (!same(&batch.body_q[w * nb * 7], alone.body_q.data(), 7 * nb)) return "body_q";
+  if (!same(&batch.body_qd[w * nb * 6], alone.body_qd.data(), 6 * nb)) return "body_qd";
+  return "";
+}
+
+void expect_each_world_equals_it_alone(Precision precision) {
+  constexpr int kWorlds = 1000, kSteps = 60;
+  const ModelBuilder robot = quadruped(true);
+  Model model = replicated(robot, kWorlds, precision);
+  const int nb = model.body_count / kWorlds, nq = model.joint_coord_count / kWorlds,
+            nv = model.joint_dof_count / kWorlds;
+  State state = model.state();
+  for (int w = 0; w < kWorlds; ++w) randomize_world(model, state, w, w * nb, nb, w * nq, nq);
+  step(model, state, kSteps);
+  for (int w = 0; w < kWorlds; ++w) {
+    Model alone = replicated(robot, 1, precision);
+    State s = alone.state();
+    randomize_world(alone, s, w, 0, nb, 0, nq);
+    step(alone, s, kSteps);
+    ASSERT_EQ(first_difference(state, w, s, nq, nv, nb), "") << "world " << w << " differs from itself alone";
+  }
+}
+
+TEST(ArticulationBatches, EveryWorldOfAThousandEqualsItselfSteppedAloneFloat64) {
+  expect_each_world_equals_it_alone(Precision::Float64);
+}
+TEST(ArticulationBatches, EveryWorldOfAThousandEqualsItselfSteppedAloneFloat32) {
+  expect_each_world_equals_it_alone(Precision::Float32);
+}
+
+TEST(ArticulationBatches, OneThreadAndAllThreadsAreBitIdentical) {
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    Model model = replicated(quadruped(true), 300, precision);
+    State initial = model.state();
+    const int nb = model.body_count / 300, nq = model.joint_coord_count / 300;
+    for (int w = 0; w < 300; ++w) randomize_world(model, initial, w, w * nb, nb, w * nq, nq);
+    State one = model.state(), all = model.state();
+    one.assign(initial), all.assign(initial);
+    SolverFeatherstoneSettings settings;
+    settings.num_threads = 1;
+    step(model, one, 50, settings);
+    settings.num_threads = 0;
+    step(model, all, 50, settings);
+    EXPECT_EQ(std::memcmp(one.joint_q.data(), all.joint_q.data(), one.joint_q.size() * sizeof(Scalar)), 0);
+    EXPECT_EQ(std::memcmp(one.body_qd.data(), all.body_qd.data(), one.body_qd.size() * sizeof(Scalar)), 0);
+  }
+}
+
+}  // namespace
+}  // namespace novaphy
