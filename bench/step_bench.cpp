@@ -1,8 +1,10 @@
 // Whole steps of many robots: NovaPhy's SolverFeatherstone on replicated worlds beside MuJoCo 2.2.2
 // stepping one mjData per world in the same OpenMP loop, same MJCF, same dt, same process.
 //   novaphy_bench_step --benchmark_format=json
-// Arguments: scene (0 chain15, 1 quadruped without a floor, 2 quadruped standing), worlds, threads.
-// items_per_second is robot-steps per second.
+// Arguments: scene (0 chain15, 1 quadruped without a floor, 2 quadruped standing, 3 MuJoCo's
+// humanoid.xml without contacts), worlds, threads, precision (NovaPhy: 0 float64, 1 float32; MuJoCo
+// is double). items_per_second is robot-steps per second. tools/bench_report.py turns the JSON into
+// the README's table.
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
@@ -21,12 +23,15 @@ struct SceneSpec {
 };
 const SceneSpec kScenes[] = {{NOVAPHY_SCENE_DIR "/chain15.xml", false},
                              {NOVAPHY_SCENE_DIR "/quadruped.xml", false},
-                             {NOVAPHY_SCENE_DIR "/quadruped.xml", true}};
+                             {NOVAPHY_SCENE_DIR "/quadruped.xml", true},
+                             {NOVAPHY_HUMANOID_XML, false}};
 
 void label(benchmark::State& bm, int worlds) {
   bm.SetItemsProcessed(bm.iterations() * worlds);
+  bm.counters["scene"] = static_cast<double>(bm.range(0));
   bm.counters["worlds"] = worlds;
   bm.counters["threads"] = static_cast<double>(bm.range(2));
+  bm.counters["precision"] = static_cast<double>(bm.range(3));
 }
 
 void BM_NovaPhyStep(benchmark::State& bm) {
@@ -37,6 +42,7 @@ void BM_NovaPhyStep(benchmark::State& bm) {
   options.static_shapes = spec.floor;
   import_mjcf(robot, spec.path, options);
   batch.set_gravity(robot.gravity());
+  batch.set_precision(bm.range(3) == 1 ? Precision::Float32 : Precision::Float64);
   batch.replicate(robot, worlds);
   const Model model = batch.finalize();
   CollisionPipeline pipeline(model);
@@ -47,14 +53,25 @@ void BM_NovaPhyStep(benchmark::State& bm) {
   State state = model.state();
   const Control control = model.control();
   for (int k = 0; k < 50; ++k) {  // settle onto the floor before timing
-    pipeline.collide(state, contacts);
+    if (spec.floor) pipeline.collide(state, contacts);
     solver.step(state, state, control, contacts, 0.005);
   }
   for (auto _ : bm) {
-    pipeline.collide(state, contacts);
+    if (spec.floor) pipeline.collide(state, contacts);
     solver.step(state, state, control, contacts, 0.005);
   }
   label(bm, worlds);
+  bm.counters["bytes_per_world"] = static_cast<double>(solver.memory_bytes()) / worlds;
+  // what a world must hold at least: its state, and H with its factor in the model's precision
+  const double scalar = bm.range(3) == 1 ? 4 : 8;
+  std::size_t h = 0;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const int n = model.articulation(a).dof_count();
+    h += static_cast<std::size_t>(n) * (n + 1);  // two packed triangles
+  }
+  const std::size_t state_scalars =
+      state.joint_q.size() + state.joint_qd.size() + state.body_q.size() + state.body_qd.size() + state.body_f.size();
+  bm.counters["state_bytes_per_world"] = (state_scalars * 8.0 + h * scalar) / worlds;
 }
 
 void BM_MujocoStep(benchmark::State& bm) {
@@ -76,15 +93,19 @@ void BM_MujocoStep(benchmark::State& bm) {
   label(bm, worlds);
 }
 
-void sweep(benchmark::internal::Benchmark* b) {
-  for (int scene = 0; scene < 3; ++scene)
-    for (const int worlds : {1, 64, 1024})
-      for (const int threads : {1, 2}) b->Args({scene, worlds, threads});
-  b->ArgNames({"scene", "worlds", "threads"})->UseRealTime();
+// worlds 1 .. 16384 at all threads; 4096 worlds at one thread too (the scaling line)
+void sweep(benchmark::internal::Benchmark* b, bool novaphy) {
+  const int all = omp_get_num_procs();
+  for (int scene = 0; scene < 4; ++scene)
+    for (int precision = 0; precision < (novaphy ? 2 : 1); ++precision) {
+      for (const int worlds : {1, 16, 256, 4096, 16384}) b->Args({scene, worlds, all, precision});
+      if (all > 1) b->Args({scene, 4096, 1, precision});
+    }
+  b->ArgNames({"scene", "worlds", "threads", "precision"})->UseRealTime();
 }
 
-BENCHMARK(BM_NovaPhyStep)->Apply(sweep);
-BENCHMARK(BM_MujocoStep)->Apply(sweep);
+BENCHMARK(BM_NovaPhyStep)->Apply([](benchmark::internal::Benchmark* b) { sweep(b, true); });
+BENCHMARK(BM_MujocoStep)->Apply([](benchmark::internal::Benchmark* b) { sweep(b, false); });
 
 }  // namespace
 }  // namespace novaphy

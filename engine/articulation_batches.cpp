@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 
 #include "kernels/batch.h"
@@ -11,8 +13,8 @@ namespace novaphy {
 
 namespace {
 
-// what articulations must share to be batched: joint types, tree, frames and axes
-std::vector<double> topology_key(const ArticulationView& art) {
+// what articulations must share to be batched: joint types, tree, frames, axes and welded bodies
+std::vector<double> topology_key(const ArticulationView& art, const std::vector<WeldedBody>& welded) {
   std::vector<double> key;
   for (int i = 0; i < art.link_count(); ++i) {
     key.push_back(static_cast<double>(art.type(i)));
@@ -22,6 +24,12 @@ std::vector<double> topology_key(const ArticulationView& art) {
     key.insert(key.end(), art.joint_X_c + 7 * j, art.joint_X_c + 7 * j + 7);
     key.insert(key.end(), art.joint_axis + 3 * j, art.joint_axis + 3 * j + 3);
   }
+  for (const WeldedBody& b : welded) {
+    key.push_back(b.link);
+    double x[7];
+    b.offset.to_array(x);
+    key.insert(key.end(), x, x + 7);
+  }
   return key;
 }
 
@@ -30,24 +38,44 @@ class Batches final : public ArticulationBatches {
   using V = Lanes<T>;
   static constexpr int W = kLanes<T>;
 
-  // per block: the parameters (BatchParams' arrays, in this order), H / its factor, S, o
+  struct Weld {  // a welded body every world of the group has
+    int link;
+    T q[4], p[3];  // its pose in the link frame
+  };
+
+  // lane slots run block after block; a partial last block repeats its first world in the others
   struct Group {
     BatchTopology<T> topo;
-    std::vector<int> arts;  // lane slots, block after block; a partial last block repeats its first world
+    std::vector<Weld> welds;
+    std::vector<int> arts;           // per slot
+    std::vector<int> q_off, qd_off;  // per slot: the articulation's first coordinate and dof
+    std::vector<int> body;           // per slot: its link bodies, then its welded bodies
     int world_count = 0;
     int blocks = 0;
     int param_size = 0;
+    // per block: the parameters (BatchParams' arrays in order, then, with welded bodies, every
+    // body's own centre of mass), H and its factor, the motion subspace and o of the last kinematics
     std::vector<V> params, H, S, origin;
     std::vector<int> coord_of_dof;  // Revolute / Prismatic dofs: their coordinate, else -1
+    std::vector<int> limited;       // Revolute / Prismatic dofs with a finite limit in some world
+    std::vector<V> limits;          // per block: [limited][2] lower and upper limit
     bool enabled = true;
     bool factored = false;  // H of every block factored by an earlier step
     bool refactor = true;   // this step computes and factors H
 
     explicit Group(const ArticulationView& art) : topo(art) {}
+    int links() const { return static_cast<int>(topo.link.size()); }
+    int bodies() const { return links() + static_cast<int>(welds.size()); }
     BatchParams<T> block_params(int b) const {
-      const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+      const int n = links(), nv = topo.dof_count;
       const V* x = params.data() + static_cast<size_t>(b) * param_size;
       return {x, x + n, x + 4 * n, x + 10 * n, x + 10 * n + nv, x + 10 * n + 2 * nv, x + 10 * n + 3 * nv};
+    }
+    V* block_params_data(int b) { return params.data() + static_cast<size_t>(b) * param_size; }
+    // [body][3] each body's own centre of mass (a link's differs from its merged one with welds)
+    const V* body_com(int b) const {
+      const V* x = params.data() + static_cast<size_t>(b) * param_size;
+      return welds.empty() ? x + links() : x + 10 * links() + 4 * topo.dof_count;
     }
     V* block_H(int b) { return H.data() + static_cast<size_t>(b) * topo.packed_size(); }
     const V* block_H(int b) const { return H.data() + static_cast<size_t>(b) * topo.packed_size(); }
@@ -60,13 +88,24 @@ class Batches final : public ArticulationBatches {
   };
 
  public:
-  Batches(const Model& model, const std::vector<ArticulationView>& art, const std::vector<std::uint8_t>& batched)
+  Batches(const Model& model, const std::vector<ArticulationView>& art, const std::vector<std::uint8_t>& batched,
+          const std::vector<std::vector<WeldedBody>>& welded, const std::vector<Scalar>& com)
       : art_(art), gravity_(model.gravity), slot_(art.size()) {
     std::map<std::vector<double>, int> index;
     for (size_t a = 0; a < art.size(); ++a) {
       if (!batched[a]) continue;
-      const auto [it, added] = index.try_emplace(topology_key(art[a]), static_cast<int>(groups_.size()));
-      if (added) groups_.emplace_back(art[a]);
+      const auto [it, added] = index.try_emplace(topology_key(art[a], welded[a]), static_cast<int>(groups_.size()));
+      if (added) {
+        groups_.emplace_back(art[a]);
+        for (const WeldedBody& b : welded[a]) {
+          Weld w{b.link, {}, {}};
+          const T q[4] = {static_cast<T>(b.offset.q.x()), static_cast<T>(b.offset.q.y()),
+                          static_cast<T>(b.offset.q.z()), static_cast<T>(b.offset.q.w())};
+          std::copy(q, q + 4, w.q);
+          for (int m = 0; m < 3; ++m) w.p[m] = static_cast<T>(b.offset.p[m]);
+          groups_.back().welds.push_back(w);
+        }
+      }
       groups_[it->second].arts.push_back(static_cast<int>(a));
     }
     for (int g = 0; g < static_cast<int>(groups_.size()); ++g) {
@@ -78,8 +117,14 @@ class Batches final : public ArticulationBatches {
       for (int b = 0; b < G.blocks; ++b)
         for (int l = 0; l < W; ++l)
           if (G.arts[b * W + l] < 0) G.arts[b * W + l] = G.arts[b * W];
-      const int n = static_cast<int>(G.topo.link.size()), nv = G.topo.dof_count;
-      G.param_size = 10 * n + 4 * nv;
+      for (const int a : G.arts) {
+        G.q_off.push_back(art[a].q_begin());
+        G.qd_off.push_back(art[a].qd_begin());
+        for (int i = 0; i < art[a].link_count(); ++i) G.body.push_back(art[a].body(i));
+        for (const WeldedBody& b : welded[a]) G.body.push_back(b.body);
+      }
+      const int n = G.links(), nv = G.topo.dof_count;
+      G.param_size = 10 * n + 4 * nv + (G.welds.empty() ? 0 : 3 * G.bodies());
       G.params.resize(static_cast<size_t>(G.blocks) * G.param_size);
       G.H.resize(static_cast<size_t>(G.blocks) * G.topo.packed_size());
       G.S.resize(static_cast<size_t>(G.blocks) * 6 * nv);
@@ -87,36 +132,59 @@ class Batches final : public ArticulationBatches {
       G.coord_of_dof.assign(nv, -1);
       for (const auto& L : G.topo.link)
         if (L.type == JointType::Revolute || L.type == JointType::Prismatic) G.coord_of_dof[L.qd_start] = L.q_start;
-      for (int b = 0; b < G.blocks; ++b) gather_params(G, b);
+      for (int b = 0; b < G.blocks; ++b) gather_params(G, b, com);
+      for (int k = 0; k < nv; ++k) {
+        if (G.coord_of_dof[k] < 0) continue;
+        bool finite = false;
+        for (const int a : G.arts)
+          finite |= std::isfinite(model.joint_limit_lower[art[a].qd_begin() + k]) ||
+                    std::isfinite(model.joint_limit_upper[art[a].qd_begin() + k]);
+        if (finite) G.limited.push_back(k);
+      }
+      const int nl = static_cast<int>(G.limited.size());
+      G.limits.resize(static_cast<size_t>(G.blocks) * 2 * nl);
+      for (int b = 0; b < G.blocks; ++b)
+        for (int m = 0; m < nl; ++m)
+          for (int l = 0; l < W; ++l) {
+            const int g = art[G.arts[b * W + l]].qd_begin() + G.limited[m];
+            G.limits[(b * nl + m) * 2][l] = static_cast<T>(model.joint_limit_lower[g]);
+            G.limits[(b * nl + m) * 2 + 1][l] = static_cast<T>(model.joint_limit_upper[g]);
+          }
       for (int b = 0; b < G.blocks; ++b) blocks_.push_back({g, b});
     }
     work_.resize(std::max(1, omp_get_max_threads()));
     for (auto& per_thread : work_) {
       per_thread.resize(groups_.size());
-      for (size_t g = 0; g < groups_.size(); ++g) per_thread[g].resize(groups_[g].topo);
+      for (size_t g = 0; g < groups_.size(); ++g) {
+        per_thread[g].resize(groups_[g].topo);
+        // per limited dof: its column of M^-1, its velocity; per side: target, impulse, active mask
+        const size_t nl = groups_[g].limited.size();
+        per_thread[g].rows.resize(nl * (groups_[g].topo.dof_count + 7));
+        per_thread[g].row_flags.resize(2 * nl);
+      }
     }
   }
 
   void enable(int max_dofs) override {
     for (Group& G : groups_) {
-      const bool on = G.topo.dof_count < max_dofs;
-      if (!on) G.factored = false;
-      G.enabled = on;
+      G.enabled = G.topo.dof_count < max_dofs;
+      if (!G.enabled) G.factored = false;
     }
   }
 
   bool active(int a) const override { return slot_[a].group >= 0 && groups_[slot_[a].group].enabled; }
 
   void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt_, bool refactor, bool fuse,
-                Scalar* qd_out, int* factor_failure, int threads) override {
+                bool wrenches, Scalar* qd_out, int* factor_failure, int threads) override {
     for (Group& G : groups_) G.refactor = refactor || !G.factored;
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       const T dt = static_cast<T>(dt_);
       const BatchTopology<T>& topo = G.topo;
       const int nv = topo.dof_count;
-      const int* arts = &G.arts[b * W];
-      gather(arts, in.joint_q.data(), art_q_begin(), topo.coord_count, w.q.data());
-      gather(arts, in.joint_qd.data(), art_qd_begin(), nv, w.qd.data());
+      const int* q_off = &G.q_off[b * W];
+      const int* qd_off = &G.qd_off[b * W];
+      gather(q_off, in.joint_q.data(), topo.coord_count, w.q.data());
+      gather(qd_off, in.joint_qd.data(), nv, w.qd.data());
       V* o = &G.origin[3 * b];
       V* S = G.block_S(b);
       const BatchParams<T> P = G.block_params(b);
@@ -124,22 +192,36 @@ class Batches final : public ArticulationBatches {
       batch_subspace(topo, w, o, S);
       batch_velocity(topo, S, w.qd.data(), w);
       batch_link_inertia(topo, P, o, w);
-      const V* f_ext = gather_wrenches(G, arts, in.body_f.data(), o, w) ? w.f_ext.data() : nullptr;
+      const V* f_ext = wrenches && gather_wrenches(G, b, in.body_f.data(), o, w) ? w.f_ext.data() : nullptr;
       V g[3];
       for (int k = 0; k < 3; ++k) g[k] = V{} + static_cast<T>(gravity_[k]);
       batch_bias(topo, S, g, f_ext, w, w.tau.data());
 
       // x = tau - bias - damping qd + kd (v_t - qd) - K_s (q_end - q_ref) + ke (q_t - q_end), q_end = q + dt qd
       V* x = w.x.data();
-      gather(arts, tau, art_qd_begin(), nv, x);
-      for (int k = 0; k < nv; ++k) x[k] -= w.tau[k];
-      add_implicit_terms(G, arts, control, P, dt, w);
+      gather(qd_off, tau, nv, x);
+      V* kd = w.drive.data();
+      V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv;
+      gather(qd_off, control.joint_target_kd.data(), nv, kd);
+      gather(qd_off, control.joint_target_vel.data(), nv, vt);
+      gather(qd_off, control.joint_target_ke.data(), nv, ke);
+      gather(qd_off, control.joint_target_pos.data(), nv, qt);
+      for (int k = 0; k < nv; ++k) {
+        const V qd = w.qd[k];
+        x[k] += -w.tau[k] - P.damping[k] * qd + kd[k] * (vt[k] - qd);
+        w.diag[k] = dt * (P.damping[k] + kd[k]);
+        const int c = G.coord_of_dof[k];
+        if (c < 0) continue;
+        const V q_end = w.q[c] + dt * qd;
+        x[k] += -P.stiffness[k] * (q_end - P.q_ref[k]) + ke[k] * (qt[k] - q_end);
+        w.diag[k] += dt * dt * (P.stiffness[k] + ke[k]);
+      }
 
       V* H = G.block_H(b);
       IntLanes<T> bad = IntLanes<T>{} - 1;
       if (G.refactor) {
         batch_mass_matrix(topo, P, S, w, H);
-        for (int k = 0; k < nv; ++k) H[packed_index(k, k)] += w.diag[k];
+        for (int k = 0; k < nv; ++k) H[topo.row_start[k] + k] += w.diag[k];
         bad = batch_factor(topo, H, fuse ? x : nullptr);
         if (fuse)
           batch_solve_lower(topo, H, x);
@@ -148,57 +230,166 @@ class Batches final : public ArticulationBatches {
       } else {
         batch_solve(topo, H, x);
       }
-      for (int l = 0; l < W && b * W + l < G.world_count; ++l) {
-        const int a = arts[l];
-        if (bad[l] >= 0) factor_failure[a] = art_[a].qd_begin() + static_cast<int>(bad[l]);
-        Scalar* out = qd_out + art_[a].qd_begin();
-        for (int k = 0; k < nv; ++k) out[k] = static_cast<T>(w.qd[k][l] + dt * x[k][l]);
+      for (int k = 0; k < nv; ++k) x[k] = w.qd[k] + dt * x[k];
+      for (int l = 0; l < lanes_in(G, b); ++l) {
+        if (bad[l] >= 0) factor_failure[G.arts[b * W + l]] = qd_off[l] + static_cast<int>(bad[l]);
+        Scalar* out = qd_out + qd_off[l];
+        for (int k = 0; k < nv; ++k) out[k] = x[k][l];
       }
     });
     for (Group& G : groups_)
       if (G.enabled) G.factored = true;
   }
 
+  bool solves_limits(int a, const std::uint8_t* skip) const override {
+    return active(a) && !skip[a] && !groups_[slot_[a].group].limited.empty();
+  }
+
+  void solve_limits(const State& in, const std::uint8_t* skip, const LimitSettings& s, Scalar dt_, Scalar* qd_io,
+                    Scalar* impulse, int threads) override {
+    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
+      const int nl = static_cast<int>(G.limited.size()), nv = G.topo.dof_count, lanes = lanes_in(G, b);
+      if (nl == 0) return;
+      const T dt = static_cast<T>(dt_);
+      const int* qd_off = &G.qd_off[b * W];
+      const int* q_off = &G.q_off[b * W];
+      IntLanes<T> mine{};  // lanes solved here: worlds of this block touched by no contact
+      bool any_mine = false;
+      for (int l = 0; l < lanes; ++l) {
+        mine[l] = skip[G.arts[b * W + l]] ? 0 : -1;
+        any_mine |= mine[l] != 0;
+      }
+      if (!any_mine) return;
+      gather(qd_off, qd_io, nv, w.qd.data());
+      V* col = w.rows.data();       // [limited][dof]
+      V* target = col + nl * nv;    // [limited][2]
+      V* lambda = target + 2 * nl;  // [limited][2]
+      V* active = lambda + 2 * nl;  // [limited][2] 1 where the row exists, else 0
+      const V* limit = &G.limits[static_cast<size_t>(b) * 2 * nl];
+      bool any_row = false;
+      for (int m = 0; m < nl; ++m) {
+        const int k = G.limited[m], c = G.coord_of_dof[k];
+        V q;
+        for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
+        for (int side = 0; side < 2; ++side) {
+          // gap >= 0 inside the range; the row keeps sign * qd >= target
+          const T sign = side == 0 ? 1 : -1;
+          const V gap = sign * (q - limit[2 * m + side]);
+          const IntLanes<T> finite = lane_abs<T>(limit[2 * m + side]) <= std::numeric_limits<T>::max();
+          const IntLanes<T> on = mine & finite & (gap + dt * sign * w.qd[k] < 0);
+          const V depth = -gap - T(s.linear_slop);
+          target[2 * m + side] = gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt;
+          V warm;
+          for (int l = 0; l < W; ++l) warm[l] = static_cast<T>(impulse[2 * (qd_off[l] + k) + side]);
+          lambda[2 * m + side] = on ? (s.use_warmstarting ? T(s.warmstarting_factor) * warm : V{}) : V{};
+          active[2 * m + side] = on ? V{} + 1 : V{};
+          for (int l = 0; l < W; ++l) any_row |= on[l] != 0;
+        }
+      }
+      if (any_row) {
+        // z_m = M^-1 e_k for each limited dof k (J = +-e_k: M^-1 J^T = +-z_m, J M^-1 J^T = z_m[k]).
+        // The sweeps read qd only at limited dofs: those are kept up to date (v), the whole of qd
+        // takes the impulses once at the end
+        for (int m = 0; m < nl; ++m) batch_solve_unit(G.topo, G.block_H(b), G.limited[m], col + m * nv);
+        V* v = active + 2 * nl;  // [limited]
+        for (int m = 0; m < nl; ++m) v[m] = w.qd[G.limited[m]];
+        std::uint8_t* on_anywhere = w.row_flags.data();  // rows some lane of the block has
+        for (int r = 0; r < 2 * nl; ++r) {
+          on_anywhere[r] = 0;
+          for (int l = 0; l < W; ++l) on_anywhere[r] |= active[r][l] != 0;
+        }
+        auto row_on_anywhere = [&](int r) { return on_anywhere[r] != 0; };
+        auto apply = [&](int m, const V& signed_impulse) {
+          const V* z = col + m * nv;
+          for (int n = 0; n < nl; ++n) v[n] += z[G.limited[n]] * signed_impulse;
+        };
+        for (int r = 0; r < 2 * nl; ++r)
+          if (row_on_anywhere(r)) apply(r / 2, r % 2 == 0 ? lambda[r] : -lambda[r]);
+        for (int it = 0; it < s.iterations; ++it)
+          for (int r = 0; r < 2 * nl; ++r) {
+            if (!row_on_anywhere(r)) continue;
+            const int m = r / 2;
+            const T sign = r % 2 == 0 ? 1 : -1;
+            const V W_row = col[m * nv + G.limited[m]];
+            const V inv = W_row + T(s.cfm) > T(1e-12) ? 1 / (W_row + T(s.cfm)) : V{};
+            const V step = -(sign * v[m] - target[r] + T(s.cfm) * lambda[r]) * inv;
+            const V sum = lambda[r] + step;
+            V next = sum > 0 ? sum : V{};
+            // a row of a lane without it, or gone non-finite, keeps its impulse
+            next = (active[r] != 0) & (lane_abs<T>(next) <= std::numeric_limits<T>::max()) ? next : lambda[r];
+            apply(m, sign * (next - lambda[r]));
+            lambda[r] = next;
+          }
+        for (int m = 0; m < nl; ++m) {
+          const V net = lambda[2 * m] - lambda[2 * m + 1];
+          const V* z = col + m * nv;
+          for (int j = 0; j < nv; ++j) w.qd[j] += z[j] * net;
+        }
+      }
+      for (int l = 0; l < lanes; ++l) {
+        if (!mine[l]) continue;
+        Scalar* out = qd_io + qd_off[l];
+        for (int j = 0; j < nv; ++j) out[j] = w.qd[j][l];
+        for (int r = 0; r < 2 * nl; ++r) {
+          const T x = active[r][l] != 0 ? lambda[r][l] : T(0);
+          impulse[2 * (qd_off[l] + G.limited[r / 2]) + r % 2] = std::isfinite(x) ? x : 0;
+        }
+      }
+    });
+  }
+
   void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) override {
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      const int* arts = &G.arts[b * W];
-      gather(arts, in.joint_q.data(), art_q_begin(), G.topo.coord_count, w.q.data());
-      gather(arts, qd, art_qd_begin(), G.topo.dof_count, w.qd.data());
+      const int nq = G.topo.coord_count;
+      gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
+      gather(&G.qd_off[b * W], qd, G.topo.dof_count, w.qd.data());
       batch_integrate(G.topo, w.q.data(), w.qd.data(), static_cast<T>(dt), w.q_next.data());
-      scatter(G, b, w.q_next.data(), art_q_begin(), G.topo.coord_count, q_out);
+      for (int l = 0; l < lanes_in(G, b); ++l) {
+        Scalar* x = q_out + G.q_off[b * W + l];
+        for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
+      }
     });
   }
 
   void store_bodies(State& out, int threads) override {
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       const BatchTopology<T>& topo = G.topo;
-      const int* arts = &G.arts[b * W];
-      gather(arts, out.joint_q.data(), art_q_begin(), topo.coord_count, w.q.data());
-      gather(arts, out.joint_qd.data(), art_qd_begin(), topo.dof_count, w.qd.data());
+      gather(&G.q_off[b * W], out.joint_q.data(), topo.coord_count, w.q.data());
+      gather(&G.qd_off[b * W], out.joint_qd.data(), topo.dof_count, w.qd.data());
       V* o = &G.origin[3 * b];
       V* S = G.block_S(b);
       batch_kinematics(topo, w.q.data(), w, o);
       batch_subspace(topo, w, o, S);
       batch_velocity(topo, S, w.qd.data(), w);
-      const BatchParams<T> P = G.block_params(b);
-      for (size_t i = 0; i < topo.link.size(); ++i) {
-        const V* R = &w.R[9 * i];
-        const V* v = &w.v[6 * i];
-        const V* com = P.com + 3 * i;
-        V c[3], v_com[3];  // centre of mass relative to o, its velocity
-        for (int m = 0; m < 3; ++m)
-          c[m] = R[3 * m] * com[0] + R[3 * m + 1] * com[1] + R[3 * m + 2] * com[2] + w.p[3 * i + m] - o[m];
-        v_com[0] = v[3] + v[1] * c[2] - v[2] * c[1];
-        v_com[1] = v[4] + v[2] * c[0] - v[0] * c[2];
-        v_com[2] = v[5] + v[0] * c[1] - v[1] * c[0];
-        for (int l = 0; l < W && b * W + l < G.world_count; ++l) {
-          const int body = art_[arts[l]].body(static_cast<int>(i));
-          Scalar* X = out.body_q.data() + 7 * body;
-          for (int m = 0; m < 3; ++m) X[m] = w.p[3 * i + m][l];
-          for (int m = 0; m < 4; ++m) X[3 + m] = w.Q[4 * i + m][l];
-          Scalar* qd = out.body_qd.data() + 6 * body;
-          for (int m = 0; m < 3; ++m) qd[m] = v_com[m][l], qd[3 + m] = v[m][l];
+      const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
+      const int* body = &G.body[static_cast<size_t>(b) * W * nb];
+      // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame
+      auto store = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
+        V c[3], x[13];
+        mat_vec(p, Q, com, o, c);
+        for (int m = 0; m < 3; ++m) x[m] = p[m];
+        for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
+        x[7] = v[3] + v[1] * c[2] - v[2] * c[1];
+        x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
+        x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
+        for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
+        for (int l = 0; l < lanes; ++l) {
+          Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
+          Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
+          for (int m = 0; m < 7; ++m) q[m] = x[m][l];
+          for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
         }
+      };
+      for (int i = 0; i < n; ++i) store(i, &w.p[3 * i], &w.Q[4 * i], G.body_com(b) + 3 * i, &w.v[6 * i]);
+      const V* body_com = G.body_com(b);
+      for (size_t k = 0; k < G.welds.size(); ++k) {
+        const Weld& weld = G.welds[k];
+        V p[3], Q[4], d[3];
+        const V* R = &w.R[9 * weld.link];
+        for (int m = 0; m < 3; ++m) d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
+        for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
+        quat_product(&w.Q[4 * weld.link], weld.q, Q);
+        store(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
       }
     });
   }
@@ -232,117 +423,106 @@ class Batches final : public ArticulationBatches {
   std::size_t bytes() const override {
     std::size_t n = 0;
     for (const Group& G : groups_)
-      n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size()) * sizeof(V) + G.arts.size() * sizeof(int);
+      n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size()) * sizeof(V) +
+           (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int);
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
-                              &w.f_ext, &w.q_next})
+                              &w.f_ext, &w.q_next, &w.drive})
           n += v->size() * sizeof(V);
     return n;
   }
 
  private:
-  // per-articulation starts, for gather and scatter
-  struct Begin {
-    const std::vector<ArticulationView>* art;
-    bool coords;
-    int operator()(int a) const { return coords ? (*art)[a].q_begin() : (*art)[a].qd_begin(); }
-  };
-  Begin art_q_begin() const { return {&art_, true}; }
-  Begin art_qd_begin() const { return {&art_, false}; }
+  // worlds in block b that are not padding
+  static int lanes_in(const Group& G, int b) { return std::min(W, G.world_count - b * W); }
 
-  // out[k][l] = field[begin(arts[l]) + k]
-  template <typename B>
-  static void gather(const int* arts, const Scalar* field, B begin, int count, V* out) {
+  // out[k][l] = field[off[l] + k]
+  static void gather(const int* off, const Scalar* field, int count, V* out) {
     for (int l = 0; l < W; ++l) {
-      const Scalar* x = field + begin(arts[l]);
+      const Scalar* x = field + off[l];
       for (int k = 0; k < count; ++k) out[k][l] = static_cast<T>(x[k]);
     }
   }
-  template <typename B>
-  void scatter(const Group& G, int b, const V* in, B begin, int count, Scalar* field) const {
-    for (int l = 0; l < W && b * W + l < G.world_count; ++l) {
-      Scalar* x = field + begin(G.arts[b * W + l]);
-      for (int k = 0; k < count; ++k) x[k] = in[k][l];
-    }
+
+  // c = R(Q) com + p - o
+  static void mat_vec(const V* p, const V* Q, const V* com, const V* o, V* c) {
+    const V tx = 2 * (Q[1] * com[2] - Q[2] * com[1]), ty = 2 * (Q[2] * com[0] - Q[0] * com[2]),
+            tz = 2 * (Q[0] * com[1] - Q[1] * com[0]);
+    c[0] = com[0] + Q[3] * tx + Q[1] * tz - Q[2] * ty + p[0] - o[0];
+    c[1] = com[1] + Q[3] * ty + Q[2] * tx - Q[0] * tz + p[1] - o[1];
+    c[2] = com[2] + Q[3] * tz + Q[0] * ty - Q[1] * tx + p[2] - o[2];
   }
 
-  void gather_params(Group& G, int b) {
-    const BatchParams<T> P = G.block_params(b);
-    auto put = [](const V* at, int k, int l, Scalar value) { const_cast<V*>(at)[k][l] = static_cast<T>(value); };
+  static void quat_product(const V* a, const T* b, V* out) {
+    out[0] = a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1];
+    out[1] = a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0];
+    out[2] = a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3];
+    out[3] = a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2];
+  }
+
+  void gather_params(Group& G, int b, const std::vector<Scalar>& com) {
+    const int n = G.links(), nv = G.topo.dof_count, nb = G.bodies();
+    V* x = G.block_params_data(b);
+    V *mass = x, *c = x + n, *inertia = x + 4 * n, *armature = x + 10 * n, *damping = armature + nv,
+      *stiffness = damping + nv, *q_ref = stiffness + nv, *own_com = q_ref + nv;
     for (int l = 0; l < W; ++l) {
       const ArticulationView& art = art_[G.arts[b * W + l]];
-      for (int i = 0; i < art.link_count(); ++i) {
-        const int body = art.body(i);
-        put(P.mass, i, l, art.body_mass[body]);
-        for (int m = 0; m < 3; ++m) put(P.com, 3 * i + m, l, art.body_com[3 * body + m]);
-        const Scalar* I = art.body_inertia + 9 * body;
+      const int* body = &G.body[static_cast<size_t>(b * W + l) * nb];
+      for (int i = 0; i < n; ++i) {
+        mass[i][l] = static_cast<T>(art.body_mass[body[i]]);
+        for (int m = 0; m < 3; ++m) c[3 * i + m][l] = static_cast<T>(art.body_com[3 * body[i] + m]);
+        const Scalar* I = art.body_inertia + 9 * body[i];
         const int order[6] = {0, 4, 8, 1, 2, 5};
-        for (int m = 0; m < 6; ++m) put(P.inertia, 6 * i + m, l, I[order[m]]);
+        for (int m = 0; m < 6; ++m) inertia[6 * i + m][l] = static_cast<T>(I[order[m]]);
       }
-      for (int k = 0; k < art.dof_count(); ++k) {
-        const int g = art.qd_begin() + k;
-        put(P.armature, k, l, art.joint_armature[g]);
-        put(P.damping, k, l, art.joint_damping[g]);
-        put(P.stiffness, k, l, art.joint_stiffness[g]);
-        const int c = G.coord_of_dof[k];
-        put(P.q_ref, k, l, c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
+      for (int k = 0; k < nv; ++k) {
+        const int g = art.qd_begin() + k, coord = G.coord_of_dof[k];
+        armature[k][l] = static_cast<T>(art.joint_armature[g]);
+        damping[k][l] = static_cast<T>(art.joint_damping[g]);
+        stiffness[k][l] = static_cast<T>(art.joint_stiffness[g]);
+        q_ref[k][l] = static_cast<T>(coord < 0 ? 0 : art.joint_q_ref[art.q_begin() + coord]);
       }
+      if (!G.welds.empty())
+        for (int k = 0; k < nb; ++k)
+          for (int m = 0; m < 3; ++m) own_com[3 * k + m][l] = static_cast<T>(com[3 * body[k] + m]);
     }
   }
 
-  // applied wrenches [f at the centre of mass; torque], world, as spatial forces about o; false if none
-  bool gather_wrenches(const Group& G, const int* arts, const Scalar* body_f, const V* o, BatchWork<T>& w) const {
-    const int n = static_cast<int>(G.topo.link.size());
+  // applied wrenches [f at the centre of mass; torque] of the block's bodies (welded ones onto their
+  // links) as spatial forces about o; false when the block has none
+  bool gather_wrenches(const Group& G, int b, const Scalar* body_f, const V* o, BatchWork<T>& w) const {
+    const int n = G.links(), nb = G.bodies();
+    const int* body = &G.body[static_cast<size_t>(b) * W * nb];
     bool any = false;
-    for (int l = 0; l < W && !any; ++l)
-      for (int i = 0; i < n && !any; ++i) {
-        const Scalar* f = body_f + 6 * art_[arts[l]].body(i);
-        for (int m = 0; m < 6; ++m) any |= f[m] != 0;
-      }
+    for (int k = 0; k < W * nb; ++k)
+      for (int m = 0; m < 6; ++m) any |= body_f[6 * body[k] + m] != 0;
     if (!any) return false;
-    for (int i = 0; i < n; ++i) {
-      V* F = &w.f_ext[6 * i];
-      for (int l = 0; l < W; ++l) {
-        const Scalar* f = body_f + 6 * art_[arts[l]].body(i);
-        for (int m = 0; m < 3; ++m) F[3 + m][l] = static_cast<T>(f[m]), F[m][l] = static_cast<T>(f[3 + m]);
+    std::fill(w.f_ext.begin(), w.f_ext.end(), V{});
+    const V* body_com = G.body_com(b);
+    for (int k = 0; k < nb; ++k) {
+      const int link = k < n ? k : G.welds[k - n].link;
+      V f[6], c[3], p[3], Q[4];
+      for (int l = 0; l < W; ++l)
+        for (int m = 0; m < 6; ++m) f[m][l] = static_cast<T>(body_f[6 * body[l * nb + k] + m]);
+      if (k < n) {
+        mat_vec(&w.p[3 * k], &w.Q[4 * k], body_com + 3 * k, o, c);
+      } else {
+        const Weld& weld = G.welds[k - n];
+        const V* R = &w.R[9 * link];
+        for (int m = 0; m < 3; ++m)
+          p[m] = w.p[3 * link + m] + R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
+        quat_product(&w.Q[4 * link], weld.q, Q);
+        mat_vec(p, Q, body_com + 3 * k, o, c);
       }
-      // torque about o: t + (c - o) x f, c the centre of mass
-      const V* R = &w.R[9 * i];
-      const BatchParams<T> P = G.block_params(static_cast<int>((arts - G.arts.data()) / W));
-      const V* com = P.com + 3 * i;
-      V c[3];
-      for (int m = 0; m < 3; ++m)
-        c[m] = R[3 * m] * com[0] + R[3 * m + 1] * com[1] + R[3 * m + 2] * com[2] + w.p[3 * i + m] - o[m];
-      F[0] += c[1] * F[5] - c[2] * F[4];
-      F[1] += c[2] * F[3] - c[0] * F[5];
-      F[2] += c[0] * F[4] - c[1] * F[3];
+      // torque about o: t + (c - o) x f
+      V* F = &w.f_ext[6 * link];
+      F[0] += f[3] + c[1] * f[2] - c[2] * f[1];
+      F[1] += f[4] + c[2] * f[0] - c[0] * f[2];
+      F[2] += f[5] + c[0] * f[1] - c[1] * f[0];
+      for (int m = 0; m < 3; ++m) F[3 + m] += f[m];
     }
     return true;
-  }
-
-  // springs, dampers and PD drives at the end of the step into w.x, their diagonal into w.diag
-  void add_implicit_terms(const Group& G, const int* arts, const Control& control, const BatchParams<T>& P, T dt,
-                          BatchWork<T>& w) const {
-    const int nv = G.topo.dof_count;
-    for (int k = 0; k < nv; ++k) {
-      V kd, vt, ke, qt;
-      for (int l = 0; l < W; ++l) {
-        const int g = art_[arts[l]].qd_begin() + k;
-        kd[l] = static_cast<T>(control.joint_target_kd[g]);
-        vt[l] = static_cast<T>(control.joint_target_vel[g]);
-        ke[l] = static_cast<T>(control.joint_target_ke[g]);
-        qt[l] = static_cast<T>(control.joint_target_pos[g]);
-      }
-      const V qd = w.qd[k];
-      w.x[k] += -P.damping[k] * qd + kd * (vt - qd);
-      w.diag[k] = dt * (P.damping[k] + kd);
-      const int c = G.coord_of_dof[k];
-      if (c < 0) continue;
-      const V q_end = w.q[c] + dt * qd;
-      w.x[k] += -P.stiffness[k] * (q_end - P.q_ref[k]) + ke * (qt - q_end);
-      w.diag[k] += dt * dt * (P.stiffness[k] + ke);
-    }
   }
 
   template <typename F>
@@ -370,9 +550,10 @@ class Batches final : public ArticulationBatches {
 std::unique_ptr<ArticulationBatches> ArticulationBatches::make(const Model& model,
                                                                const std::vector<ArticulationView>& art,
                                                                const std::vector<std::uint8_t>& batched,
-                                                               Precision precision) {
-  if (precision == Precision::Float32) return std::make_unique<Batches<float>>(model, art, batched);
-  return std::make_unique<Batches<double>>(model, art, batched);
+                                                               const std::vector<std::vector<WeldedBody>>& welded,
+                                                               const std::vector<Scalar>& com, Precision precision) {
+  if (precision == Precision::Float32) return std::make_unique<Batches<float>>(model, art, batched, welded, com);
+  return std::make_unique<Batches<double>>(model, art, batched, welded, com);
 }
 
 }  // namespace novaphy

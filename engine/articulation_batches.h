@@ -14,14 +14,24 @@
 
 namespace novaphy {
 
+// a body welded into a link by a Fixed joint (engine/weld.h): where its state comes from
+struct WeldedBody {
+  int body = 0;
+  int link = 0;
+  Transform offset;  // its pose in the link's frame
+};
+
 class ArticulationBatches {
  public:
   virtual ~ArticulationBatches() = default;
 
   // batches over the articulations a with batched[a] != 0, in precision `precision`; `model`
-  // holds the arrays the views `art` point into
+  // holds the arrays the views `art` point into (the welded model), `welded[a]` articulation a's
+  // welded bodies and `com` every body's own centre of mass
   static std::unique_ptr<ArticulationBatches> make(const Model& model, const std::vector<ArticulationView>& art,
-                                                   const std::vector<std::uint8_t>& batched, Precision precision);
+                                                   const std::vector<std::uint8_t>& batched,
+                                                   const std::vector<std::vector<WeldedBody>>& welded,
+                                                   const std::vector<Scalar>& com, Precision precision);
 
   // 1 where articulation a is stepped here while batches with at least `max_dofs` dofs are off
   // (those take the solver's ABA path)
@@ -30,10 +40,23 @@ class ArticulationBatches {
 
   // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =
   // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. H is recomputed and
-  // factored when `refactor` (else the last factor is reused). factor_failure[a] = the dof whose
-  // pivot failed, or left alone
+  // factored when `refactor` (else the last factor is reused); `wrenches`: in.body_f has a nonzero
+  // entry. factor_failure[a] = the dof whose pivot failed, or left alone
   virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt, bool refactor, bool fuse,
-                        Scalar* qd_out, int* factor_failure, int threads) = 0;
+                        bool wrenches, Scalar* qd_out, int* factor_failure, int threads) = 0;
+  // joint-limit rows of active articulations whose lane `skip[a]` is 0 (those touched by no contact),
+  // solved here a block at a time: the same rows, warm start and PGS sweeps as the solver's scalar
+  // path, with each lane's inactive rows masked. qd [dof] and impulse [dof][2] (the warm-start
+  // impulses of the lower and upper limit) are read and written for those articulations
+  struct LimitSettings {
+    int iterations = 20;
+    Scalar erp = 0.2, linear_slop = 0.001, cfm = 1e-6, warmstarting_factor = 0.85;
+    bool use_warmstarting = true;
+  };
+  virtual void solve_limits(const State& in, const std::uint8_t* skip, const LimitSettings& settings, Scalar dt,
+                            Scalar* qd, Scalar* impulse, int threads) = 0;
+  // 1 where articulation a's limit rows are solved by solve_limits (given the same skip)
+  virtual bool solves_limits(int a, const std::uint8_t* skip) const = 0;
   // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations)
   virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) = 0;
   // body_q / body_qd of active articulations from out.joint_q / out.joint_qd

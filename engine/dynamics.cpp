@@ -14,9 +14,20 @@ namespace novaphy {
 
 namespace {
 
-void check_finite(const std::vector<Scalar>& x, const char* name) {
+// throws Error naming x's first non-finite entry; returns whether x has a nonzero entry. One
+// vectorised pass (x * 0 is NaN exactly for inf and NaN), the search only on failure
+bool check_finite(const std::vector<Scalar>& x, const char* name) {
+  Scalar nan_seen = 0;
+  Scalar magnitude = 0;
+#pragma omp simd reduction(+ : nan_seen, magnitude)
+  for (size_t k = 0; k < x.size(); ++k) {
+    nan_seen += x[k] * 0;
+    magnitude += std::abs(x[k]);
+  }
+  if (nan_seen == 0) return magnitude != 0;  // a sum of magnitudes is 0 only when all are
   for (size_t k = 0; k < x.size(); ++k)
     if (!std::isfinite(x[k])) fail(name, "[", k, "] is not finite: ", x[k]);
+  return true;
 }
 
 // FK and link velocities of articulation a at the state's coordinates
@@ -46,10 +57,11 @@ void articulation_inverse_dynamics(const Model& model, const State& state, const
 
 }  // namespace
 
-void check_finite_state(const State& state) {
+void check_finite_state(const State& state, bool* any_wrench) {
   check_finite(state.joint_q, "joint_q");
   check_finite(state.joint_qd, "joint_qd");
-  check_finite(state.body_f, "body_f");
+  const bool any = check_finite(state.body_f, "body_f");
+  if (any_wrench) *any_wrench = any;
 }
 
 void check_finite_control(const Control& control) {

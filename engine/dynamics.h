@@ -39,8 +39,9 @@ void store_body_state(const ArticulationView& art, const ArticulationScratch& s,
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
                            ForwardDynamicsMethod method = ForwardDynamicsMethod::Crba);
 
-// throws Error naming the first non-finite entry of state.joint_q / joint_qd / body_f
-void check_finite_state(const State& state);
+// throws Error naming the first non-finite entry of state.joint_q / joint_qd / body_f; any_wrench
+// (when given) is set to whether body_f holds a nonzero entry
+void check_finite_state(const State& state, bool* any_wrench = nullptr);
 // throws Error naming the first non-finite entry of any control array
 void check_finite_control(const Control& control);
 

@@ -122,10 +122,15 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     constant_mass_[a] = constant;
   }
   diverged_.assign(model.articulation_count, 0);
+  touched_.assign(model.articulation_count, 0);
   std::vector<std::uint8_t> batchable(model.articulation_count, 0);
-  for (int a = 0; a < model.articulation_count; ++a) batchable[a] = art_[a].dof_count() > 0 && welded_into_[a].empty();
+  std::vector<std::vector<WeldedBody>> welded(model.articulation_count);
+  for (int a = 0; a < model.articulation_count; ++a) {
+    batchable[a] = art_[a].dof_count() > 0;
+    for (const int b : welded_into_[a]) welded[a].push_back({b, body_link_[b], welded_.offset[b]});
+  }
   if (std::count(batchable.begin(), batchable.end(), 1) > 0)
-    batches_ = ArticulationBatches::make(kernel_model, art_, batchable, model.precision);
+    batches_ = ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
 }
@@ -184,6 +189,21 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   lap(stage_seconds_.dynamics);
   row_count_ = 0;
   pool_size_ = 0;
+  if (batch_step_ && !limited_joints_.empty()) {
+    // articulations touched by no contact have their limit rows solved in their blocks
+    std::fill(touched_.begin(), touched_.end(), 0);
+    for (int c = 0; c < contacts.contact_count; ++c)
+      for (const int b : {contacts.contact_body_a[c], contacts.contact_body_b[c]})
+        if (b >= 0) touched_[body_articulation_[b]] = 1;
+    ArticulationBatches::LimitSettings limits;
+    limits.iterations = settings.num_iterations;
+    limits.erp = settings.erp;
+    limits.linear_slop = settings.linear_slop;
+    limits.cfm = settings.cfm;
+    limits.warmstarting_factor = settings.warmstarting_factor;
+    limits.use_warmstarting = settings.use_warmstarting;
+    batches_->solve_limits(in, touched_.data(), limits, dt, qd_.data(), limit_impulse_.data(), settings.num_threads);
+  }
   build_limit_rows(in, dt);
   lap(stage_seconds_.limit_rows);
   build_contact_rows(contacts, dt);
@@ -196,7 +216,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
 }
 
 void SolverFeatherstone::check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
-                                    Scalar dt) const {
+                                    Scalar dt) {
   if (!(dt > 0) || !std::isfinite(dt)) fail("dt must be finite and > 0, got ", dt);
   settings.check();
   model_.check(in);
@@ -205,7 +225,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   if (!same_layout(contacts, model_))
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
-  check_finite_state(in);
+  check_finite_state(in, &wrenches_);
   check_finite_control(control);
 }
 
@@ -221,7 +241,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
       batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0 && !settings.use_tile_gemm;
   if (batch_step_) {
     batches_->enable(settings.aba_min_dofs);
-    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, qd_.data(),
+    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, qd_.data(),
                        factor_failure_.data(), settings.num_threads);
   }
 
@@ -404,6 +424,7 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
     limit_row_[2 * g] = limit_row_[2 * g + 1] = -1;
   }
   for (const int j : limited_joints_) {
+    if (limits_in_batch(model_.joint_articulation[j])) continue;
     const int g = model_.joint_qd_start[j];
     const Scalar q = in.joint_q[model_.joint_q_start[j]];
     for (int side = 0; side < 2; ++side) {
@@ -520,7 +541,8 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
     Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) = impulse.allFinite() ? impulse : Vec3::Zero();
   }
   for (const int j : limited_joints_)
-    for (int k = 2 * model_.joint_qd_start[j]; k < 2 * model_.joint_qd_start[j] + 2; ++k) {
+    for (int k = 2 * model_.joint_qd_start[j];
+         k < 2 * model_.joint_qd_start[j] + 2 && !limits_in_batch(model_.joint_articulation[j]); ++k) {
       const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
       limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
     }

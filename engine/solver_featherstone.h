@@ -102,7 +102,8 @@ class SolverFeatherstone {
   SolverFeatherstoneSettings settings;
 
  private:
-  void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt) const;
+  // throws Error naming the first bad argument; notes whether in.body_f has a nonzero wrench
+  void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
   void unconstrained_velocity(const State& in, const Control& control, Scalar dt);
   void build_contact_rows(const Contacts& contacts, Scalar dt);
   void build_limit_rows(const State& in, Scalar dt);
@@ -114,6 +115,8 @@ class SolverFeatherstone {
   void for_each_articulation(F&& f);
   // true when articulation a is stepped by the batched kernels this step
   bool on_batch(int a) const { return batch_step_ && batches_->active(a); }
+  // true when articulation a's limit rows are solved in its block this step (no contact touches it)
+  bool limits_in_batch(int a) const { return batch_step_ && batches_->solves_limits(a, touched_.data()); }
   // articulation a's scalar scratch, sized on first use
   ArticulationScratch& scratch(int a);
 
@@ -141,6 +144,8 @@ class SolverFeatherstone {
   std::vector<ArticulationScratch> scratch_;
   std::unique_ptr<ArticulationBatches> batches_;
   bool batch_step_ = false;
+  bool wrenches_ = false;              // the step's input has a nonzero body_f
+  std::vector<std::uint8_t> touched_;  // per articulation: 1 where a contact of this step touches it
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;
   std::vector<int> rotational_dof_;  // dofs scaled by angular damping

@@ -1,5 +1,7 @@
 #include "kernels/batch.h"
 
+#include <algorithm>
+
 namespace novaphy {
 
 namespace {
@@ -149,6 +151,15 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
     copy_n(Xc.p.data(), 3, L.tc);
     copy_n(ac.data(), 3, L.ac);
   }
+  ancestor_start.assign(1, 0);
+  row_start.resize(dof_count);
+  for (int k = 0; k < dof_count; ++k) {
+    const size_t first = ancestors.size();
+    for (int j = dof_parent[k]; j >= 0; j = dof_parent[j]) ancestors.push_back(j);
+    std::reverse(ancestors.begin() + first, ancestors.end());
+    ancestor_start.push_back(static_cast<int>(ancestors.size()));
+    row_start[k] = packed_index(k, 0);
+  }
 }
 
 template <typename T>
@@ -157,7 +168,7 @@ void BatchWork<T>::resize(const BatchTopology<T>& topo) {
   Q.resize(4 * n), p.resize(3 * n), R.resize(9 * n);
   v.resize(6 * n), a.resize(6 * n), f.resize(6 * n), I.resize(10 * n), vrel.resize(3 * n);
   q.resize(topo.coord_count), qd.resize(topo.dof_count), x.resize(topo.dof_count), tau.resize(topo.dof_count);
-  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count);
+  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(4 * topo.dof_count);
 }
 
 template <typename T>
@@ -400,31 +411,40 @@ void batch_mass_matrix(const BatchTopology<T>& topo, const BatchParams<T>& param
       const int r = k.qd_start + d;
       V<T> F[6];
       apply_inertia<T>(&w.I[10 * i], S + 6 * r, F);
-      H[packed_index(r, r)] = dot6<T>(S + 6 * r, F) + params.armature[r];
-      for (int j = topo.dof_parent[r]; j >= 0; j = topo.dof_parent[j]) H[packed_index(r, j)] = dot6<T>(S + 6 * j, F);
+      V<T>* row = H + topo.row_start[r];
+      row[r] = dot6<T>(S + 6 * r, F) + params.armature[r];
+      for (int p = topo.ancestor_start[r]; p < topo.ancestor_start[r + 1]; ++p) {
+        const int j = topo.ancestors[p];
+        row[j] = dot6<T>(S + 6 * j, F);
+      }
     }
   }
 }
 
 template <typename T>
 IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
+  // row k of L is final once the rows below it have been folded in: divide it by the pivot, then
+  // take its outer product off the rows of its ancestors (all of them ancestors of k too)
   IntLanes<T> bad = IntLanes<T>{} - 1;
-  const int* lambda = topo.dof_parent.data();
   for (int k = topo.dof_count - 1; k >= 0; --k) {
-    const V<T> d = H[packed_index(k, k)];
+    V<T>* Lk = H + topo.row_start[k];
+    const int* a = topo.ancestors.data() + topo.ancestor_start[k];
+    const int m = topo.ancestor_start[k + 1] - topo.ancestor_start[k];
+    const V<T> d = Lk[k];
     bad = (d > 0) ? bad : IntLanes<T>{} + k;
     const V<T> l_kk = lane_sqrt<T>(d);
     const V<T> inv = 1 / l_kk;
-    H[packed_index(k, k)] = l_kk;
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) H[packed_index(k, i)] *= inv;
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) {
-      const V<T> l_ki = H[packed_index(k, i)];
-      for (int j = i; j >= 0; j = lambda[j]) H[packed_index(i, j)] -= l_ki * H[packed_index(k, j)];
+    Lk[k] = inv;  // the diagonal is kept inverted: solves multiply
+    for (int p = 0; p < m; ++p) Lk[a[p]] *= inv;
+    for (int p = 0; p < m; ++p) {
+      const V<T> l_ki = Lk[a[p]];
+      V<T>* Li = H + topo.row_start[a[p]];
+      for (int q = 0; q <= p; ++q) Li[a[q]] -= l_ki * Lk[a[q]];
     }
     if (x) {  // L^T y = x: row k of L is final
       const V<T> y = x[k] * inv;
       x[k] = y;
-      for (int i = lambda[k]; i >= 0; i = lambda[i]) x[i] -= H[packed_index(k, i)] * y;
+      for (int p = 0; p < m; ++p) x[a[p]] -= Lk[a[p]] * y;
     }
   }
   return bad;
@@ -432,38 +452,59 @@ IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
 
 template <typename T>
 void batch_solve_lower(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
-  const int* lambda = topo.dof_parent.data();
   for (int k = 0; k < topo.dof_count; ++k) {
+    const V<T>* Lk = L + topo.row_start[k];
     V<T> y = x[k];
-    for (int j = lambda[k]; j >= 0; j = lambda[j]) y -= L[packed_index(k, j)] * x[j];
-    x[k] = y / L[packed_index(k, k)];
+    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
+      y -= Lk[topo.ancestors[p]] * x[topo.ancestors[p]];
+    x[k] = y * Lk[k];
   }
 }
 
 template <typename T>
 void batch_solve(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
-  const int* lambda = topo.dof_parent.data();
   for (int k = topo.dof_count - 1; k >= 0; --k) {
-    const V<T> y = x[k] / L[packed_index(k, k)];
+    const V<T>* Lk = L + topo.row_start[k];
+    const V<T> y = x[k] * Lk[k];
     x[k] = y;
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) x[i] -= L[packed_index(k, i)] * y;
+    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
+      x[topo.ancestors[p]] -= Lk[topo.ancestors[p]] * y;
+  }
+  batch_solve_lower(topo, L, x);
+}
+
+template <typename T>
+void batch_solve_unit(const BatchTopology<T>& topo, const V<T>* L, int unit, V<T>* x) {
+  // L^T y = e_unit is nonzero only on unit and its ancestors
+  for (int k = 0; k < topo.dof_count; ++k) x[k] = V<T>{};
+  x[unit] = L[topo.row_start[unit] + unit];
+  const int* a = topo.ancestors.data() + topo.ancestor_start[unit];
+  const int m = topo.ancestor_start[unit + 1] - topo.ancestor_start[unit];
+  for (int p = 0; p < m; ++p) x[a[p]] = -L[topo.row_start[unit] + a[p]] * x[unit];
+  for (int p = m - 1; p >= 0; --p) {
+    const int k = a[p];
+    const V<T>* Lk = L + topo.row_start[k];
+    const V<T> y = x[k] * Lk[k];
+    x[k] = y;
+    for (int r = 0; r < p; ++r) x[a[r]] -= Lk[a[r]] * y;
   }
   batch_solve_lower(topo, L, x);
 }
 
 template <typename T>
 void batch_solve_lane(const BatchTopology<T>& topo, const V<T>* L, int lane, double* x) {
-  const int* lambda = topo.dof_parent.data();
-  auto l = [&](int i, int j) { return static_cast<double>(L[packed_index(i, j)][lane]); };
+  auto l = [&](int i, int j) { return static_cast<double>(L[topo.row_start[i] + j][lane]); };
   for (int k = topo.dof_count - 1; k >= 0; --k) {
-    const double y = x[k] / l(k, k);
+    const double y = x[k] * l(k, k);
     x[k] = y;
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) x[i] -= l(k, i) * y;
+    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
+      x[topo.ancestors[p]] -= l(k, topo.ancestors[p]) * y;
   }
   for (int k = 0; k < topo.dof_count; ++k) {
     double y = x[k];
-    for (int j = lambda[k]; j >= 0; j = lambda[j]) y -= l(k, j) * x[j];
-    x[k] = y / l(k, k);
+    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
+      y -= l(k, topo.ancestors[p]) * x[topo.ancestors[p]];
+    x[k] = y * l(k, k);
   }
 }
 
@@ -516,6 +557,7 @@ void batch_integrate(const BatchTopology<T>& topo, const V<T>* q, const V<T>* qd
   template IntLanes<T> batch_factor(const BatchTopology<T>&, Lanes<T>*, Lanes<T>*);                                   \
   template void batch_solve(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                     \
   template void batch_solve_lower(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                               \
+  template void batch_solve_unit(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*);                           \
   template void batch_solve_lane(const BatchTopology<T>&, const Lanes<T>*, int, double*);                             \
   template void batch_integrate(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, T, Lanes<T>*);
 

@@ -11,6 +11,7 @@
 // cost nothing against each other.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "kernels/articulation.h"
@@ -36,7 +37,10 @@ struct BatchTopology {
     T ac[3];                // joint axis in link coordinates (Revolute, Prismatic)
   };
   std::vector<Link> link;
-  std::vector<int> dof_parent;      // per dof: the next dof up the tree, -1 past the root
+  std::vector<int> dof_parent;  // per dof: the next dof up the tree, -1 past the root
+  // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
+  // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
+  std::vector<int> ancestor_start, ancestors, row_start;
   std::vector<int> dof_rotational;  // per dof: 1 where angular_damping applies
   int coord_count = 0;
   int dof_count = 0;
@@ -63,15 +67,18 @@ struct BatchParams {
 // one block's kinematics and per-link work, sized for a topology (a thread's scratch)
 template <typename T>
 struct BatchWork {
-  std::vector<Lanes<T>> Q, p, R;   // [link][4], [link][3], [link][9]: link pose in the world
-  std::vector<Lanes<T>> v, a, f;   // [link][6] velocity, acceleration, force about o
-  std::vector<Lanes<T>> I;         // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
-  std::vector<Lanes<T>> vrel;      // [link][3] Free joints: linear velocity in the parent, world axes
-  std::vector<Lanes<T>> q, qd, x;  // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
-  std::vector<Lanes<T>> q_next;    // [coord] coordinates after the step
-  std::vector<Lanes<T>> tau;       // [dof] bias forces
-  std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
-  std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
+  std::vector<Lanes<T>> Q, p, R;        // [link][4], [link][3], [link][9]: link pose in the world
+  std::vector<Lanes<T>> v, a, f;        // [link][6] velocity, acceleration, force about o
+  std::vector<Lanes<T>> I;              // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
+  std::vector<Lanes<T>> vrel;           // [link][3] Free joints: linear velocity in the parent, world axes
+  std::vector<Lanes<T>> q, qd, x;       // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
+  std::vector<Lanes<T>> q_next;         // [coord] coordinates after the step
+  std::vector<Lanes<T>> tau;            // [dof] bias forces
+  std::vector<Lanes<T>> diag;           // [dof] implicit diagonal added to H
+  std::vector<Lanes<T>> f_ext;          // [link][6] applied wrenches about o
+  std::vector<Lanes<T>> drive;          // [4][dof] PD drive gains and targets: kd, target velocity, ke, target position
+  std::vector<Lanes<T>> rows;           // the batched limit rows' work (sized by their owner)
+  std::vector<std::uint8_t> row_flags;  // and their per-row flags
 
   void resize(const BatchTopology<T>& topo);
 };
@@ -103,8 +110,8 @@ template <typename T>
 void batch_mass_matrix(const BatchTopology<T>& topo, const BatchParams<T>& params, const Lanes<T>* S, BatchWork<T>& w,
                        Lanes<T>* H);
 
-// H = L^T L in place; with x (not nullptr) solves L^T y = x in the same pass (fused). Returns per
-// lane the dof whose pivot was not positive (-1: none)
+// H = L^T L in place (the diagonal holding 1 / L_kk); with x (not nullptr) solves L^T y = x in the
+// same pass (fused). Returns per lane the dof whose pivot was not positive (-1: none)
 template <typename T>
 IntLanes<T> batch_factor(const BatchTopology<T>& topo, Lanes<T>* H, Lanes<T>* x);
 
@@ -113,6 +120,9 @@ template <typename T>
 void batch_solve(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>* x);
 template <typename T>
 void batch_solve_lower(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>* x);
+// x = H^-1 e_unit (a column of the inverse), the first half only along unit's ancestors
+template <typename T>
+void batch_solve_unit(const BatchTopology<T>& topo, const Lanes<T>* L, int unit, Lanes<T>* x);
 
 // x = H^-1 x for the world in one lane (the constraint rows' M^-1 J^T), in double
 template <typename T>
