@@ -12,7 +12,8 @@ namespace {
 ForwardDynamicsMethod method_from_name(const std::string& name) {
   if (name == "crba") return ForwardDynamicsMethod::Crba;
   if (name == "aba") return ForwardDynamicsMethod::Aba;
-  throw py::value_error("method must be 'crba' or 'aba', got '" + name + "'");
+  if (name == "batched") return ForwardDynamicsMethod::Batched;
+  throw py::value_error("method must be 'crba', 'aba' or 'batched', got '" + name + "'");
 }
 
 }  // namespace
@@ -57,8 +58,8 @@ void bind_dynamics(py::module_& m) {
         return eval_forward_dynamics(model, state, control, chosen);
       },
       py::arg("model"), py::arg("state"), py::arg("control"), py::kw_only(), py::arg("method") = "crba",
-      "qdd from tau = eval_control_force(model, control): 'crba' (CRBA + Cholesky) or 'aba' (articulated-body "
-      "algorithm).");
+      "qdd from tau = eval_control_force(model, control): 'crba' (CRBA + Cholesky), 'aba' (articulated-body "
+      "algorithm) or 'batched' (the solver's batched kernels, in the model's precision).");
 }
 
 }  // namespace novaphy::python

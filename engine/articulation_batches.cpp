@@ -175,7 +175,7 @@ class Batches final : public ArticulationBatches {
   bool active(int a) const override { return slot_[a].group >= 0 && groups_[slot_[a].group].enabled; }
 
   void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt_, bool refactor, bool fuse,
-                bool wrenches, Scalar* qd_out, int* factor_failure, int threads) override {
+                bool wrenches, Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) override {
     for (Group& G : groups_) G.refactor = refactor || !G.factored;
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       const T dt = static_cast<T>(dt_);
@@ -230,12 +230,15 @@ class Batches final : public ArticulationBatches {
       } else {
         batch_solve(topo, H, x);
       }
-      for (int k = 0; k < nv; ++k) x[k] = w.qd[k] + dt * x[k];
       for (int l = 0; l < lanes_in(G, b); ++l) {
         if (bad[l] >= 0) factor_failure[G.arts[b * W + l]] = qd_off[l] + static_cast<int>(bad[l]);
-        Scalar* out = qd_out + qd_off[l];
-        for (int k = 0; k < nv; ++k) out[k] = x[k][l];
+        if (qdd_out)
+          for (int k = 0; k < nv; ++k) qdd_out[qd_off[l] + k] = x[k][l];
       }
+      if (!qd_out) return;
+      for (int k = 0; k < nv; ++k) x[k] = w.qd[k] + dt * x[k];
+      for (int l = 0; l < lanes_in(G, b); ++l)
+        for (int k = 0; k < nv; ++k) qd_out[qd_off[l] + k] = x[k][l];
     });
     for (Group& G : groups_)
       if (G.enabled) G.factored = true;

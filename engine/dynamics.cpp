@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
+#include "engine/articulation_batches.h"
 #include "engine/error.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
@@ -53,6 +55,29 @@ void articulation_inverse_dynamics(const Model& model, const State& state, const
   while (model.joint_qd_start[j + 1] <= art.qd_begin() + dof) ++j;
   fail("articulation ", model.joint_articulation[art.joint_begin], ": mass matrix is not positive definite at dof ",
        art.qd_begin() + dof, " (joint ", j, " '", model.joint_name[j], "'; a massless link without children?)");
+}
+
+// qdd from the batched kernels: their unconstrained step with dt = 0 and no drives
+VecX batched_forward_dynamics(const Model& model, const State& state, const Control& control, const VecX& tau) {
+  std::vector<ArticulationView> art;
+  std::vector<std::uint8_t> batched(model.articulation_count);
+  for (int a = 0; a < model.articulation_count; ++a) {
+    art.push_back(model.articulation(a));
+    batched[a] = art.back().dof_count() > 0;
+  }
+  const std::unique_ptr<ArticulationBatches> batches =
+      ArticulationBatches::make(model, art, batched, std::vector<std::vector<WeldedBody>>(model.articulation_count),
+                                model.body_com, model.precision);
+  Control passive = control;
+  std::fill(passive.joint_target_ke.begin(), passive.joint_target_ke.end(), 0);
+  std::fill(passive.joint_target_kd.begin(), passive.joint_target_kd.end(), 0);
+  VecX qdd = VecX::Zero(model.joint_dof_count);
+  std::vector<int> failure(model.articulation_count, -1);
+  const bool wrenches = std::any_of(state.body_f.begin(), state.body_f.end(), [](Scalar f) { return f != 0; });
+  batches->dynamics(state, passive, tau.data(), 0, true, true, wrenches, nullptr, qdd.data(), failure.data(), 1);
+  for (int a = 0; a < model.articulation_count; ++a)
+    if (failure[a] >= 0) fail_not_positive_definite(model, art[a], failure[a] - art[a].qd_begin());
+  return qdd;
 }
 
 }  // namespace
@@ -158,6 +183,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
   check_finite_state(state);
   const VecX tau_control = eval_control_force(model, control);
   VecX qdd(model.joint_dof_count);
+  if (method == ForwardDynamicsMethod::Batched) return batched_forward_dynamics(model, state, control, tau_control);
   ArticulationScratch s;
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);

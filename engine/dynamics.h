@@ -8,7 +8,9 @@
 
 namespace novaphy {
 
-enum class ForwardDynamicsMethod { Crba, Aba };
+// Crba: CRBA + Cholesky; Aba: the articulated-body algorithm; Batched: the solver's batched kernels
+// (kernels/batch.h) in the model's precision, each articulation a lane of its own block
+enum class ForwardDynamicsMethod { Crba, Aba, Batched };
 
 // state.body_q and state.body_qd from state.joint_q and state.joint_qd
 void eval_fk(const Model& model, State& state);

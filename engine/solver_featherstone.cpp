@@ -241,7 +241,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
       batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0 && !settings.use_tile_gemm;
   if (batch_step_) {
     batches_->enable(settings.aba_min_dofs);
-    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, qd_.data(),
+    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, qd_.data(), nullptr,
                        factor_failure_.data(), settings.num_threads);
   }
 

@@ -64,8 +64,8 @@ inline Lanes<T> lane_round(Lanes<T> x) {
 }
 
 // sin and cos of every lane: Cody-Waite reduction by pi/2 (three-part constant) and minimax
-// polynomials on [-pi/4, pi/4] (Moshier's Cephes coefficients). Within 2 ulp of std::sin/cos for
-// |x| < 1e4 (double) and |x| < 1e3 (float); tests/kernels/lanes_test.cpp measures it.
+// polynomials on [-pi/4, pi/4] (Moshier's Cephes coefficients). Within one epsilon of std::sin/cos
+// for |x| < 1e4 (double) and |x| < 1e3 (float); tests/kernels/batch_test.cpp measures it.
 template <typename T>
 inline void lane_sincos(Lanes<T> x, Lanes<T>* s, Lanes<T>* c) {
   using V = Lanes<T>;

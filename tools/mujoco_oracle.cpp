@@ -23,7 +23,9 @@ void random_unit_quat(std::mt19937& rng, mjtNum* q) {
 
 }  // namespace
 
-Scalar OracleErrors::max() const { return std::max({body_pose, body_velocity, mass_matrix, bias, qdd_crba, qdd_aba}); }
+Scalar OracleErrors::max() const {
+  return std::max({body_pose, body_velocity, mass_matrix, bias, qdd_crba, qdd_aba, qdd_batched});
+}
 
 void OracleErrors::accumulate(const OracleErrors& o) {
   body_pose = std::max(body_pose, o.body_pose);
@@ -32,6 +34,7 @@ void OracleErrors::accumulate(const OracleErrors& o) {
   bias = std::max(bias, o.bias);
   qdd_crba = std::max(qdd_crba, o.qdd_crba);
   qdd_aba = std::max(qdd_aba, o.qdd_aba);
+  qdd_batched = std::max(qdd_batched, o.qdd_batched);
 }
 
 MujocoOracle::MujocoOracle(const std::string& path) {
@@ -127,6 +130,7 @@ OracleErrors MujocoOracle::compare_random_state(std::mt19937& rng) {
   const VecX qdd_mj = T * Eigen::Map<const VecX>(d_->qacc, nv);
   e.qdd_crba = relative(eval_forward_dynamics(model_, state, control, ForwardDynamicsMethod::Crba), qdd_mj);
   e.qdd_aba = relative(eval_forward_dynamics(model_, state, control, ForwardDynamicsMethod::Aba), qdd_mj);
+  e.qdd_batched = relative(eval_forward_dynamics(model_, state, control, ForwardDynamicsMethod::Batched), qdd_mj);
   return e;
 }
 

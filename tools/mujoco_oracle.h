@@ -13,7 +13,7 @@ namespace novaphy {
 
 struct OracleErrors {
   // max |novaphy - mujoco| / max(1, max |mujoco|) over the quantity
-  Scalar body_pose = 0, body_velocity = 0, mass_matrix = 0, bias = 0, qdd_crba = 0, qdd_aba = 0;
+  Scalar body_pose = 0, body_velocity = 0, mass_matrix = 0, bias = 0, qdd_crba = 0, qdd_aba = 0, qdd_batched = 0;
   Scalar max() const;
   void accumulate(const OracleErrors& other);  // elementwise maximum
 };

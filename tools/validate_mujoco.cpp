@@ -21,8 +21,8 @@ int main(int argc, char** argv) {
   }
   if (scenes.empty()) scenes = {"/usr/share/mujoco/model/humanoid/humanoid.xml", NOVAPHY_SCENE_DIR "/chain15.xml"};
 
-  std::printf("%-16s %5s %5s | %-9s %-9s %-9s %-9s %-9s %-9s\n", "scene", "dofs", "states", "pose", "velocity", "H",
-              "bias", "qdd CRBA", "qdd ABA");
+  std::printf("%-16s %5s %5s | %-9s %-9s %-9s %-9s %-9s %-9s %-9s\n", "scene", "dofs", "states", "pose", "velocity",
+              "H", "bias", "qdd CRBA", "qdd ABA", "qdd batch");
   novaphy::Scalar worst = 0;
   std::mt19937 rng(2026);
   for (const std::string& scene : scenes) {
@@ -31,8 +31,8 @@ int main(int argc, char** argv) {
       novaphy::OracleErrors e;
       for (int s = 0; s < states; ++s) e.accumulate(oracle.compare_random_state(rng));
       const std::string name = scene.substr(scene.find_last_of('/') + 1);
-      std::printf("%-16s %5d %5d | %.3e %.3e %.3e %.3e %.3e %.3e\n", name.c_str(), oracle.model().joint_dof_count,
-                  states, e.body_pose, e.body_velocity, e.mass_matrix, e.bias, e.qdd_crba, e.qdd_aba);
+      std::printf("%-16s %5d %5d | %.3e %.3e %.3e %.3e %.3e %.3e %.3e\n", name.c_str(), oracle.model().joint_dof_count,
+                  states, e.body_pose, e.body_velocity, e.mass_matrix, e.bias, e.qdd_crba, e.qdd_aba, e.qdd_batched);
       worst = std::max(worst, e.max());
     } catch (const novaphy::Error& error) {
       std::fprintf(stderr, "novaphy_validate: %s\n", error.what());

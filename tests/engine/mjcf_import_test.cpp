@@ -25,6 +25,7 @@ void expect_matches_mujoco(const std::string& path, unsigned seed) {
   EXPECT_LT(worst.bias, kTolerance) << path;
   EXPECT_LT(worst.qdd_crba, kTolerance) << path;
   EXPECT_LT(worst.qdd_aba, kTolerance) << path;
+  EXPECT_LT(worst.qdd_batched, kTolerance) << path;
 }
 
 class SceneMatchesMujoco : public ::testing::TestWithParam<std::string> {};

@@ -101,6 +101,7 @@ def test_humanoid_dynamics_oracles():
 
     qdd = novaphy.eval_forward_dynamics(model, state, control)
     np.testing.assert_allclose(novaphy.eval_forward_dynamics(model, state, control, method="aba"), qdd, atol=1e-10)
+    np.testing.assert_allclose(novaphy.eval_forward_dynamics(model, state, control, method="batched"), qdd, atol=1e-10)
     np.testing.assert_allclose(novaphy.eval_inverse_dynamics(model, state, qdd), control.joint_f, atol=1e-10)
 
 
@@ -146,7 +147,7 @@ def test_bad_dynamics_input():
         novaphy.forward_dynamics([joint], [body], np.zeros(1), np.array([np.nan]), np.zeros(1), np.zeros(3))
     with pytest.raises(TypeError):
         novaphy.forward_kinematics([joint], "not an array")
-    with pytest.raises(ValueError, match="method must be 'crba' or 'aba'"):
+    with pytest.raises(ValueError, match="method must be 'crba', 'aba' or 'batched'"):
         model = seed_pendulum_model()
         novaphy.eval_forward_dynamics(model, model.state(), model.control(), method="rk4")
 

@@ -1,0 +1,218 @@
+// The batched kernels against their reference twins (the scalar fk, rnea, crba, cholesky and
+// integrate kernels in double), lane by lane, each lane a different random state of one random
+// tree. Bounds are stated in units of the precision's epsilon times the quantity's largest entry.
+#include "kernels/batch.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+#include "kernels/cholesky.h"
+#include "kernels/crba.h"
+#include "kernels/fk.h"
+#include "kernels/integrate.h"
+#include "kernels/rnea.h"
+#include "test_support.h"
+
+namespace novaphy {
+namespace {
+
+template <typename T>
+constexpr double kEps = std::numeric_limits<T>::epsilon();
+
+// a block of kLanes<T> random states of one articulation, its parameters in lanes, and the
+// reference results of each lane
+template <typename T>
+struct Block {
+  using V = Lanes<T>;
+  static constexpr int W = kLanes<T>;
+
+  Model model;
+  ArticulationView art;
+  BatchTopology<T> topo;
+  BatchWork<T> w;
+  std::vector<V> params, q, qd, S, o, tau, H;
+  BatchParams<T> P{};
+  std::vector<State> states;
+  std::vector<ArticulationScratch> ref;
+
+  Block(Model model_, std::mt19937& rng) : model(std::move(model_)), art(model.articulation(0)), topo(art) {
+    w.resize(topo);
+    const int n = art.link_count(), nv = art.dof_count();
+    params.resize(10 * n + 4 * nv);
+    P = {params.data(),
+         params.data() + n,
+         params.data() + 4 * n,
+         params.data() + 10 * n,
+         params.data() + 10 * n + nv,
+         params.data() + 10 * n + 2 * nv,
+         params.data() + 10 * n + 3 * nv};
+    V* x = params.data();
+    for (int i = 0; i < n; ++i) {
+      const int b = art.body(i);
+      x[i] = V{} + static_cast<T>(model.body_mass[b]);
+      for (int m = 0; m < 3; ++m) x[n + 3 * i + m] = V{} + static_cast<T>(model.body_com[3 * b + m]);
+      const int order[6] = {0, 4, 8, 1, 2, 5};
+      for (int m = 0; m < 6; ++m) x[4 * n + 6 * i + m] = V{} + static_cast<T>(model.body_inertia[9 * b + order[m]]);
+    }
+    for (int k = 0; k < nv; ++k) x[10 * n + k] = V{} + static_cast<T>(model.joint_armature[art.qd_begin() + k]);
+    q.resize(art.coord_count()), qd.resize(nv), S.resize(6 * nv), o.resize(3), tau.resize(nv);
+    H.resize(topo.packed_size());
+    for (int l = 0; l < W; ++l) {
+      State s = model.state();
+      test::randomize_state(model, s, rng, true);
+      // the reference sees the inputs the lanes see: rounded to T
+      for (Scalar& v : s.joint_q) v = static_cast<T>(v);
+      for (Scalar& v : s.joint_qd) v = static_cast<T>(v);
+      for (Scalar& v : s.body_f) v = 0;
+      for (int k = 0; k < art.coord_count(); ++k) q[k][l] = static_cast<T>(s.joint_q[art.q_begin() + k]);
+      for (int k = 0; k < nv; ++k) qd[k][l] = static_cast<T>(s.joint_qd[art.qd_begin() + k]);
+      states.push_back(std::move(s));
+      ref.emplace_back();
+      ref.back().resize(art);
+      forward_kinematics(art, states.back().joint_q.data() + art.q_begin(), ref.back());
+      forward_velocity(art, states.back().joint_qd.data() + art.qd_begin(), ref.back());
+    }
+  }
+
+  // kinematics, bias forces and H of every lane
+  void run() {
+    batch_kinematics(topo, q.data(), w, o.data());
+    batch_subspace(topo, w, o.data(), S.data());
+    batch_velocity(topo, S.data(), qd.data(), w);
+    batch_link_inertia(topo, P, o.data(), w);
+    V g[3];
+    for (int k = 0; k < 3; ++k) g[k] = V{} + static_cast<T>(model.gravity[k]);
+    batch_bias(topo, S.data(), g, nullptr, w, tau.data());
+    batch_mass_matrix(topo, P, S.data(), w, H.data());
+  }
+};
+
+// max |a - b| / (eps * max(1, max |b|))
+double error_in_eps(const VecX& a, const VecX& b, double eps) {
+  const double scale = std::max(1.0, b.cwiseAbs().maxCoeff());
+  return (a - b).cwiseAbs().maxCoeff() / (eps * scale);
+}
+
+template <typename T>
+void expect_twins_agree(double bound) {
+  std::mt19937 rng(11);
+  double worst_pose = 0, worst_bias = 0, worst_H = 0, worst_solve = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    Block<T> block(test::random_builder_tree(rng, 2 + trial % 9), rng);
+    block.run();
+    const ArticulationView& art = block.art;
+    const int nv = art.dof_count();
+    for (int l = 0; l < Block<T>::W; ++l) {
+      ArticulationScratch& s = block.ref[l];
+      // link poses
+      VecX pose(7 * art.link_count()), pose_ref(7 * art.link_count());
+      for (int i = 0; i < art.link_count(); ++i) {
+        Quat Q(block.w.Q[4 * i + 3][l], block.w.Q[4 * i][l], block.w.Q[4 * i + 1][l], block.w.Q[4 * i + 2][l]);
+        if (Q.coeffs().dot(s.X_world[i].q.coeffs()) < 0) Q.coeffs() *= -1;  // q and -q are one rotation
+        pose.segment<7>(7 * i) << block.w.p[3 * i][l], block.w.p[3 * i + 1][l], block.w.p[3 * i + 2][l], Q.x(), Q.y(),
+            Q.z(), Q.w();
+        pose_ref.segment<7>(7 * i) << s.X_world[i].p, s.X_world[i].q.x(), s.X_world[i].q.y(), s.X_world[i].q.z(),
+            s.X_world[i].q.w();
+      }
+      worst_pose = std::max(worst_pose, error_in_eps(pose, pose_ref, kEps<T>));
+      if (nv == 0) continue;
+      // bias forces: RNEA at qdd = 0
+      VecX bias(nv), bias_ref(nv), zero = VecX::Zero(nv);
+      rnea(art, zero.data(), block.model.gravity, nullptr, s, bias_ref.data());
+      for (int k = 0; k < nv; ++k) bias[k] = block.tau[k][l];
+      worst_bias = std::max(worst_bias, error_in_eps(bias, bias_ref, kEps<T>));
+      // H: the ancestor entries against CRBA, which has exact zeros everywhere else
+      crba(art, s);
+      VecX h, h_ref;
+      std::vector<Scalar> entries, entries_ref;
+      for (int i = 0; i < nv; ++i)
+        for (int j = 0; j <= i; ++j) {
+          bool related = j == i;
+          for (int p = block.topo.ancestor_start[i]; p < block.topo.ancestor_start[i + 1]; ++p)
+            related |= block.topo.ancestors[p] == j;
+          if (!related) {
+            EXPECT_EQ(s.H(i, j), 0) << "trial " << trial << " H(" << i << ", " << j << ") of unrelated dofs";
+            continue;
+          }
+          entries.push_back(block.H[packed_index(i, j)][l]);
+          entries_ref.push_back(s.H(i, j));
+        }
+      worst_H = std::max(worst_H, error_in_eps(Eigen::Map<VecX>(entries.data(), entries.size()),
+                                               Eigen::Map<VecX>(entries_ref.data(), entries_ref.size()), kEps<T>));
+    }
+    // factor and solve against the reference factor: the residual of H x = b, relative to |H| |x|
+    std::vector<Lanes<T>> b(nv), L = block.H;
+    for (int k = 0; k < nv; ++k)
+      for (int l = 0; l < Block<T>::W; ++l) b[k][l] = static_cast<T>(std::sin(1.0 + k + 3 * l));
+    std::vector<Lanes<T>> x = b;
+    const IntLanes<T> bad = batch_factor(block.topo, L.data(), x.data());
+    batch_solve_lower(block.topo, L.data(), x.data());
+    for (int l = 0; l < Block<T>::W && nv > 0; ++l) {
+      ASSERT_EQ(bad[l], -1);
+      MatX H_ref = block.ref[l].H;
+      VecX xl(nv), bl(nv);
+      for (int k = 0; k < nv; ++k) xl[k] = x[k][l], bl[k] = b[k][l];
+      const double residual = (H_ref * xl - bl).cwiseAbs().maxCoeff();
+      worst_solve =
+          std::max(worst_solve, residual / (kEps<T> * H_ref.cwiseAbs().maxCoeff() * xl.cwiseAbs().maxCoeff()));
+    }
+  }
+  EXPECT_LT(worst_pose, bound) << "link poses";
+  EXPECT_LT(worst_bias, bound) << "bias forces";
+  EXPECT_LT(worst_H, bound) << "mass matrix";
+  EXPECT_LT(worst_solve, bound) << "factor and solve residual";
+}
+
+// over 30 random trees of 2..10 links (every joint type, rotated frames, offset centres of mass,
+// full inertias) the worst seen, in eps times the largest entry: poses 7, bias forces 34, H 18,
+// solve residual 5, in both precisions; the stated bound is 64
+TEST(BatchKernels, Float64LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<double>(64); }
+TEST(BatchKernels, Float32LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<float>(64); }
+
+template <typename T>
+void expect_integration_agrees() {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 10; ++trial) {
+    Block<T> block(test::random_builder_tree(rng, 2 + trial), rng);
+    const ArticulationView& art = block.art;
+    std::vector<Lanes<T>> q_next(art.coord_count());
+    const T dt = static_cast<T>(0.01);
+    batch_integrate(block.topo, block.q.data(), block.qd.data(), dt, q_next.data());
+    for (int l = 0; l < Block<T>::W; ++l) {
+      const State& s = block.states[l];
+      VecX next(art.coord_count()), ref(art.coord_count());
+      integrate_joints(art, s.joint_q.data() + art.q_begin(), s.joint_qd.data() + art.qd_begin(), dt, ref.data());
+      for (int k = 0; k < art.coord_count(); ++k) next[k] = q_next[k][l];
+      EXPECT_LT(error_in_eps(next, ref, kEps<T>), 16) << "trial " << trial << " lane " << l;
+    }
+  }
+}
+
+TEST(BatchKernels, Float64IntegrationEqualsTheScalarKernelWithin16Eps) { expect_integration_agrees<double>(); }
+TEST(BatchKernels, Float32IntegrationEqualsTheScalarKernelWithin16Eps) { expect_integration_agrees<float>(); }
+
+template <typename T>
+void expect_sincos_within(double range, double ulps) {
+  using V = Lanes<T>;
+  double worst = 0;
+  for (int k = 0; k < 20000; ++k) {
+    V x, s, c;
+    for (int l = 0; l < kLanes<T>; ++l) x[l] = static_cast<T>(range * std::sin(0.37 * (k * kLanes<T> + l)));
+    lane_sincos<T>(x, &s, &c);
+    for (int l = 0; l < kLanes<T>; ++l) {
+      const long double xs = x[l];
+      // error in units of the precision's epsilon (absolute: sin and cos are at most 1)
+      worst = std::max(worst, static_cast<double>(std::abs(s[l] - std::sin(xs)) / kEps<T>));
+      worst = std::max(worst, static_cast<double>(std::abs(c[l] - std::cos(xs)) / kEps<T>));
+    }
+  }
+  EXPECT_LT(worst, ulps);
+}
+
+// worst seen 0.76 eps in both precisions
+TEST(LaneSinCos, Float64WithinOneEpsUpToTenThousandRadians) { expect_sincos_within<double>(1e4, 1); }
+TEST(LaneSinCos, Float32WithinOneEpsUpToAThousandRadians) { expect_sincos_within<float>(1e3, 1); }
+
+}  // namespace
+}  // namespace novaphy
