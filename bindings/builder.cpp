@@ -113,6 +113,8 @@ void bind_builder(py::module_& m) {
   auto builder = py::class_<ModelBuilder>(m, "ModelBuilder", "Builds a Model; every call checks its arguments.");
   builder.def(py::init<const Vec3&>(), py::arg("gravity") = Vec3(0, -9.81, 0))
       .def_property("gravity", &ModelBuilder::gravity, &ModelBuilder::set_gravity)
+      .def_property("precision", &ModelBuilder::precision, &ModelBuilder::set_precision,
+                    "Precision the solver's batched kernels step the finalized model in (Precision.Float64).")
       .def_property_readonly("body_count", &ModelBuilder::body_count)
       .def_property_readonly("joint_count", &ModelBuilder::joint_count)
       .def_property_readonly("shape_count", &ModelBuilder::shape_count)

@@ -99,6 +99,11 @@ void bind_model(py::module_& m) {
       .value("Fixed", JointType::Fixed)
       .value("Free", JointType::Free);
 
+  py::enum_<Precision>(m, "Precision",
+                       "The precision the solver's batched kernels step a model in (its arrays stay float64).")
+      .value("Float64", Precision::Float64)
+      .value("Float32", Precision::Float32);
+
   py::enum_<ShapeType>(m, "ShapeType", "Collision shape types.")
       .value("Plane", ShapeType::Plane)
       .value("Sphere", ShapeType::Sphere)
@@ -154,6 +159,7 @@ void bind_model(py::module_& m) {
   auto model = py::class_<Model>(m, "Model", "Read-only model: topology and parameters as flat arrays.");
   bind_counts(model);
   model.def_property_readonly("gravity", [](const Model& self) { return self.gravity; })
+      .def_readonly("precision", &Model::precision, "Precision of the solver's batched kernels for this model.")
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("joint_name", &Model::joint_name)
       .def_readonly("actuator_name", &Model::actuator_name)

@@ -38,6 +38,9 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("weld_fixed_joints", &Settings::weld_fixed_joints,
                      "Merge bodies held by Fixed joints into their parent's link so they cost nothing in the dynamics "
                      "(read when the solver is made).")
+      .def_readwrite("use_batch_kernels", &Settings::use_batch_kernels,
+                     "Step articulations that share joints, frames and axes (replicated worlds) a SIMD block of "
+                     "worlds at a time, in the model's precision; off: the scalar kernels for all.")
       .def_readwrite("profile_stages", &Settings::profile_stages,
                      "Accumulate each stage's wall time into solver.stage_seconds.")
       .def_readwrite("num_threads", &Settings::num_threads,
@@ -94,6 +97,8 @@ void bind_solver_featherstone(py::module_& m) {
           },
           "Seconds spent in each stage of step while settings.profile_stages is on, and the steps timed.")
       .def("reset_stage_seconds", &SolverFeatherstone::reset_stage_seconds, "Zeroes stage_seconds.")
+      .def_property_readonly("memory_bytes", &SolverFeatherstone::memory_bytes,
+                             "Bytes the solver holds: batched blocks, scalar scratch, step vectors.")
       .def_property_readonly(
           "diverged",
           [](py::object self) {

@@ -202,3 +202,41 @@ def test_settings_object_on_its_own():
     settings.num_iterations = 7
     solver.settings = settings
     assert solver.settings.num_iterations == 7
+
+
+def pendulum_grid(precision, worlds=20):
+    robot = novaphy.ModelBuilder()
+    body = robot.add_body(novaphy.RigidBody.from_box(1.0, np.array([0.1, 0.5, 0.1])))
+    dof = novaphy.JointDofConfig()
+    dof.axis = np.array([0.0, 0.0, 1.0])
+    robot.add_articulation([robot.add_joint_revolute(parent=-1, child=body, axis=dof)])
+    batch = novaphy.ModelBuilder()
+    batch.precision = precision
+    batch.replicate(robot, worlds)
+    return batch.finalize()
+
+
+def swing(model, batched=True, steps=200):
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.use_batch_kernels = batched
+    state, control = model.state(), model.control()
+    state.joint_qd[:] = np.linspace(-2, 2, model.joint_dof_count)
+    contacts = novaphy.CollisionPipeline(model).contacts()
+    for _ in range(steps):
+        solver.step(state, state, control, contacts, 1.0 / 240.0)
+    return solver, state
+
+
+def test_batched_precisions_follow_the_scalar_kernels():
+    model64 = pendulum_grid(novaphy.Precision.Float64)
+    assert model64.precision == novaphy.Precision.Float64
+    solver, batched = swing(model64)
+    _, scalar = swing(model64, batched=False)
+    np.testing.assert_allclose(batched.joint_q, scalar.joint_q, atol=1e-12)
+    assert solver.memory_bytes > 0
+    model32 = pendulum_grid(novaphy.Precision.Float32)
+    assert model32.precision == novaphy.Precision.Float32
+    _, single = swing(model32)
+    # float32 steps round the state to float each step: close to float64, and exactly representable
+    np.testing.assert_allclose(single.joint_q, scalar.joint_q, atol=1e-4)
+    assert np.array_equal(single.joint_q.astype(np.float32).astype(np.float64), single.joint_q)

@@ -1,0 +1,145 @@
+// The batched kernels on one core: CRBA (link inertias, composite inertias, H) + the fused L^T L
+// factor and solve, per scene x precision x worlds, in GFLOP/s from the flop model below and as a
+// fraction of this core's FP32 FMA peak, which BM_FmaPeak measures in the same program.
+//   novaphy_bench_batch --benchmark_format=json
+// Arguments of BM_CrbaCholesky: scene (0 chain15, 1 quadruped, 2 humanoid), precision (0 float64,
+// 1 float32), worlds. items_per_second is worlds per second.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <random>
+#include <vector>
+
+#include "engine/mjcf_import.h"
+#include "kernels/batch.h"
+
+namespace novaphy {
+namespace {
+
+const char* const kScenes[] = {NOVAPHY_SCENE_DIR "/chain15.xml", NOVAPHY_SCENE_DIR "/quadruped.xml",
+                               NOVAPHY_HUMANOID_XML};
+
+// FP32 FMA peak of one core in GFLOP/s, measured once: 12 independent accumulators of one vector
+// register each (enough to cover the FMA latency on two pipes), 2 flops per lane per FMA
+double fma_peak() {
+  static const double peak = [] {
+    using V = Lanes<float>;
+    constexpr int kAccumulators = 12, kInner = 20'000'000;
+    V acc[kAccumulators];
+    for (int k = 0; k < kAccumulators; ++k) acc[k] = V{} + 0.001f * static_cast<float>(k);
+    V a = V{} + 0.999999f, b = V{} + 1e-7f;
+    benchmark::DoNotOptimize(a);
+    benchmark::DoNotOptimize(b);
+    const auto start = std::chrono::steady_clock::now();
+    for (int i = 0; i < kInner; ++i)
+      for (int k = 0; k < kAccumulators; ++k) acc[k] = acc[k] * a + b;
+    benchmark::DoNotOptimize(acc);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return 2.0 * kLanes<float> * kAccumulators * kInner / seconds * 1e-9;
+  }();
+  return peak;
+}
+
+void BM_FmaPeak(benchmark::State& bm) {
+  for (auto _ : bm) benchmark::DoNotOptimize(fma_peak());
+  bm.counters["GFLOPs"] = fma_peak();
+}
+BENCHMARK(BM_FmaPeak);
+
+// flops per world of link inertias + CRBA + fused factor and solve, counted from the kernels'
+// arithmetic (an FMA is two flops; sqrt and division one each)
+template <typename T>
+double crba_cholesky_flops(const BatchTopology<T>& topo) {
+  double flops = 0;
+  const int n = static_cast<int>(topo.link.size());
+  flops += n * 123.0;  // batch_link_inertia: R c + p - o (21), R I R^T (75), h (3), J (24)
+  for (const auto& L : topo.link) flops += L.parent >= 0 ? 10 : 0;  // composite inertias
+  for (int k = 0; k < topo.dof_count; ++k) {
+    const int m = topo.ancestor_start[k + 1] - topo.ancestor_start[k];
+    flops += 42 + 11.0 * (m + 1) + 1;  // I s, s . (I s) for k and its ancestors, armature
+    flops += 2 + m + m * (m + 1);      // sqrt and reciprocal, row scaling, outer-product update
+    flops += 1 + 2.0 * m;              // fused L^T y = x
+    flops += 1 + 2.0 * m;              // L x = y
+  }
+  return flops;
+}
+
+template <typename T>
+void crba_cholesky(benchmark::State& bm) {
+  using V = Lanes<T>;
+  constexpr int W = kLanes<T>;
+  ModelBuilder builder;
+  import_mjcf(builder, kScenes[bm.range(0)]);
+  const Model model = builder.finalize();
+  const ArticulationView art = model.articulation(0);
+  const BatchTopology<T> topo(art);
+  const int worlds = static_cast<int>(bm.range(2)), blocks = (worlds + W - 1) / W;
+  const int n = art.link_count(), nv = art.dof_count();
+  // per block: parameters, coordinates, kinematics, S, o, H and the right-hand side
+  std::vector<V> params(10 * n + 4 * nv), q(static_cast<size_t>(blocks) * art.coord_count());
+  std::vector<BatchWork<T>> work(blocks);
+  std::vector<V> S(static_cast<size_t>(blocks) * 6 * nv), o(3 * blocks),
+      H(static_cast<size_t>(blocks) * topo.packed_size());
+  std::vector<V> x(static_cast<size_t>(blocks) * nv);
+  const BatchParams<T> P{params.data(),
+                         params.data() + n,
+                         params.data() + 4 * n,
+                         params.data() + 10 * n,
+                         params.data() + 10 * n + nv,
+                         params.data() + 10 * n + 2 * nv,
+                         params.data() + 10 * n + 3 * nv};
+  for (int i = 0; i < n; ++i) {
+    const int b = art.body(i);
+    params[i] = V{} + static_cast<T>(model.body_mass[b]);
+    for (int m = 0; m < 3; ++m) params[n + 3 * i + m] = V{} + static_cast<T>(model.body_com[3 * b + m]);
+    const int order[6] = {0, 4, 8, 1, 2, 5};
+    for (int m = 0; m < 6; ++m) params[4 * n + 6 * i + m] = V{} + static_cast<T>(model.body_inertia[9 * b + order[m]]);
+  }
+  for (int k = 0; k < nv; ++k) params[10 * n + k] = V{} + static_cast<T>(model.joint_armature[k]);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> angle(-1, 1);
+  for (int b = 0; b < blocks; ++b) {
+    work[b].resize(topo);
+    V* qb = q.data() + static_cast<size_t>(b) * art.coord_count();
+    for (int c = 0; c < art.coord_count(); ++c)
+      for (int l = 0; l < W; ++l) qb[c][l] = static_cast<T>(model.joint_q0[c] + 0.3 * angle(rng));
+    batch_kinematics(topo, qb, work[b], &o[3 * b]);
+    batch_subspace(topo, work[b], &o[3 * b], &S[static_cast<size_t>(b) * 6 * nv]);
+  }
+  for (auto _ : bm) {
+    for (int b = 0; b < blocks; ++b) {
+      V* Hb = &H[static_cast<size_t>(b) * topo.packed_size()];
+      V* xb = &x[static_cast<size_t>(b) * nv];
+      for (int k = 0; k < nv; ++k) xb[k] = V{} + 1;
+      batch_link_inertia(topo, P, &o[3 * b], work[b]);
+      batch_mass_matrix(topo, P, &S[static_cast<size_t>(b) * 6 * nv], work[b], Hb);
+      benchmark::DoNotOptimize(batch_factor(topo, Hb, xb));
+      batch_solve_lower(topo, Hb, xb);
+    }
+    benchmark::ClobberMemory();
+  }
+  const double flops = crba_cholesky_flops(topo) * blocks * W;
+  bm.SetItemsProcessed(bm.iterations() * worlds);
+  bm.counters["GFLOPs"] =
+      benchmark::Counter(flops * 1e-9 * static_cast<double>(bm.iterations()), benchmark::Counter::kIsRate);
+  bm.counters["flops_per_world"] = crba_cholesky_flops(topo);
+  bm.counters["fma_peak_GFLOPs"] = fma_peak();  // the report divides GFLOPs by it
+  bm.counters["scene"] = static_cast<double>(bm.range(0));
+  bm.counters["precision"] = static_cast<double>(bm.range(1));
+  bm.counters["worlds"] = worlds;
+}
+
+void BM_CrbaCholesky(benchmark::State& bm) {
+  if (bm.range(1) == 1)
+    crba_cholesky<float>(bm);
+  else
+    crba_cholesky<double>(bm);
+}
+BENCHMARK(BM_CrbaCholesky)
+    ->ArgsProduct({{0, 1, 2}, {0, 1}, {kLanes<float>, 64, 1024, 4096}})
+    ->ArgNames({"scene", "precision", "worlds"});
+
+}  // namespace
+}  // namespace novaphy
+
+BENCHMARK_MAIN();

@@ -1,0 +1,150 @@
+"""Turns the JSON of novaphy_bench_step and novaphy_bench_batch (Google Benchmark, --benchmark_format=json)
+into the README's markdown tables and a throughput plot.
+
+    /usr/bin/python3 tools/bench_report.py step.json batch.json [--out PREFIX]
+
+Writes PREFIX.md and PREFIX.png (default bench/results/bench). Robot-steps per second are medians over
+repetitions when the JSON has them; ratios set NovaPhy against MuJoCo measured in the same run.
+"""
+
+import argparse
+import json
+import os
+import statistics
+from collections import defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (after the headless backend is chosen)
+
+STEP_SCENES = ["chain15", "quadruped, no floor", "quadruped standing", "humanoid.xml"]
+BATCH_SCENES = ["chain15", "quadruped", "humanoid.xml"]
+PRECISION = ["float64", "float32"]
+
+
+def runs(path):
+    """(name without repetition suffix, the benchmark's entries) of every iteration run in a JSON file."""
+    with open(path) as f:
+        data = json.load(f)
+    grouped = defaultdict(list)
+    for b in data["benchmarks"]:
+        if b.get("run_type", "iteration") != "iteration":
+            continue
+        grouped[b["run_name"] if "run_name" in b else b["name"]].append(b)
+    return grouped, data.get("context", {})
+
+
+def median(entries, key):
+    return statistics.median(float(e[key]) for e in entries)
+
+
+def step_tables(path):
+    grouped, context = runs(path)
+    rate = {}  # (engine, scene, precision, worlds, threads) -> robot-steps/s
+    memory = {}  # (scene, precision) -> (bytes per world at 4096 worlds, state + H + factor bytes)
+    for name, entries in grouped.items():
+        engine = "novaphy" if name.startswith("BM_NovaPhyStep") else "mujoco"
+        e = entries[0]
+        key = (engine, int(e["scene"]), int(e["precision"]), int(e["worlds"]), int(e["threads"]))
+        rate[key] = median(entries, "items_per_second")
+        if engine == "novaphy" and int(e["worlds"]) == 4096 and int(e["threads"]) == 1:
+            memory[(key[1], key[2])] = (float(e["solver_bytes_per_world"]), float(e["state_bytes_per_world"]),
+                                        float(e["h_factor_bytes_per_world"]))
+    all_threads = max(k[4] for k in rate)
+    lines = [
+        f"Whole steps, robot-steps/s (medians), {all_threads} threads unless noted; MuJoCo 2.2.2 steps the same",
+        "MJCF with one mjData per world in the same OpenMP loop. Ratios are NovaPhy / MuJoCo.",
+        "",
+        "| scene | worlds | MuJoCo | NovaPhy float64 | ratio | NovaPhy float32 | ratio |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    worlds_list = sorted({k[3] for k in rate})
+    for scene in sorted({k[1] for k in rate}):
+        for worlds in worlds_list:
+            mj = rate.get(("mujoco", scene, 0, worlds, all_threads))
+            if mj is None:
+                continue
+            cells = [STEP_SCENES[scene], f"{worlds}", f"{mj:,.0f}"]
+            for precision in (0, 1):
+                n = rate.get(("novaphy", scene, precision, worlds, all_threads))
+                cells += [f"{n:,.0f}", f"{n / mj:.1f}x"] if n else ["", ""]
+            lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "Thread scaling at 4096 worlds (robot-steps/s, one thread and all):", ""]
+    lines += ["| scene | engine | 1 thread | all threads | speed-up |", "|---|---|---:|---:|---:|"]
+    for scene in sorted({k[1] for k in rate}):
+        for engine, precision, label in (("mujoco", 0, "MuJoCo"), ("novaphy", 0, "NovaPhy float64"),
+                                         ("novaphy", 1, "NovaPhy float32")):
+            one = rate.get((engine, scene, precision, 4096, 1))
+            many = rate.get((engine, scene, precision, 4096, all_threads))
+            if one and many:
+                lines.append(f"| {STEP_SCENES[scene]} | {label} | {one:,.0f} | {many:,.0f} | {many / one:.2f}x |")
+    lines += ["", "Memory per world at 4096 worlds, bytes: the solver's (batched blocks, scalar scratch, step vectors)",
+              "plus the State's arrays, against the State's arrays plus H and its factor:", "",
+              "| scene | precision | solver | state | solver + state | state + H + factor | ratio |",
+              "|---|---|---:|---:|---:|---:|---:|"]
+    for (scene, precision), (solver, state, h) in sorted(memory.items()):
+        lines.append(f"| {STEP_SCENES[scene]} | {PRECISION[precision]} | {solver:,.0f} | {state:,.0f} "
+                     f"| {solver + state:,.0f} | {state + h:,.0f} | {(solver + state) / (state + h):.2f} |")
+    return lines, rate, all_threads, context
+
+
+def batch_tables(path):
+    grouped, _ = runs(path)
+    peak = None
+    rows = []
+    for name, entries in grouped.items():
+        if name.startswith("BM_FmaPeak"):
+            peak = median(entries, "GFLOPs")
+            continue
+        e = entries[0]
+        rows.append((int(e["scene"]), int(e["precision"]), int(e["worlds"]), median(entries, "GFLOPs"),
+                     float(e["flops_per_world"]), median(entries, "items_per_second")))
+    lines = [f"Batched CRBA + fused L^T L factor and solve on one core (flop model in bench/batch_bench.cpp);",
+             f"measured FP32 FMA peak of the core: {peak:.1f} GFLOP/s.", "",
+             "| scene | precision | worlds | flops/world | worlds/s | GFLOP/s | % of FP32 peak |",
+             "|---|---|---:|---:|---:|---:|---:|"]
+    for scene, precision, worlds, gflops, flops, items in sorted(rows):
+        lines.append(f"| {BATCH_SCENES[scene]} | {PRECISION[precision]} | {worlds} | {flops:,.0f} | {items:,.0f} "
+                     f"| {gflops:.1f} | {100 * gflops / peak:.0f} % |")
+    return lines
+
+
+def plot(rate, all_threads, path):
+    scenes = sorted({k[1] for k in rate})
+    fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.6), squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
+        for engine, precision, label, style in (("mujoco", 0, "MuJoCo 2.2.2", "k-o"),
+                                                ("novaphy", 0, "NovaPhy float64", "b-s"),
+                                                ("novaphy", 1, "NovaPhy float32", "r-^")):
+            points = sorted((k[3], v) for k, v in rate.items()
+                            if k[0] == engine and k[1] == scene and k[2] == precision and k[4] == all_threads)
+            if points:
+                ax.loglog([p[0] for p in points], [p[1] for p in points], style, label=label, ms=4)
+        ax.set_title(STEP_SCENES[scene])
+        ax.set_xlabel("worlds")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].set_ylabel(f"robot-steps/s ({all_threads} threads)")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("step_json")
+    parser.add_argument("batch_json")
+    parser.add_argument("--out", default="bench/results/bench")
+    args = parser.parse_args()
+    step_lines, rate, all_threads, context = step_tables(args.step_json)
+    lines = [f"<!-- {os.path.basename(args.step_json)}: {context.get('num_cpus', '?')} CPUs at "
+             f"{context.get('mhz_per_cpu', '?')} MHz, {context.get('date', '')} -->", ""]
+    lines += step_lines + [""] + batch_tables(args.batch_json)
+    with open(args.out + ".md", "w") as f:
+        f.write("\n".join(lines) + "\n")
+    plot(rate, all_threads, args.out + ".png")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
