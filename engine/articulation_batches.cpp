@@ -161,6 +161,7 @@ class Batches final : public ArticulationBatches {
         const size_t nl = groups_[g].limited.size();
         per_thread[g].rows.resize(nl * (groups_[g].topo.dof_count + 7));
         per_thread[g].row_flags.resize(2 * nl);
+        per_thread[g].bodies.resize(13 * groups_[g].bodies());
       }
     }
   }
@@ -175,7 +176,8 @@ class Batches final : public ArticulationBatches {
   bool active(int a) const override { return slot_[a].group >= 0 && groups_[slot_[a].group].enabled; }
 
   void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt_, bool refactor, bool fuse,
-                bool wrenches, Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) override {
+                bool wrenches, bool drives, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
+                int threads) override {
     for (Group& G : groups_) G.refactor = refactor || !G.factored;
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       const T dt = static_cast<T>(dt_);
@@ -202,10 +204,14 @@ class Batches final : public ArticulationBatches {
       gather(qd_off, tau, nv, x);
       V* kd = w.drive.data();
       V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv;
-      gather(qd_off, control.joint_target_kd.data(), nv, kd);
-      gather(qd_off, control.joint_target_vel.data(), nv, vt);
-      gather(qd_off, control.joint_target_ke.data(), nv, ke);
-      gather(qd_off, control.joint_target_pos.data(), nv, qt);
+      if (drives) {
+        gather(qd_off, control.joint_target_kd.data(), nv, kd);
+        gather(qd_off, control.joint_target_vel.data(), nv, vt);
+        gather(qd_off, control.joint_target_ke.data(), nv, ke);
+        gather(qd_off, control.joint_target_pos.data(), nv, qt);
+      } else {
+        std::fill(w.drive.begin(), w.drive.end(), V{});
+      }
       for (int k = 0; k < nv; ++k) {
         const V qd = w.qd[k];
         x[k] += -w.tau[k] - P.damping[k] * qd + kd[k] * (vt[k] - qd);
@@ -366,9 +372,12 @@ class Batches final : public ArticulationBatches {
       batch_velocity(topo, S, w.qd.data(), w);
       const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
       const int* body = &G.body[static_cast<size_t>(b) * W * nb];
-      // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame
-      auto store = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
-        V c[3], x[13];
+      // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
+      // every body's 13 numbers in lanes first, then each world's written out in order
+      V* x_all = w.bodies.data();
+      auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
+        V* x = x_all + 13 * k;
+        V c[3];
         mat_vec(p, Q, com, o, c);
         for (int m = 0; m < 3; ++m) x[m] = p[m];
         for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
@@ -376,15 +385,9 @@ class Batches final : public ArticulationBatches {
         x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
         x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
         for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
-        for (int l = 0; l < lanes; ++l) {
-          Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
-          Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
-          for (int m = 0; m < 7; ++m) q[m] = x[m][l];
-          for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
-        }
       };
-      for (int i = 0; i < n; ++i) store(i, &w.p[3 * i], &w.Q[4 * i], G.body_com(b) + 3 * i, &w.v[6 * i]);
       const V* body_com = G.body_com(b);
+      for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
       for (size_t k = 0; k < G.welds.size(); ++k) {
         const Weld& weld = G.welds[k];
         V p[3], Q[4], d[3];
@@ -392,8 +395,23 @@ class Batches final : public ArticulationBatches {
         for (int m = 0; m < 3; ++m) d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
         for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
         quat_product(&w.Q[4 * weld.link], weld.q, Q);
-        store(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
+        put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
       }
+      // the next block's bodies are fetched for writing while this block's are written
+      if (b + 1 < G.blocks)
+        for (int l = 0; l < W * nb; ++l) {
+          const int next = G.body[static_cast<size_t>(b + 1) * W * nb + l];
+          __builtin_prefetch(out.body_q.data() + 7 * next, 1);
+          __builtin_prefetch(out.body_qd.data() + 6 * next, 1);
+        }
+      for (int l = 0; l < lanes; ++l)
+        for (int k = 0; k < nb; ++k) {
+          const V* x = x_all + 13 * k;
+          Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
+          Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
+          for (int m = 0; m < 7; ++m) q[m] = x[m][l];
+          for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
+        }
     });
   }
 
@@ -431,7 +449,7 @@ class Batches final : public ArticulationBatches {
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
-                              &w.f_ext, &w.q_next, &w.drive})
+                              &w.f_ext, &w.q_next, &w.drive, &w.rows, &w.bodies})
           n += v->size() * sizeof(V);
     return n;
   }

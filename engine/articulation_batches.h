@@ -41,10 +41,12 @@ class ArticulationBatches {
   // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =
   // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. H is recomputed and
   // factored when `refactor` (else the last factor is reused); `wrenches`: in.body_f has a nonzero
-  // entry. qdd_out (when given) receives M^-1 (...) itself: with dt = 0 and zero drive gains, the
-  // forward dynamics. factor_failure[a] = the dof whose pivot failed, or left alone
+  // entry; `drives`: the control has a nonzero PD gain. qdd_out (when given) receives M^-1 (...)
+  // itself: with dt = 0 and no drives, the forward dynamics. factor_failure[a] = the dof whose pivot
+  // failed, or left alone
   virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt, bool refactor, bool fuse,
-                        bool wrenches, Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) = 0;
+                        bool wrenches, bool drives, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
+                        int threads) = 0;
   // joint-limit rows of active articulations whose lane `skip[a]` is 0 (those touched by no contact),
   // solved here a block at a time: the same rows, warm start and PGS sweeps as the solver's scalar
   // path, with each lane's inactive rows masked. qd [dof] and impulse [dof][2] (the warm-start

@@ -68,13 +68,10 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
   const std::unique_ptr<ArticulationBatches> batches =
       ArticulationBatches::make(model, art, batched, std::vector<std::vector<WeldedBody>>(model.articulation_count),
                                 model.body_com, model.precision);
-  Control passive = control;
-  std::fill(passive.joint_target_ke.begin(), passive.joint_target_ke.end(), 0);
-  std::fill(passive.joint_target_kd.begin(), passive.joint_target_kd.end(), 0);
   VecX qdd = VecX::Zero(model.joint_dof_count);
   std::vector<int> failure(model.articulation_count, -1);
   const bool wrenches = std::any_of(state.body_f.begin(), state.body_f.end(), [](Scalar f) { return f != 0; });
-  batches->dynamics(state, passive, tau.data(), 0, true, true, wrenches, nullptr, qdd.data(), failure.data(), 1);
+  batches->dynamics(state, control, tau.data(), 0, true, true, wrenches, false, nullptr, qdd.data(), failure.data(), 1);
   for (int a = 0; a < model.articulation_count; ++a)
     if (failure[a] >= 0) fail_not_positive_definite(model, art[a], failure[a] - art[a].qd_begin());
   return qdd;
@@ -89,9 +86,14 @@ void check_finite_state(const State& state, bool* any_wrench) {
   if (any_wrench) *any_wrench = any;
 }
 
-void check_finite_control(const Control& control) {
+void check_finite_control(const Control& control, bool* any_drive) {
 #define NOVAPHY_CHECK_FINITE_CONTROL(T, name, count, width) check_finite(control.name, #name);
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FINITE_CONTROL)
+#undef NOVAPHY_CHECK_FINITE_CONTROL
+  // (per dof: small beside the per-body arrays)
+  if (any_drive)
+    *any_drive = check_finite(control.joint_target_ke, "joint_target_ke") ||
+                 check_finite(control.joint_target_kd, "joint_target_kd");
 }
 
 void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state) {

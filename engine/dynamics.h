@@ -45,6 +45,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
 // (when given) is set to whether body_f holds a nonzero entry
 void check_finite_state(const State& state, bool* any_wrench = nullptr);
 // throws Error naming the first non-finite entry of any control array
-void check_finite_control(const Control& control);
+// any_drive (when given) is set to whether a PD gain (joint_target_ke or joint_target_kd) is nonzero
+void check_finite_control(const Control& control, bool* any_drive = nullptr);
 
 }  // namespace novaphy

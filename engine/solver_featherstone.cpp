@@ -226,7 +226,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   check_finite_state(in, &wrenches_);
-  check_finite_control(control);
+  check_finite_control(control, &drives_);
 }
 
 void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt) {
@@ -241,8 +241,8 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
       batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0 && !settings.use_tile_gemm;
   if (batch_step_) {
     batches_->enable(settings.aba_min_dofs);
-    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, qd_.data(), nullptr,
-                       factor_failure_.data(), settings.num_threads);
+    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, drives_, qd_.data(),
+                       nullptr, factor_failure_.data(), settings.num_threads);
   }
 
   for_each_articulation([&](int a) {

@@ -145,6 +145,7 @@ class SolverFeatherstone {
   std::unique_ptr<ArticulationBatches> batches_;
   bool batch_step_ = false;
   bool wrenches_ = false;              // the step's input has a nonzero body_f
+  bool drives_ = false;                // the step's control has a nonzero PD gain
   std::vector<std::uint8_t> touched_;  // per articulation: 1 where a contact of this step touches it
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;

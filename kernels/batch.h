@@ -79,6 +79,7 @@ struct BatchWork {
   std::vector<Lanes<T>> drive;          // [4][dof] PD drive gains and targets: kd, target velocity, ke, target position
   std::vector<Lanes<T>> rows;           // the batched limit rows' work (sized by their owner)
   std::vector<std::uint8_t> row_flags;  // and their per-row flags
+  std::vector<Lanes<T>> bodies;         // [body][13] body_q and body_qd on their way out (sized by the owner)
 
   void resize(const BatchTopology<T>& topo);
 };
