@@ -299,14 +299,16 @@ class Batches final : public ArticulationBatches {
         // z_m = M^-1 e_k for each limited dof k (J = +-e_k: M^-1 J^T = +-z_m, J M^-1 J^T = z_m[k]).
         // The sweeps read qd only at limited dofs: those are kept up to date (v), the whole of qd
         // takes the impulses once at the end
-        for (int m = 0; m < nl; ++m) batch_solve_unit(G.topo, G.block_H(b), G.limited[m], col + m * nv);
-        V* v = active + 2 * nl;  // [limited]
-        for (int m = 0; m < nl; ++m) v[m] = w.qd[G.limited[m]];
         std::uint8_t* on_anywhere = w.row_flags.data();  // rows some lane of the block has
         for (int r = 0; r < 2 * nl; ++r) {
           on_anywhere[r] = 0;
           for (int l = 0; l < W; ++l) on_anywhere[r] |= active[r][l] != 0;
         }
+        auto dof_on_anywhere = [&](int m) { return on_anywhere[2 * m] || on_anywhere[2 * m + 1]; };
+        for (int m = 0; m < nl; ++m)
+          if (dof_on_anywhere(m)) batch_solve_unit(G.topo, G.block_H(b), G.limited[m], col + m * nv);
+        V* v = active + 2 * nl;  // [limited]
+        for (int m = 0; m < nl; ++m) v[m] = w.qd[G.limited[m]];
         auto row_on_anywhere = [&](int r) { return on_anywhere[r] != 0; };
         auto apply = [&](int m, const V& signed_impulse) {
           const V* z = col + m * nv;
@@ -330,6 +332,7 @@ class Batches final : public ArticulationBatches {
             lambda[r] = next;
           }
         for (int m = 0; m < nl; ++m) {
+          if (!dof_on_anywhere(m)) continue;
           const V net = lambda[2 * m] - lambda[2 * m + 1];
           const V* z = col + m * nv;
           for (int j = 0; j < nv; ++j) w.qd[j] += z[j] * net;

@@ -123,6 +123,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   }
   diverged_.assign(model.articulation_count, 0);
   touched_.assign(model.articulation_count, 0);
+  limits_batched_.assign(model.articulation_count, 0);
   std::vector<std::uint8_t> batchable(model.articulation_count, 0);
   std::vector<std::vector<WeldedBody>> welded(model.articulation_count);
   for (int a = 0; a < model.articulation_count; ++a) {
@@ -203,6 +204,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     limits.warmstarting_factor = settings.warmstarting_factor;
     limits.use_warmstarting = settings.use_warmstarting;
     batches_->solve_limits(in, touched_.data(), limits, dt, qd_.data(), limit_impulse_.data(), settings.num_threads);
+    for (size_t a = 0; a < art_.size(); ++a) limits_batched_[a] = batches_->solves_limits(a, touched_.data());
   }
   build_limit_rows(in, dt);
   lap(stage_seconds_.limit_rows);

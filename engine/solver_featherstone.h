@@ -116,7 +116,7 @@ class SolverFeatherstone {
   // true when articulation a is stepped by the batched kernels this step
   bool on_batch(int a) const { return batch_step_ && batches_->active(a); }
   // true when articulation a's limit rows are solved in its block this step (no contact touches it)
-  bool limits_in_batch(int a) const { return batch_step_ && batches_->solves_limits(a, touched_.data()); }
+  bool limits_in_batch(int a) const { return batch_step_ && limits_batched_[a]; }
   // articulation a's scalar scratch, sized on first use
   ArticulationScratch& scratch(int a);
 
@@ -144,9 +144,10 @@ class SolverFeatherstone {
   std::vector<ArticulationScratch> scratch_;
   std::unique_ptr<ArticulationBatches> batches_;
   bool batch_step_ = false;
-  bool wrenches_ = false;              // the step's input has a nonzero body_f
-  bool drives_ = false;                // the step's control has a nonzero PD gain
-  std::vector<std::uint8_t> touched_;  // per articulation: 1 where a contact of this step touches it
+  bool wrenches_ = false;                     // the step's input has a nonzero body_f
+  bool drives_ = false;                       // the step's control has a nonzero PD gain
+  std::vector<std::uint8_t> touched_;         // per articulation: 1 where a contact of this step touches it
+  std::vector<std::uint8_t> limits_batched_;  // per articulation: its limit rows solved in its block this step
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;
   std::vector<int> rotational_dof_;  // dofs scaled by angular damping
