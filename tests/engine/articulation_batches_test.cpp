@@ -111,6 +111,39 @@ TEST(ArticulationBatches, Float64MatchesTheScalarKernels) {
   }
 }
 
+TEST(ArticulationBatches, LimitRowsSolvedInBlocksMatchTheScalarRows) {
+  // the hanging quadruped pushed against its limits: every leg joint beyond its range at the start
+  const Model model = replicated(quadruped(false), 6, Precision::Float64);
+  State batched = model.state();
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (model.joint_type[j] != static_cast<int>(JointType::Revolute)) continue;
+    const int g = model.joint_qd_start[j];
+    batched.joint_q[model.joint_q_start[j]] = model.joint_limit_upper[g] + 0.05;
+    batched.joint_qd[g] = 1;
+  }
+  State scalar = model.state();
+  scalar.assign(batched);
+  SolverFeatherstoneSettings settings;
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  SolverFeatherstone on(model, settings);
+  settings.use_batch_kernels = false;
+  SolverFeatherstone off(model, settings);
+  const Control control = model.control();
+  for (int k = 0; k < 100; ++k) {
+    on.step(batched, batched, control, contacts, kDt);
+    off.step(scalar, scalar, control, contacts, kDt);
+  }
+  EXPECT_LT(max_relative_difference(batched.joint_q, scalar.joint_q), 1e-10);
+  EXPECT_LT(max_relative_difference(batched.joint_qd, scalar.joint_qd), 1e-10);
+  // the limits held: every leg joint back within its range, less the slop and a step's motion
+  for (int j = 0; j < model.joint_count; ++j) {
+    if (model.joint_type[j] != static_cast<int>(JointType::Revolute)) continue;
+    const int g = model.joint_qd_start[j];
+    EXPECT_LT(batched.joint_q[model.joint_q_start[j]], model.joint_limit_upper[g] + 0.02) << "joint " << j;
+  }
+}
+
 TEST(ArticulationBatches, Float32StaysCloseToFloat64) {
   EXPECT_LT(batched_against_scalar(scene("chain15.xml"), 5, Precision::Float32, 100), 1e-3);
   EXPECT_LT(batched_against_scalar(quadruped(false), 5, Precision::Float32, 100), 1e-3);
