@@ -153,6 +153,9 @@ class Batches final : public ArticulationBatches {
       for (int b = 0; b < G.blocks; ++b) blocks_.push_back({g, b});
     }
     work_.resize(std::max(1, omp_get_max_threads()));
+    std::size_t packed = 0;
+    for (const Group& G : groups_) packed = std::max<std::size_t>(packed, G.topo.packed_size());
+    lane_factor_.assign(work_.size(), LaneFactor{-1, 0, std::vector<Scalar>(packed)});
     for (auto& per_thread : work_) {
       per_thread.resize(groups_.size());
       for (size_t g = 0; g < groups_.size(); ++g) {
@@ -179,6 +182,10 @@ class Batches final : public ArticulationBatches {
                 bool wrenches, bool drives, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
                 int threads) override {
     for (Group& G : groups_) G.refactor = refactor || !G.factored;
+    ++step_;  // factors copied out by solve_mass before are stale
+    // one copy per thread of the rows' parallel loop (grows only when the thread count does)
+    if (static_cast<int>(lane_factor_.size()) < threads)
+      lane_factor_.resize(threads, LaneFactor{-1, 0, lane_factor_[0].L});
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       const T dt = static_cast<T>(dt_);
       const BatchTopology<T>& topo = G.topo;
@@ -419,9 +426,16 @@ class Batches final : public ArticulationBatches {
   }
 
   void solve_mass(int a, Scalar* x) const override {
+    // rows come a world at a time: its factor is copied out of the block once per step and thread
     const Slot& s = slot_[a];
     const Group& G = groups_[s.group];
-    batch_solve_lane(G.topo, G.block_H(s.block), s.lane, x);
+    LaneFactor& copy = lane_factor_[omp_get_thread_num()];
+    if (copy.articulation != a || copy.step != step_) {
+      batch_lane_factor(G.topo, G.block_H(s.block), s.lane, copy.L.data());
+      copy.articulation = a;
+      copy.step = step_;
+    }
+    batch_solve_packed(G.topo, copy.L.data(), x);
   }
 
   void point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const override {
@@ -449,6 +463,7 @@ class Batches final : public ArticulationBatches {
     for (const Group& G : groups_)
       n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size()) * sizeof(V) +
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int);
+    for (const LaneFactor& copy : lane_factor_) n += copy.L.size() * sizeof(Scalar);
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
@@ -561,8 +576,17 @@ class Batches final : public ArticulationBatches {
     }
   }
 
+  // a world's factor copied out of its block (solve_mass), per thread
+  struct LaneFactor {
+    int articulation = -1;
+    std::uint64_t step = 0;
+    std::vector<Scalar> L;
+  };
+
   const std::vector<ArticulationView>& art_;
   Vec3 gravity_;
+  std::uint64_t step_ = 0;  // dynamics calls so far
+  mutable std::vector<LaneFactor> lane_factor_;
   std::vector<Group> groups_;
   std::vector<std::pair<int, int>> blocks_;      // (group, block) in order
   std::vector<Slot> slot_;                       // per articulation

@@ -43,7 +43,8 @@ class ArticulationBatches {
   // factored when `refactor` (else the last factor is reused); `wrenches`: in.body_f has a nonzero
   // entry; `drives`: the control has a nonzero PD gain. qdd_out (when given) receives M^-1 (...)
   // itself: with dt = 0 and no drives, the forward dynamics. factor_failure[a] = the dof whose pivot
-  // failed, or left alone
+  // failed, or left alone. `threads`: the thread count of this step's parallel loops (solve_mass may
+  // be called from any of them)
   virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt, bool refactor, bool fuse,
                         bool wrenches, bool drives, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
                         int threads) = 0;

@@ -170,7 +170,7 @@ template <typename F>
 void SolverFeatherstone::for_each_articulation(F&& f) {
   // articulations are independent here: a static schedule over threads, no shared writes
   const int count = static_cast<int>(art_.size());
-  const int threads = settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads();
+  const int threads = thread_count();
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int a = 0; a < count; ++a) f(a);
 }
@@ -244,7 +244,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
   if (batch_step_) {
     batches_->enable(settings.aba_min_dofs);
     batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, drives_, qd_.data(),
-                       nullptr, factor_failure_.data(), settings.num_threads);
+                       nullptr, factor_failure_.data(), thread_count());
   }
 
   for_each_articulation([&](int a) {

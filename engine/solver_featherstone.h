@@ -4,6 +4,8 @@
 //   joint-limit rows through M^-1 J^T -> semi-implicit integration -> forward kinematics
 #pragma once
 
+#include <omp.h>
+
 #include <Eigen/LU>
 #include <cstdint>
 #include <memory>
@@ -113,6 +115,7 @@ class SolverFeatherstone {
   void integrate(const State& in, State& out, Scalar dt);
   template <typename F>
   void for_each_articulation(F&& f);
+  int thread_count() const { return settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads(); }
   // true when articulation a is stepped by the batched kernels this step
   bool on_batch(int a) const { return batch_step_ && batches_->active(a); }
   // true when articulation a's limit rows are solved in its block this step (no contact touches it)

@@ -492,19 +492,25 @@ void batch_solve_unit(const BatchTopology<T>& topo, const V<T>* L, int unit, V<T
 }
 
 template <typename T>
-void batch_solve_lane(const BatchTopology<T>& topo, const V<T>* L, int lane, double* x) {
-  auto l = [&](int i, int j) { return static_cast<double>(L[topo.row_start[i] + j][lane]); };
+void batch_lane_factor(const BatchTopology<T>& topo, const V<T>* L, int lane, double* out) {
+  for (int k = 0; k < topo.packed_size(); ++k) out[k] = L[k][lane];
+}
+
+template <typename T>
+void batch_solve_packed(const BatchTopology<T>& topo, const double* L, double* x) {
   for (int k = topo.dof_count - 1; k >= 0; --k) {
-    const double y = x[k] * l(k, k);
+    const double* Lk = L + topo.row_start[k];
+    const double y = x[k] * Lk[k];
     x[k] = y;
     for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
-      x[topo.ancestors[p]] -= l(k, topo.ancestors[p]) * y;
+      x[topo.ancestors[p]] -= Lk[topo.ancestors[p]] * y;
   }
   for (int k = 0; k < topo.dof_count; ++k) {
+    const double* Lk = L + topo.row_start[k];
     double y = x[k];
     for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
-      y -= l(k, topo.ancestors[p]) * x[topo.ancestors[p]];
-    x[k] = y * l(k, k);
+      y -= Lk[topo.ancestors[p]] * x[topo.ancestors[p]];
+    x[k] = y * Lk[k];
   }
 }
 
@@ -558,7 +564,8 @@ void batch_integrate(const BatchTopology<T>& topo, const V<T>* q, const V<T>* qd
   template void batch_solve(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                     \
   template void batch_solve_lower(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                               \
   template void batch_solve_unit(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*);                           \
-  template void batch_solve_lane(const BatchTopology<T>&, const Lanes<T>*, int, double*);                             \
+  template void batch_lane_factor(const BatchTopology<T>&, const Lanes<T>*, int, double*);                            \
+  template void batch_solve_packed(const BatchTopology<T>&, const double*, double*);                                  \
   template void batch_integrate(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, T, Lanes<T>*);
 
 NOVAPHY_BATCH_INSTANTIATE(float)

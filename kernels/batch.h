@@ -125,9 +125,12 @@ void batch_solve_lower(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>
 template <typename T>
 void batch_solve_unit(const BatchTopology<T>& topo, const Lanes<T>* L, int unit, Lanes<T>* x);
 
-// x = H^-1 x for the world in one lane (the constraint rows' M^-1 J^T), in double
+// the factor of the world in one lane, copied out packed in double (packed_size entries), and
+// x = H^-1 x with such a copy: the constraint rows' M^-1 J^T, many rows to one copy
 template <typename T>
-void batch_solve_lane(const BatchTopology<T>& topo, const Lanes<T>* L, int lane, double* x);
+void batch_lane_factor(const BatchTopology<T>& topo, const Lanes<T>* L, int lane, double* out);
+template <typename T>
+void batch_solve_packed(const BatchTopology<T>& topo, const double* L, double* x);
 
 // semi-implicit step of the coordinates: q_out = q (+) dt qd, quaternions by the exponential map
 template <typename T>
