@@ -74,28 +74,15 @@ void crba_cholesky(benchmark::State& bm) {
   const ArticulationView art = model.articulation(0);
   const BatchTopology<T> topo(art);
   const int worlds = static_cast<int>(bm.range(2)), blocks = (worlds + W - 1) / W;
-  const int n = art.link_count(), nv = art.dof_count();
+  const int nv = art.dof_count();
   // per block: parameters, coordinates, kinematics, S, o, H and the right-hand side
-  std::vector<V> params(10 * n + 4 * nv), q(static_cast<size_t>(blocks) * art.coord_count());
+  std::vector<V> params(batch_param_count(topo)), q(static_cast<size_t>(blocks) * art.coord_count());
   std::vector<BatchWork<T>> work(blocks);
   std::vector<V> S(static_cast<size_t>(blocks) * 6 * nv), o(3 * blocks),
       H(static_cast<size_t>(blocks) * topo.packed_size());
   std::vector<V> x(static_cast<size_t>(blocks) * nv);
-  const BatchParams<T> P{params.data(),
-                         params.data() + n,
-                         params.data() + 4 * n,
-                         params.data() + 10 * n,
-                         params.data() + 10 * n + nv,
-                         params.data() + 10 * n + 2 * nv,
-                         params.data() + 10 * n + 3 * nv};
-  for (int i = 0; i < n; ++i) {
-    const int b = art.body(i);
-    params[i] = V{} + static_cast<T>(model.body_mass[b]);
-    for (int m = 0; m < 3; ++m) params[n + 3 * i + m] = V{} + static_cast<T>(model.body_com[3 * b + m]);
-    const int order[6] = {0, 4, 8, 1, 2, 5};
-    for (int m = 0; m < 6; ++m) params[4 * n + 6 * i + m] = V{} + static_cast<T>(model.body_inertia[9 * b + order[m]]);
-  }
-  for (int k = 0; k < nv; ++k) params[10 * n + k] = V{} + static_cast<T>(model.joint_armature[k]);
+  const BatchParams<T> P = batch_params(topo, params.data());
+  for (int l = 0; l < W; ++l) batch_set_params(topo, art, l, params.data());
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> angle(-1, 1);
   for (int b = 0; b < blocks; ++b) {

@@ -67,15 +67,13 @@ class Batches final : public ArticulationBatches {
     int links() const { return static_cast<int>(topo.link.size()); }
     int bodies() const { return links() + static_cast<int>(welds.size()); }
     BatchParams<T> block_params(int b) const {
-      const int n = links(), nv = topo.dof_count;
-      const V* x = params.data() + static_cast<size_t>(b) * param_size;
-      return {x, x + n, x + 4 * n, x + 10 * n, x + 10 * n + nv, x + 10 * n + 2 * nv, x + 10 * n + 3 * nv};
+      return batch_params(topo, params.data() + static_cast<size_t>(b) * param_size);
     }
     V* block_params_data(int b) { return params.data() + static_cast<size_t>(b) * param_size; }
     // [body][3] each body's own centre of mass (a link's differs from its merged one with welds)
     const V* body_com(int b) const {
       const V* x = params.data() + static_cast<size_t>(b) * param_size;
-      return welds.empty() ? x + links() : x + 10 * links() + 4 * topo.dof_count;
+      return welds.empty() ? x + links() : x + batch_param_count(topo);
     }
     V* block_H(int b) { return H.data() + static_cast<size_t>(b) * topo.packed_size(); }
     const V* block_H(int b) const { return H.data() + static_cast<size_t>(b) * topo.packed_size(); }
@@ -124,7 +122,7 @@ class Batches final : public ArticulationBatches {
         for (const WeldedBody& b : welded[a]) G.body.push_back(b.body);
       }
       const int n = G.links(), nv = G.topo.dof_count;
-      G.param_size = 10 * n + 4 * nv + (G.welds.empty() ? 0 : 3 * G.bodies());
+      G.param_size = batch_param_count(G.topo) + (G.welds.empty() ? 0 : 3 * G.bodies());
       G.params.resize(static_cast<size_t>(G.blocks) * G.param_size);
       G.H.resize(static_cast<size_t>(G.blocks) * G.topo.packed_size());
       G.S.resize(static_cast<size_t>(G.blocks) * 6 * nv);
@@ -501,27 +499,12 @@ class Batches final : public ArticulationBatches {
   }
 
   void gather_params(Group& G, int b, const std::vector<Scalar>& com) {
-    const int n = G.links(), nv = G.topo.dof_count, nb = G.bodies();
+    const int nb = G.bodies();
     V* x = G.block_params_data(b);
-    V *mass = x, *c = x + n, *inertia = x + 4 * n, *armature = x + 10 * n, *damping = armature + nv,
-      *stiffness = damping + nv, *q_ref = stiffness + nv, *own_com = q_ref + nv;
+    V* own_com = x + batch_param_count(G.topo);  // with welded bodies: every body's own centre of mass
     for (int l = 0; l < W; ++l) {
-      const ArticulationView& art = art_[G.arts[b * W + l]];
+      batch_set_params(G.topo, art_[G.arts[b * W + l]], l, x);
       const int* body = &G.body[static_cast<size_t>(b * W + l) * nb];
-      for (int i = 0; i < n; ++i) {
-        mass[i][l] = static_cast<T>(art.body_mass[body[i]]);
-        for (int m = 0; m < 3; ++m) c[3 * i + m][l] = static_cast<T>(art.body_com[3 * body[i] + m]);
-        const Scalar* I = art.body_inertia + 9 * body[i];
-        const int order[6] = {0, 4, 8, 1, 2, 5};
-        for (int m = 0; m < 6; ++m) inertia[6 * i + m][l] = static_cast<T>(I[order[m]]);
-      }
-      for (int k = 0; k < nv; ++k) {
-        const int g = art.qd_begin() + k, coord = G.coord_of_dof[k];
-        armature[k][l] = static_cast<T>(art.joint_armature[g]);
-        damping[k][l] = static_cast<T>(art.joint_damping[g]);
-        stiffness[k][l] = static_cast<T>(art.joint_stiffness[g]);
-        q_ref[k][l] = static_cast<T>(coord < 0 ? 0 : art.joint_q_ref[art.q_begin() + coord]);
-      }
       if (!G.welds.empty())
         for (int k = 0; k < nb; ++k)
           for (int m = 0; m < 3; ++m) own_com[3 * k + m][l] = static_cast<T>(com[3 * body[k] + m]);

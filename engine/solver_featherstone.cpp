@@ -203,7 +203,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     limits.cfm = settings.cfm;
     limits.warmstarting_factor = settings.warmstarting_factor;
     limits.use_warmstarting = settings.use_warmstarting;
-    batches_->solve_limits(in, touched_.data(), limits, dt, qd_.data(), limit_impulse_.data(), settings.num_threads);
+    batches_->solve_limits(in, touched_.data(), limits, dt, qd_.data(), limit_impulse_.data(), thread_count());
     for (size_t a = 0; a < art_.size(); ++a) limits_batched_[a] = batches_->solves_limits(a, touched_.data());
   }
   build_limit_rows(in, dt);
@@ -553,7 +553,7 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   // divergence guard: an articulation whose state went non-finite or beyond divergence_speed is
   // flagged, and raised, kept as it was (Flag) or reset to the model's initial state (Reset)
-  if (batch_step_) batches_->integrate(in, qd_.data(), dt, q_next_.data(), settings.num_threads);
+  if (batch_step_) batches_->integrate(in, qd_.data(), dt, q_next_.data(), thread_count());
   for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();
@@ -575,7 +575,7 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
   std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
   if (&out != &in) out.body_f = in.body_f;
-  if (batch_step_) batches_->store_bodies(out, settings.num_threads);
+  if (batch_step_) batches_->store_bodies(out, thread_count());
   for_each_articulation([&](int a) {
     if (on_batch(a)) return;
     scratch(a);

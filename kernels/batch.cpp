@@ -163,6 +163,29 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
 }
 
 template <typename T>
+void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, V<T>* data) {
+  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  V<T>* x = data;
+  for (int i = 0; i < n; ++i) {
+    const int b = art.body(i);
+    x[i][lane] = static_cast<T>(art.body_mass[b]);
+    for (int m = 0; m < 3; ++m) x[n + 3 * i + m][lane] = static_cast<T>(art.body_com[3 * b + m]);
+    const int order[6] = {0, 4, 8, 1, 2, 5};  // xx yy zz xy xz yz of the row-major 3x3
+    for (int m = 0; m < 6; ++m) x[4 * n + 6 * i + m][lane] = static_cast<T>(art.body_inertia[9 * b + order[m]]);
+  }
+  for (int k = 0; k < nv; ++k) {
+    const int g = art.qd_begin() + k;
+    x[10 * n + k][lane] = static_cast<T>(art.joint_armature[g]);
+    x[10 * n + nv + k][lane] = static_cast<T>(art.joint_damping[g]);
+    x[10 * n + 2 * nv + k][lane] = static_cast<T>(art.joint_stiffness[g]);
+    x[10 * n + 3 * nv + k][lane] = 0;
+  }
+  for (const auto& L : topo.link)  // spring rest positions of the one-coordinate joints
+    if (L.type == JointType::Revolute || L.type == JointType::Prismatic)
+      x[10 * n + 3 * nv + L.qd_start][lane] = static_cast<T>(art.joint_q_ref[art.q_begin() + L.q_start]);
+}
+
+template <typename T>
 void BatchWork<T>::resize(const BatchTopology<T>& topo) {
   const size_t n = topo.link.size();
   Q.resize(4 * n), p.resize(3 * n), R.resize(9 * n);
@@ -552,6 +575,7 @@ void batch_integrate(const BatchTopology<T>& topo, const V<T>* q, const V<T>* qd
 #define NOVAPHY_BATCH_INSTANTIATE(T)                                                                                  \
   template struct BatchTopology<T>;                                                                                   \
   template struct BatchWork<T>;                                                                                       \
+  template void batch_set_params(const BatchTopology<T>&, const ArticulationView&, int, Lanes<T>*);                   \
   template void batch_kinematics(const BatchTopology<T>&, const Lanes<T>*, BatchWork<T>&, Lanes<T>*);                 \
   template void batch_subspace(const BatchTopology<T>&, const BatchWork<T>&, const Lanes<T>*, Lanes<T>*);             \
   template void batch_velocity(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, BatchWork<T>&);             \

@@ -64,6 +64,21 @@ struct BatchParams {
   const Lanes<T>* q_ref;      // [dof] spring rest position (Revolute, Prismatic)
 };
 
+// BatchParams over one buffer of batch_param_count lanes (mass, com, inertia, armature, damping,
+// stiffness, q_ref in that order), and lane `lane` of it filled from an articulation's model arrays
+template <typename T>
+int batch_param_count(const BatchTopology<T>& topo) {
+  return 10 * static_cast<int>(topo.link.size()) + 4 * topo.dof_count;
+}
+template <typename T>
+BatchParams<T> batch_params(const BatchTopology<T>& topo, const Lanes<T>* data) {
+  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  return {
+      data, data + n, data + 4 * n, data + 10 * n, data + 10 * n + nv, data + 10 * n + 2 * nv, data + 10 * n + 3 * nv};
+}
+template <typename T>
+void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, Lanes<T>* data);
+
 // one block's kinematics and per-link work, sized for a topology (a thread's scratch)
 template <typename T>
 struct BatchWork {

@@ -38,24 +38,10 @@ struct Block {
 
   Block(Model model_, std::mt19937& rng) : model(std::move(model_)), art(model.articulation(0)), topo(art) {
     w.resize(topo);
-    const int n = art.link_count(), nv = art.dof_count();
-    params.resize(10 * n + 4 * nv);
-    P = {params.data(),
-         params.data() + n,
-         params.data() + 4 * n,
-         params.data() + 10 * n,
-         params.data() + 10 * n + nv,
-         params.data() + 10 * n + 2 * nv,
-         params.data() + 10 * n + 3 * nv};
-    V* x = params.data();
-    for (int i = 0; i < n; ++i) {
-      const int b = art.body(i);
-      x[i] = V{} + static_cast<T>(model.body_mass[b]);
-      for (int m = 0; m < 3; ++m) x[n + 3 * i + m] = V{} + static_cast<T>(model.body_com[3 * b + m]);
-      const int order[6] = {0, 4, 8, 1, 2, 5};
-      for (int m = 0; m < 6; ++m) x[4 * n + 6 * i + m] = V{} + static_cast<T>(model.body_inertia[9 * b + order[m]]);
-    }
-    for (int k = 0; k < nv; ++k) x[10 * n + k] = V{} + static_cast<T>(model.joint_armature[art.qd_begin() + k]);
+    const int nv = art.dof_count();
+    params.resize(batch_param_count(topo));
+    P = batch_params(topo, params.data());
+    for (int l = 0; l < W; ++l) batch_set_params(topo, art, l, params.data());
     q.resize(art.coord_count()), qd.resize(nv), S.resize(6 * nv), o.resize(3), tau.resize(nv);
     H.resize(topo.packed_size());
     for (int l = 0; l < W; ++l) {
