@@ -33,9 +33,10 @@ class ArticulationBatches {
                                                    const std::vector<std::vector<WeldedBody>>& welded,
                                                    const std::vector<Scalar>& com, Precision precision);
 
-  // 1 where articulation a is stepped here while batches with at least `max_dofs` dofs are off
-  // (those take the solver's ABA path)
+  // batches of fewer than `max_dofs` dofs on, the others off (those take the solver's ABA path; a
+  // batch switched off refactors when it is next on)
   virtual void enable(int max_dofs) = 0;
+  // true when articulation a is in a batch that is on
   virtual bool active(int a) const = 0;
 
   // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =

@@ -245,6 +245,8 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     batches_->enable(settings.aba_min_dofs);
     batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, drives_, qd_.data(),
                        nullptr, factor_failure_.data(), thread_count());
+  } else if (batches_) {
+    batches_->enable(0);  // every batch off: their factors go stale while the scalar kernels step
   }
 
   for_each_articulation([&](int a) {
