@@ -105,7 +105,6 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
   coord_count = art.coord_count();
   dof_count = art.dof_count();
   dof_parent.assign(dof_count, -1);
-  dof_rotational.assign(dof_count, 0);
   std::vector<int> last_dof(n, -1);  // deepest dof at or above each link
   for (int i = 0; i < n; ++i) {
     Link& L = link[i];
@@ -118,8 +117,6 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
     for (int k = 0; k < L.dof; ++k) {
       dof_parent[L.qd_start + k] = up;
       up = L.qd_start + k;
-      dof_rotational[L.qd_start + k] =
-          L.type == JointType::Revolute || L.type == JointType::Ball || (L.type == JointType::Free && k < 3);
     }
     last_dof[i] = up;
 

@@ -41,7 +41,6 @@ struct BatchTopology {
   // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
   // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
   std::vector<int> ancestor_start, ancestors, row_start;
-  std::vector<int> dof_rotational;  // per dof: 1 where angular_damping applies
   int coord_count = 0;
   int dof_count = 0;
 
