@@ -121,7 +121,7 @@ class Batches final : public ArticulationBatches {
         for (int i = 0; i < art[a].link_count(); ++i) G.body.push_back(art[a].body(i));
         for (const WeldedBody& b : welded[a]) G.body.push_back(b.body);
       }
-      const int n = G.links(), nv = G.topo.dof_count;
+      const int nv = G.topo.dof_count;
       G.param_size = batch_param_count(G.topo) + (G.welds.empty() ? 0 : 3 * G.bodies());
       G.params.resize(static_cast<size_t>(G.blocks) * G.param_size);
       G.H.resize(static_cast<size_t>(G.blocks) * G.topo.packed_size());
@@ -332,7 +332,7 @@ class Batches final : public ArticulationBatches {
             const V sum = lambda[r] + step;
             V next = sum > 0 ? sum : V{};
             // a row of a lane without it, or gone non-finite, keeps its impulse
-            next = (active[r] != 0) & (lane_abs<T>(next) <= std::numeric_limits<T>::max()) ? next : lambda[r];
+            next = ((active[r] != 0) & (lane_abs<T>(next) <= std::numeric_limits<T>::max())) ? next : lambda[r];
             apply(m, sign * (next - lambda[r]));
             lambda[r] = next;
           }
