@@ -56,9 +56,8 @@ class Batches final : public ArticulationBatches {
     // per block: the parameters (BatchParams' arrays in order, then, with welded bodies, every
     // body's own centre of mass), H and its factor, the motion subspace and o of the last kinematics
     std::vector<V> params, H, S, origin;
-    std::vector<int> coord_of_dof;  // Revolute / Prismatic dofs: their coordinate, else -1
-    std::vector<int> limited;       // Revolute / Prismatic dofs with a finite limit in some world
-    std::vector<V> limits;          // per block: [limited][2] lower and upper limit
+    std::vector<int> limited;  // Revolute / Prismatic dofs with a finite limit in some world
+    std::vector<V> limits;     // per block: [limited][2] lower and upper limit
     bool enabled = true;
     bool factored = false;  // H of every block factored by an earlier step
     bool refactor = true;   // this step computes and factors H
@@ -127,12 +126,9 @@ class Batches final : public ArticulationBatches {
       G.H.resize(static_cast<size_t>(G.blocks) * G.topo.packed_size());
       G.S.resize(static_cast<size_t>(G.blocks) * 6 * nv);
       G.origin.resize(static_cast<size_t>(G.blocks) * 3);
-      G.coord_of_dof.assign(nv, -1);
-      for (const auto& L : G.topo.link)
-        if (L.type == JointType::Revolute || L.type == JointType::Prismatic) G.coord_of_dof[L.qd_start] = L.q_start;
       for (int b = 0; b < G.blocks; ++b) gather_params(G, b, com);
       for (int k = 0; k < nv; ++k) {
-        if (G.coord_of_dof[k] < 0) continue;
+        if (G.topo.coord_of_dof[k] < 0) continue;
         bool finite = false;
         for (const int a : G.arts)
           finite |= std::isfinite(model.joint_limit_lower[art[a].qd_begin() + k]) ||
@@ -221,7 +217,7 @@ class Batches final : public ArticulationBatches {
         const V qd = w.qd[k];
         x[k] += -w.tau[k] - P.damping[k] * qd + kd[k] * (vt[k] - qd);
         w.diag[k] = dt * (P.damping[k] + kd[k]);
-        const int c = G.coord_of_dof[k];
+        const int c = topo.coord_of_dof[k];
         if (c < 0) continue;
         const V q_end = w.q[c] + dt * qd;
         x[k] += -P.stiffness[k] * (q_end - P.q_ref[k]) + ke[k] * (qt[k] - q_end);
@@ -282,7 +278,7 @@ class Batches final : public ArticulationBatches {
       const V* limit = &G.limits[static_cast<size_t>(b) * 2 * nl];
       bool any_row = false;
       for (int m = 0; m < nl; ++m) {
-        const int k = G.limited[m], c = G.coord_of_dof[k];
+        const int k = G.limited[m], c = G.topo.coord_of_dof[k];
         V q;
         for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
         for (int side = 0; side < 2; ++side) {
@@ -550,8 +546,10 @@ class Batches final : public ArticulationBatches {
   template <typename F>
   void for_each_block(int threads, F&& f) {
     const int count = static_cast<int>(blocks_.size());
-    const int n = std::min<int>(threads > 0 ? threads : static_cast<int>(work_.size()), static_cast<int>(work_.size()));
-#pragma omp parallel for schedule(static) num_threads(n)
+    // no more threads than blocks: a team with idle members still pays for waking them at every call
+    const int n =
+        std::min({threads > 0 ? threads : static_cast<int>(work_.size()), static_cast<int>(work_.size()), count});
+#pragma omp parallel for schedule(static) num_threads(n) if (n > 1)
     for (int k = 0; k < count; ++k) {
       Group& G = groups_[blocks_[k].first];
       if (!G.enabled) continue;

@@ -58,7 +58,8 @@ void articulation_inverse_dynamics(const Model& model, const State& state, const
 }
 
 // qdd from the batched kernels: their unconstrained step with dt = 0 and no drives
-VecX batched_forward_dynamics(const Model& model, const State& state, const Control& control, const VecX& tau) {
+VecX batched_forward_dynamics(const Model& model, const State& state, const Control& control, const VecX& tau,
+                              bool wrenches) {
   std::vector<ArticulationView> art;
   std::vector<std::uint8_t> batched(model.articulation_count);
   for (int a = 0; a < model.articulation_count; ++a) {
@@ -70,7 +71,6 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
                                 model.body_com, model.precision);
   VecX qdd = VecX::Zero(model.joint_dof_count);
   std::vector<int> failure(model.articulation_count, -1);
-  const bool wrenches = std::any_of(state.body_f.begin(), state.body_f.end(), [](Scalar f) { return f != 0; });
   batches->dynamics(state, control, tau.data(), 0, true, true, wrenches, false, nullptr, qdd.data(), failure.data(), 1);
   for (int a = 0; a < model.articulation_count; ++a)
     if (failure[a] >= 0) fail_not_positive_definite(model, art[a], failure[a] - art[a].qd_begin());
@@ -182,10 +182,12 @@ VecX eval_control_force(const Model& model, const Control& control) {
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
                            ForwardDynamicsMethod method) {
   model.check(state);
-  check_finite_state(state);
+  bool wrenches = false;
+  check_finite_state(state, &wrenches);
   const VecX tau_control = eval_control_force(model, control);
+  if (method == ForwardDynamicsMethod::Batched)
+    return batched_forward_dynamics(model, state, control, tau_control, wrenches);
   VecX qdd(model.joint_dof_count);
-  if (method == ForwardDynamicsMethod::Batched) return batched_forward_dynamics(model, state, control, tau_control);
   ArticulationScratch s;
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);

@@ -170,8 +170,8 @@ template <typename F>
 void SolverFeatherstone::for_each_articulation(F&& f) {
   // articulations are independent here: a static schedule over threads, no shared writes
   const int count = static_cast<int>(art_.size());
-  const int threads = thread_count();
-#pragma omp parallel for schedule(static) num_threads(threads)
+  const int threads = std::min(thread_count(), count);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
   for (int a = 0; a < count; ++a) f(a);
 }
 
@@ -544,12 +544,13 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
     const Vec3 impulse = rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
     Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) = impulse.allFinite() ? impulse : Vec3::Zero();
   }
-  for (const int j : limited_joints_)
-    for (int k = 2 * model_.joint_qd_start[j];
-         k < 2 * model_.joint_qd_start[j] + 2 && !limits_in_batch(model_.joint_articulation[j]); ++k) {
+  for (const int j : limited_joints_) {
+    if (limits_in_batch(model_.joint_articulation[j])) continue;  // its block kept its impulses
+    for (int k = 2 * model_.joint_qd_start[j]; k < 2 * model_.joint_qd_start[j] + 2; ++k) {
       const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
       limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
     }
+  }
 }
 
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
@@ -580,9 +581,9 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   if (batch_step_) batches_->store_bodies(out, thread_count());
   for_each_articulation([&](int a) {
     if (on_batch(a)) return;
-    scratch(a);
-    forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), scratch_[a]);
-    forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), scratch_[a]);
+    ArticulationScratch& s = scratch(a);
+    forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), s);
+    forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), s);
     store_bodies(a, out);
   });
 }

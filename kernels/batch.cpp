@@ -105,6 +105,7 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
   coord_count = art.coord_count();
   dof_count = art.dof_count();
   dof_parent.assign(dof_count, -1);
+  coord_of_dof.assign(dof_count, -1);
   std::vector<int> last_dof(n, -1);  // deepest dof at or above each link
   for (int i = 0; i < n; ++i) {
     Link& L = link[i];
@@ -119,6 +120,7 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
       up = L.qd_start + k;
     }
     last_dof[i] = up;
+    if (L.type == JointType::Revolute || L.type == JointType::Prismatic) coord_of_dof[L.qd_start] = L.q_start;
 
     const Transform Xp = art.X_p(i), Xc = art.X_c(i), Xci = Xc.inverse();
     const Vec3 a = art.axis(i);
@@ -175,11 +177,9 @@ void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art,
     x[10 * n + k][lane] = static_cast<T>(art.joint_armature[g]);
     x[10 * n + nv + k][lane] = static_cast<T>(art.joint_damping[g]);
     x[10 * n + 2 * nv + k][lane] = static_cast<T>(art.joint_stiffness[g]);
-    x[10 * n + 3 * nv + k][lane] = 0;
+    const int c = topo.coord_of_dof[k];  // spring rest positions of the one-coordinate joints
+    x[10 * n + 3 * nv + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
   }
-  for (const auto& L : topo.link)  // spring rest positions of the one-coordinate joints
-    if (L.type == JointType::Revolute || L.type == JointType::Prismatic)
-      x[10 * n + 3 * nv + L.qd_start][lane] = static_cast<T>(art.joint_q_ref[art.q_begin() + L.q_start]);
 }
 
 template <typename T>

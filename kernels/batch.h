@@ -37,7 +37,8 @@ struct BatchTopology {
     T ac[3];                // joint axis in link coordinates (Revolute, Prismatic)
   };
   std::vector<Link> link;
-  std::vector<int> dof_parent;  // per dof: the next dof up the tree, -1 past the root
+  std::vector<int> dof_parent;    // per dof: the next dof up the tree, -1 past the root
+  std::vector<int> coord_of_dof;  // per dof: its coordinate for Revolute / Prismatic joints, else -1
   // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
   // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
   std::vector<int> ancestor_start, ancestors, row_start;

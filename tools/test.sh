@@ -6,6 +6,9 @@
 #   3. each libFuzzer target for 60 s (tools/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# the tests run side by side (-j): their OpenMP threads sleep while they wait rather than spin, so
+# one test's team does not take the cores (or a CPU quota) from another's
+export OMP_WAIT_POLICY=passive
 bash tools/setup.sh
 (cd build && ctest --output-on-failure -j"$(nproc)")
 
