@@ -172,10 +172,9 @@ class Batches final : public ArticulationBatches {
 
   bool active(int a) const override { return slot_[a].group >= 0 && groups_[slot_[a].group].enabled; }
 
-  void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt_, bool refactor, bool fuse,
-                bool wrenches, bool drives, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
-                int threads) override {
-    for (Group& G : groups_) G.refactor = refactor || !G.factored;
+  void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt_, const DynamicsOptions& options,
+                Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) override {
+    for (Group& G : groups_) G.refactor = options.refactor || !G.factored;
     ++step_;  // factors copied out by solve_mass before are stale
     // one copy per thread of the rows' parallel loop (grows only when the thread count does)
     if (static_cast<int>(lane_factor_.size()) < threads)
@@ -195,7 +194,7 @@ class Batches final : public ArticulationBatches {
       batch_subspace(topo, w, o, S);
       batch_velocity(topo, S, w.qd.data(), w);
       batch_link_inertia(topo, P, o, w);
-      const V* f_ext = wrenches && gather_wrenches(G, b, in.body_f.data(), o, w) ? w.f_ext.data() : nullptr;
+      const V* f_ext = options.wrenches && gather_wrenches(G, b, in.body_f.data(), o, w) ? w.f_ext.data() : nullptr;
       V g[3];
       for (int k = 0; k < 3; ++k) g[k] = V{} + static_cast<T>(gravity_[k]);
       batch_bias(topo, S, g, f_ext, w, w.tau.data());
@@ -205,7 +204,7 @@ class Batches final : public ArticulationBatches {
       gather(qd_off, tau, nv, x);
       V* kd = w.drive.data();
       V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv;
-      if (drives) {
+      if (options.drives) {
         gather(qd_off, control.joint_target_kd.data(), nv, kd);
         gather(qd_off, control.joint_target_vel.data(), nv, vt);
         gather(qd_off, control.joint_target_ke.data(), nv, ke);
@@ -227,10 +226,13 @@ class Batches final : public ArticulationBatches {
       V* H = G.block_H(b);
       IntLanes<T> bad = IntLanes<T>{} - 1;
       if (G.refactor) {
-        batch_mass_matrix(topo, P, S, w, H);
+        if (options.tile_gemm)
+          batch_mass_matrix_gemm(topo, P, S, w, H);
+        else
+          batch_mass_matrix(topo, P, S, w, H);
         for (int k = 0; k < nv; ++k) H[topo.row_start[k] + k] += w.diag[k];
-        bad = batch_factor(topo, H, fuse ? x : nullptr);
-        if (fuse)
+        bad = batch_factor(topo, H, options.fuse ? x : nullptr);
+        if (options.fuse)
           batch_solve_lower(topo, H, x);
         else
           batch_solve(topo, H, x);

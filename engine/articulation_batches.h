@@ -39,15 +39,21 @@ class ArticulationBatches {
   // true when articulation a is in a batch that is on
   virtual bool active(int a) const = 0;
 
+  // how dynamics treats a step
+  struct DynamicsOptions {
+    bool refactor = true;    // H recomputed and factored (else the last factor is reused)
+    bool fuse = true;        // the factor and the first half of the solve in one pass
+    bool tile_gemm = false;  // H as the tiled product sum J_i^T I_i J_i instead of CRBA
+    bool wrenches = false;   // in.body_f has a nonzero entry
+    bool drives = false;     // the control has a nonzero PD gain
+  };
   // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =
-  // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. H is recomputed and
-  // factored when `refactor` (else the last factor is reused); `wrenches`: in.body_f has a nonzero
-  // entry; `drives`: the control has a nonzero PD gain. qdd_out (when given) receives M^-1 (...)
-  // itself: with dt = 0 and no drives, the forward dynamics. factor_failure[a] = the dof whose pivot
-  // failed, or left alone. `threads`: the thread count of this step's parallel loops (solve_mass may
-  // be called from any of them)
-  virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt, bool refactor, bool fuse,
-                        bool wrenches, bool drives, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
+  // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. qdd_out (when
+  // given) receives M^-1 (...) itself: with dt = 0 and no drives, the forward dynamics.
+  // factor_failure[a] = the dof whose pivot failed, or left alone. `threads`: the thread count of
+  // this step's parallel loops (solve_mass may be called from any of them)
+  virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt,
+                        const DynamicsOptions& options, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
                         int threads) = 0;
   // joint-limit rows of active articulations whose lane `skip[a]` is 0 (those touched by no contact),
   // solved here a block at a time: the same rows, warm start and PGS sweeps as the solver's scalar

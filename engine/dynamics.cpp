@@ -71,7 +71,9 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
                                 model.body_com, model.precision);
   VecX qdd = VecX::Zero(model.joint_dof_count);
   std::vector<int> failure(model.articulation_count, -1);
-  batches->dynamics(state, control, tau.data(), 0, true, true, wrenches, false, nullptr, qdd.data(), failure.data(), 1);
+  ArticulationBatches::DynamicsOptions options;
+  options.wrenches = wrenches;
+  batches->dynamics(state, control, tau.data(), 0, options, nullptr, qdd.data(), failure.data(), 1);
   for (int a = 0; a < model.articulation_count; ++a)
     if (failure[a] >= 0) fail_not_positive_definite(model, art[a], failure[a] - art[a].qd_begin());
   return qdd;

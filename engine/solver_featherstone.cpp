@@ -239,12 +239,17 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
   control_force(model_, control, rhs_.data());
   std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
 
-  batch_step_ =
-      batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0 && !settings.use_tile_gemm;
+  batch_step_ = batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0;
   if (batch_step_) {
     batches_->enable(settings.aba_min_dofs);
-    batches_->dynamics(in, control, rhs_.data(), dt, refactor, settings.fuse_cholesky, wrenches_, drives_, qd_.data(),
-                       nullptr, factor_failure_.data(), thread_count());
+    ArticulationBatches::DynamicsOptions options;
+    options.refactor = refactor;
+    options.fuse = settings.fuse_cholesky;
+    options.tile_gemm = settings.use_tile_gemm;
+    options.wrenches = wrenches_;
+    options.drives = drives_;
+    batches_->dynamics(in, control, rhs_.data(), dt, options, qd_.data(), nullptr, factor_failure_.data(),
+                       thread_count());
   } else if (batches_) {
     batches_->enable(0);  // every batch off: their factors go stale while the scalar kernels step
   }

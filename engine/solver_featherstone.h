@@ -33,8 +33,10 @@ struct SolverFeatherstoneSettings {
   Scalar angular_damping = 0.05;        // rotational dof velocities scaled by (1 - angular_damping dt)
   int update_mass_matrix_interval = 1;  // recompute and refactor H every N steps
   Scalar friction_smoothing = 1.0;      // 0: box friction per tangent; 1: circular cone; between: blend
-  bool use_tile_gemm = false;           // H as sum J^T I J over link Jacobians instead of CRBA
-  bool fuse_cholesky = true;            // factor and forward-substitute in one pass
+  // H as sum J_i^T I_i J_i over link Jacobians instead of CRBA (batched: multiplied in register tiles,
+  // kernels/batch.h batch_mass_matrix_gemm)
+  bool use_tile_gemm = false;
+  bool fuse_cholesky = true;  // factor and forward-substitute in one pass
   // articulations with at least this many dofs use ABA's O(n) factor and solves instead of CRBA +
   // Cholesky (O(n^2) + O(n^3)); they refactor every step, whatever update_mass_matrix_interval says
   // (32: where a chain steps faster on ABA, bench/chain_bench.cpp; branched trees of fewer dofs favour CRBA)
@@ -51,7 +53,7 @@ struct SolverFeatherstoneSettings {
   bool weld_fixed_joints = true;
   // articulations that share joints, frames and axes (replicated worlds) are stepped a SIMD block of
   // worlds at a time by the batched kernels, in the model's precision (engine/articulation_batches.h);
-  // off, or while coriolis_implicitness > 0 or use_tile_gemm, every articulation takes the scalar kernels
+  // off, or while coriolis_implicitness > 0, every articulation takes the scalar kernels
   bool use_batch_kernels = true;
   // Flag: the articulation keeps its previous state and solver.diverged() marks it; Reset: it restarts
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing

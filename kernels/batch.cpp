@@ -159,6 +159,16 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
     ancestor_start.push_back(static_cast<int>(ancestors.size()));
     row_start[k] = packed_index(k, 0);
   }
+  link_dof_start.assign(1, 0);
+  for (int i = 0; i < n; ++i) {
+    const int d = last_dof[i];
+    if (d >= 0) {
+      link_dofs.insert(link_dofs.end(), ancestors.begin() + ancestor_start[d],
+                       ancestors.begin() + ancestor_start[d + 1]);
+      link_dofs.push_back(d);
+    }
+    link_dof_start.push_back(static_cast<int>(link_dofs.size()));
+  }
 }
 
 template <typename T>
@@ -189,6 +199,7 @@ void BatchWork<T>::resize(const BatchTopology<T>& topo) {
   v.resize(6 * n), a.resize(6 * n), f.resize(6 * n), I.resize(10 * n), vrel.resize(3 * n);
   q.resize(topo.coord_count), qd.resize(topo.dof_count), x.resize(topo.dof_count), tau.resize(topo.dof_count);
   diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(4 * topo.dof_count);
+  IJ.resize(6 * (topo.dof_count + 1));
 }
 
 template <typename T>
@@ -442,6 +453,46 @@ void batch_mass_matrix(const BatchTopology<T>& topo, const BatchParams<T>& param
 }
 
 template <typename T>
+void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& params, const V<T>* S, BatchWork<T>& w,
+                            V<T>* H) {
+  constexpr int kT = kGemmTile;
+  std::fill(H, H + topo.packed_size(), V<T>{});
+  V<T>* IJ = w.IJ.data();
+  const V<T>* zero = IJ + 6 * topo.dof_count;  // the padding column
+  for (int m = 0; m < 6; ++m) IJ[6 * topo.dof_count + m] = V<T>{};
+  for (size_t i = 0; i < topo.link.size(); ++i) {
+    const int* D = topo.link_dofs.data() + topo.link_dof_start[i];
+    const int d = topo.link_dof_start[i + 1] - topo.link_dof_start[i];
+    if (d == 0) continue;
+    // the link's Jacobian columns J_i (columns of S) and I_i J_i, both padded to whole tiles by the zero column
+    for (int c = 0; c < d; ++c) apply_inertia<T>(&w.I[10 * i], S + 6 * D[c], IJ + 6 * c);
+    auto column = [&](const V<T>* base, int c) { return c < d ? base : zero; };
+    for (int rt = 0; rt < d; rt += kT) {
+      for (int ct = 0; ct <= rt; ct += kT) {
+        // a tile of H in registers: rows rt.., columns ct.., each entry a sum over the 6 spatial components
+        const V<T>* s[kT];
+        const V<T>* f[kT];
+        for (int a = 0; a < kT; ++a)
+          s[a] = column(S + 6 * D[std::min(rt + a, d - 1)], rt + a), f[a] = column(IJ + 6 * (ct + a), ct + a);
+        V<T> acc[kT][kT] = {};
+#pragma GCC unroll 6
+        for (int m = 0; m < 6; ++m) {
+          V<T> sm[kT], fm[kT];
+          for (int a = 0; a < kT; ++a) sm[a] = s[a][m], fm[a] = f[a][m];
+          for (int a = 0; a < kT; ++a)
+            for (int b = 0; b < kT; ++b) acc[a][b] += sm[a] * fm[b];
+        }
+        for (int a = 0; a < kT && rt + a < d; ++a) {
+          V<T>* row = H + topo.row_start[D[rt + a]];
+          for (int b = 0; b < kT && ct + b <= rt + a; ++b) row[D[ct + b]] += acc[a][b];
+        }
+      }
+    }
+  }
+  for (int k = 0; k < topo.dof_count; ++k) H[topo.row_start[k] + k] += params.armature[k];
+}
+
+template <typename T>
 IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
   // row k of L is final once the rows below it have been folded in: divide it by the pivot, then
   // take its outer product off the rows of its ancestors (all of them ancestors of k too)
@@ -569,24 +620,26 @@ void batch_integrate(const BatchTopology<T>& topo, const V<T>* q, const V<T>* qd
   }
 }
 
-#define NOVAPHY_BATCH_INSTANTIATE(T)                                                                                  \
-  template struct BatchTopology<T>;                                                                                   \
-  template struct BatchWork<T>;                                                                                       \
-  template void batch_set_params(const BatchTopology<T>&, const ArticulationView&, int, Lanes<T>*);                   \
-  template void batch_kinematics(const BatchTopology<T>&, const Lanes<T>*, BatchWork<T>&, Lanes<T>*);                 \
-  template void batch_subspace(const BatchTopology<T>&, const BatchWork<T>&, const Lanes<T>*, Lanes<T>*);             \
-  template void batch_velocity(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, BatchWork<T>&);             \
-  template void batch_link_inertia(const BatchTopology<T>&, const BatchParams<T>&, const Lanes<T>*, BatchWork<T>&);   \
-  template void batch_bias(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, const Lanes<T>*, BatchWork<T>&, \
-                           Lanes<T>*);                                                                                \
-  template void batch_mass_matrix(const BatchTopology<T>&, const BatchParams<T>&, const Lanes<T>*, BatchWork<T>&,     \
-                                  Lanes<T>*);                                                                         \
-  template IntLanes<T> batch_factor(const BatchTopology<T>&, Lanes<T>*, Lanes<T>*);                                   \
-  template void batch_solve(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                     \
-  template void batch_solve_lower(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                               \
-  template void batch_solve_unit(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*);                           \
-  template void batch_lane_factor(const BatchTopology<T>&, const Lanes<T>*, int, double*);                            \
-  template void batch_solve_packed(const BatchTopology<T>&, const double*, double*);                                  \
+#define NOVAPHY_BATCH_INSTANTIATE(T)                                                                                   \
+  template struct BatchTopology<T>;                                                                                    \
+  template struct BatchWork<T>;                                                                                        \
+  template void batch_set_params(const BatchTopology<T>&, const ArticulationView&, int, Lanes<T>*);                    \
+  template void batch_kinematics(const BatchTopology<T>&, const Lanes<T>*, BatchWork<T>&, Lanes<T>*);                  \
+  template void batch_subspace(const BatchTopology<T>&, const BatchWork<T>&, const Lanes<T>*, Lanes<T>*);              \
+  template void batch_velocity(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, BatchWork<T>&);              \
+  template void batch_link_inertia(const BatchTopology<T>&, const BatchParams<T>&, const Lanes<T>*, BatchWork<T>&);    \
+  template void batch_bias(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, const Lanes<T>*, BatchWork<T>&,  \
+                           Lanes<T>*);                                                                                 \
+  template void batch_mass_matrix(const BatchTopology<T>&, const BatchParams<T>&, const Lanes<T>*, BatchWork<T>&,      \
+                                  Lanes<T>*);                                                                          \
+  template void batch_mass_matrix_gemm(const BatchTopology<T>&, const BatchParams<T>&, const Lanes<T>*, BatchWork<T>&, \
+                                       Lanes<T>*);                                                                     \
+  template IntLanes<T> batch_factor(const BatchTopology<T>&, Lanes<T>*, Lanes<T>*);                                    \
+  template void batch_solve(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                      \
+  template void batch_solve_lower(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                \
+  template void batch_solve_unit(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*);                            \
+  template void batch_lane_factor(const BatchTopology<T>&, const Lanes<T>*, int, double*);                             \
+  template void batch_solve_packed(const BatchTopology<T>&, const double*, double*);                                   \
   template void batch_integrate(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, T, Lanes<T>*);
 
 NOVAPHY_BATCH_INSTANTIATE(float)

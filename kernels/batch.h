@@ -42,6 +42,9 @@ struct BatchTopology {
   // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
   // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
   std::vector<int> ancestor_start, ancestors, row_start;
+  // per link i: the dofs that move it (its ancestors' and its own) ascending, link_dofs[link_dof_start[i] ..
+  // link_dof_start[i + 1]): the nonzero columns of its Jacobian, which batch_mass_matrix_gemm multiplies
+  std::vector<int> link_dof_start, link_dofs;
   int coord_count = 0;
   int dof_count = 0;
 
@@ -95,6 +98,7 @@ struct BatchWork {
   std::vector<Lanes<T>> rows;           // the batched limit rows' work (sized by their owner)
   std::vector<std::uint8_t> row_flags;  // and their per-row flags
   std::vector<Lanes<T>> bodies;         // [body][13] body_q and body_qd on their way out (sized by the owner)
+  std::vector<Lanes<T>> IJ;             // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
 
   void resize(const BatchTopology<T>& topo);
 };
@@ -125,6 +129,14 @@ void batch_bias(const BatchTopology<T>& topo, const Lanes<T>* S, const Lanes<T>*
 template <typename T>
 void batch_mass_matrix(const BatchTopology<T>& topo, const BatchParams<T>& params, const Lanes<T>* S, BatchWork<T>& w,
                        Lanes<T>* H);
+
+// the use_tile_gemm path: H [packed] = sum over links of J_i^T (I_i J_i) with armature, J_i the
+// columns of S that move link i, multiplied in register tiles of kGemmTile x kGemmTile entries of H
+// (a link's columns padded with a zero column to whole tiles); w.I is left as batch_link_inertia made it
+constexpr int kGemmTile = 4;
+template <typename T>
+void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& params, const Lanes<T>* S,
+                            BatchWork<T>& w, Lanes<T>* H);
 
 // H = L^T L in place (the diagonal holding 1 / L_kk); with x (not nullptr) solves L^T y = x in the
 // same pass (fused). Returns per lane the dof whose pivot was not positive (-1: none)

@@ -68,13 +68,15 @@ Scalar max_relative_difference(const std::vector<Scalar>& a, const std::vector<S
 }
 
 // the batched kernels against the scalar ones, step for step, without contacts (the order of
-// contacts found in a tie follows the rounding of the poses, and PGS sweeps rows in that order)
-Scalar batched_against_scalar(const Model& model, int steps) {
+// contacts found in a tie follows the rounding of the poses, and PGS sweeps rows in that order);
+// H by CRBA or, with `tile_gemm`, by the product of link Jacobians on both sides
+Scalar batched_against_scalar(const Model& model, int steps, bool tile_gemm = false) {
   State batched = model.state(), scalar = model.state();
   std::mt19937 rng(7);
   test::randomize_state(model, batched, rng, true);
   scalar.assign(batched);
   SolverFeatherstoneSettings settings;
+  settings.use_tile_gemm = tile_gemm;
   step(model, batched, steps, settings, false);
   settings.use_batch_kernels = false;
   step(model, scalar, steps, settings, false);
@@ -83,8 +85,9 @@ Scalar batched_against_scalar(const Model& model, int steps) {
                    max_relative_difference(batched.body_q, scalar.body_q),
                    max_relative_difference(batched.body_qd, scalar.body_qd)});
 }
-Scalar batched_against_scalar(const ModelBuilder& robot, int worlds, Precision precision, int steps) {
-  return batched_against_scalar(replicated(robot, worlds, precision), steps);
+Scalar batched_against_scalar(const ModelBuilder& robot, int worlds, Precision precision, int steps,
+                              bool tile_gemm = false) {
+  return batched_against_scalar(replicated(robot, worlds, precision), steps, tile_gemm);
 }
 
 TEST(ArticulationBatches, GroupsReplicatedWorldsIntoBlocks) {
@@ -108,6 +111,17 @@ TEST(ArticulationBatches, Float64MatchesTheScalarKernels) {
   for (int trial = 0; trial < 10; ++trial) {
     const Model tree = test::random_builder_tree(rng, 2 + trial, 1 + trial % 3);
     EXPECT_LT(batched_against_scalar(tree, 50), 1e-9) << "trial " << trial;
+  }
+}
+
+TEST(ArticulationBatches, TiledMassMatrixMatchesTheScalarProduct) {
+  // use_tile_gemm: tiles padded at every dof count (chain15: 15 columns on its last link), branches
+  EXPECT_LT(batched_against_scalar(scene("chain15.xml"), 3, Precision::Float64, 200, true), 1e-10);
+  EXPECT_LT(batched_against_scalar(quadruped(false), 3, Precision::Float64, 200, true), 1e-10);
+  std::mt19937 rng(4);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Model tree = test::random_builder_tree(rng, 3 + 2 * trial, 1 + trial % 2);
+    EXPECT_LT(batched_against_scalar(tree, 50, true), 1e-9) << "trial " << trial;
   }
 }
 

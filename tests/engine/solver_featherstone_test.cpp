@@ -616,6 +616,11 @@ TEST(SolverFeatherstoneSettingsEffect, UseTileGemmGivesTheSameMassMatrix) {
   const auto crba = double_pendulum([](auto&) {});
   const auto gemm = double_pendulum([](auto& s) { s.use_tile_gemm = true; });
   EXPECT_LT(max_difference(crba, gemm), 1e-9);
+  const auto scalar_gemm = double_pendulum([](auto& s) {
+    s.use_tile_gemm = true;
+    s.use_batch_kernels = false;
+  });
+  EXPECT_LT(max_difference(crba, scalar_gemm), 1e-9);
 }
 
 TEST(SolverFeatherstoneSettingsEffect, FuseCholeskyGivesTheSameSolution) {
