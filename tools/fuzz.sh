@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -DNOVAPHY_FUZZ=ON -DNOVAPHY_BUILD_PYTHON=OFF \
   -DNOVAPHY_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build-fuzz -j"$(nproc)"
+cmake --build build-fuzz -j"$(nproc)" --target fuzz_builder fuzz_mjcf
 cd build-fuzz  # MuJoCo writes MUJOCO_LOG.TXT into the working directory
 for target in fuzz_builder fuzz_mjcf; do
   mkdir -p "corpus/$target" "findings/$target"

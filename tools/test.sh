@@ -13,7 +13,7 @@ bash tools/setup.sh
 (cd build && ctest --output-on-failure -j"$(nproc)")
 
 cmake -S . -B build-asan -DNOVAPHY_SANITIZE=ON -DNOVAPHY_BUILD_PYTHON=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build-asan -j"$(nproc)"
+cmake --build build-asan -j"$(nproc)" --target novaphy_tests  # all that ctest runs there
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$(nproc)" -E "clang_format|install_consumer")
 
 bash tools/fuzz.sh 60
