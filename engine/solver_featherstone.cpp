@@ -104,7 +104,6 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     std::fill_n(dof_articulation_.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
   qd_.setZero(model.joint_dof_count);
   zero_.setZero(model.joint_dof_count);
-  qd_in_.setZero(model.joint_dof_count);
   rhs_.setZero(model.joint_dof_count);
   q_next_.setZero(model.joint_coord_count);
   factor_failure_.assign(model.articulation_count, -1);
@@ -162,7 +161,7 @@ std::size_t SolverFeatherstone::memory_bytes() const {
          (s.c.size() + s.v.size() + s.a.size() + s.f.size() + s.pA.size()) * sizeof(Vec6);
     n += bytes(s.S) + bytes(s.U) + bytes(s.H) + bytes(s.S_world) + bytes(s.u) + bytes(s.C);
   }
-  n += bytes(qd_) + bytes(qd_in_) + bytes(q_next_) + bytes(rhs_) + bytes(zero_);
+  n += bytes(qd_) + bytes(q_next_) + bytes(rhs_) + bytes(zero_);
   return n;
 }
 
@@ -235,7 +234,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
   const bool refactor = steps_since_factor_ % settings.update_mass_matrix_interval == 0 || dt != factored_dt_;
   steps_since_factor_ = refactor ? 1 : steps_since_factor_ + 1;
   if (refactor) factored_dt_ = dt;
-  qd_in_ = Eigen::Map<const VecX>(in.joint_qd.data(), model_.joint_dof_count);
+  qd_in_ = in.joint_qd.data();
   control_force(model_, control, rhs_.data());
   std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
 
@@ -340,7 +339,7 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     factored_aba_[a] = use_aba;
     factored_batch_[a] = 0;
     factor_failure_[a] = bad < 0 ? -1 : qd0 + bad;
-    qd_.segment(qd0, nv) = qd_in_.segment(qd0, nv) + dt * rhs_.segment(qd0, nv);
+    qd_.segment(qd0, nv) = Eigen::Map<const VecX>(qd_in_ + qd0, nv) + dt * rhs_.segment(qd0, nv);
   });
   for (size_t a = 0; a < art_.size(); ++a)
     if (factor_failure_[a] >= 0)
@@ -473,7 +472,7 @@ void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt)
     Scalar target = depth > settings.linear_slop ? settings.erp * (depth - settings.linear_slop) / dt
                                                  : std::min<Scalar>(depth, 0) / dt;
     // restitution only for a contact that closes within this step
-    const Scalar v_approach = row_velocity(normal, J_, qd_in_.data());
+    const Scalar v_approach = row_velocity(normal, J_, qd_in_);
     if (v_approach < -settings.restitution_threshold && depth - v_approach * dt >= 0)
       target = std::max(target, -restitution * v_approach);
     normal.target = target;

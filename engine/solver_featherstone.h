@@ -157,7 +157,7 @@ class SolverFeatherstone {
   std::vector<int> dof_articulation_;
   std::vector<int> rotational_dof_;  // dofs scaled by angular damping
   VecX qd_;                          // velocity being solved, all dofs
-  VecX qd_in_;                       // the step's initial velocity (restitution)
+  const Scalar* qd_in_ = nullptr;    // the step's initial velocity, in.joint_qd (read before out is written)
   VecX q_next_;
   VecX rhs_;
   VecX zero_;
