@@ -463,7 +463,7 @@ class Batches final : public ArticulationBatches {
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
-                              &w.f_ext, &w.q_next, &w.drive, &w.rows, &w.bodies})
+                              &w.f_ext, &w.q_next, &w.drive, &w.rows, &w.bodies, &w.IJ})
           n += v->size() * sizeof(V);
     return n;
   }

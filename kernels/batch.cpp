@@ -466,14 +466,15 @@ void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& 
     if (d == 0) continue;
     // the link's Jacobian columns J_i (columns of S) and I_i J_i, both padded to whole tiles by the zero column
     for (int c = 0; c < d; ++c) apply_inertia<T>(&w.I[10 * i], S + 6 * D[c], IJ + 6 * c);
-    auto column = [&](const V<T>* base, int c) { return c < d ? base : zero; };
     for (int rt = 0; rt < d; rt += kT) {
       for (int ct = 0; ct <= rt; ct += kT) {
         // a tile of H in registers: rows rt.., columns ct.., each entry a sum over the 6 spatial components
         const V<T>* s[kT];
         const V<T>* f[kT];
-        for (int a = 0; a < kT; ++a)
-          s[a] = column(S + 6 * D[std::min(rt + a, d - 1)], rt + a), f[a] = column(IJ + 6 * (ct + a), ct + a);
+        for (int a = 0; a < kT; ++a) {
+          s[a] = rt + a < d ? S + 6 * D[rt + a] : zero;
+          f[a] = ct + a < d ? IJ + 6 * (ct + a) : zero;
+        }
         V<T> acc[kT][kT] = {};
 #pragma GCC unroll 6
         for (int m = 0; m < 6; ++m) {
