@@ -216,8 +216,8 @@ def pendulum_grid(precision, worlds=20):
     return batch.finalize()
 
 
-def swing(model, batched=True, steps=200):
-    solver = novaphy.solvers.SolverFeatherstone(model)
+def swing(model, batched=True, steps=200, use_tile_gemm=False):
+    solver = novaphy.solvers.SolverFeatherstone(model, use_tile_gemm=use_tile_gemm)
     solver.settings.use_batch_kernels = batched
     state, control = model.state(), model.control()
     state.joint_qd[:] = np.linspace(-2, 2, model.joint_dof_count)
@@ -225,6 +225,15 @@ def swing(model, batched=True, steps=200):
     for _ in range(steps):
         solver.step(state, state, control, contacts, 1.0 / 240.0)
     return solver, state
+
+
+def test_tiled_mass_matrix_steps_like_crba_on_the_batched_path():
+    model = pendulum_grid(novaphy.Precision.Float64)
+    _, crba = swing(model)
+    _, tiled = swing(model, use_tile_gemm=True)
+    _, scalar_tiled = swing(model, batched=False, use_tile_gemm=True)
+    np.testing.assert_allclose(tiled.joint_q, crba.joint_q, atol=1e-12)
+    np.testing.assert_allclose(scalar_tiled.joint_q, crba.joint_q, atol=1e-12)
 
 
 def test_batched_precisions_follow_the_scalar_kernels():
