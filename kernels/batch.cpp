@@ -570,7 +570,10 @@ void batch_lane_factor(const BatchTopology<T>& topo, const V<T>* L, int lane, do
 
 template <typename T>
 void batch_solve_packed(const BatchTopology<T>& topo, const double* L, double* x) {
+  // L^T y = x: a zero entry stays zero and changes nothing (a contact row's J^T is zero off the path
+  // of its link, so another leg's dofs are skipped)
   for (int k = topo.dof_count - 1; k >= 0; --k) {
+    if (x[k] == 0) continue;
     const double* Lk = L + topo.row_start[k];
     const double y = x[k] * Lk[k];
     x[k] = y;
