@@ -458,8 +458,8 @@ void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& 
   constexpr int kT = kGemmTile;
   std::fill(H, H + topo.packed_size(), V<T>{});
   V<T>* IJ = w.IJ.data();
-  const V<T>* zero = IJ + 6 * topo.dof_count;  // the padding column
-  for (int m = 0; m < 6; ++m) IJ[6 * topo.dof_count + m] = V<T>{};
+  V<T>* zero = IJ + 6 * topo.dof_count;  // the padding column
+  std::fill(zero, zero + 6, V<T>{});
   for (size_t i = 0; i < topo.link.size(); ++i) {
     const int* D = topo.link_dofs.data() + topo.link_dof_start[i];
     const int d = topo.link_dof_start[i + 1] - topo.link_dof_start[i];
