@@ -8,6 +8,7 @@
 #include <map>
 
 #include "kernels/batch.h"
+#include "kernels/batch_pgs.h"
 
 namespace novaphy {
 
@@ -150,15 +151,15 @@ class Batches final : public ArticulationBatches {
     std::size_t packed = 0;
     for (const Group& G : groups_) packed = std::max<std::size_t>(packed, G.topo.packed_size());
     lane_factor_.assign(work_.size(), LaneFactor{-1, 0, std::vector<Scalar>(packed)});
-    for (auto& per_thread : work_) {
-      per_thread.resize(groups_.size());
+    row_work_.resize(work_.size());
+    for (size_t t = 0; t < work_.size(); ++t) {
+      work_[t].resize(groups_.size());
       for (size_t g = 0; g < groups_.size(); ++g) {
-        per_thread[g].resize(groups_[g].topo);
-        // per limited dof: its column of M^-1, its velocity; per side: target, impulse, active mask
-        const size_t nl = groups_[g].limited.size();
-        per_thread[g].rows.resize(nl * (groups_[g].topo.dof_count + 7));
-        per_thread[g].row_flags.resize(2 * nl);
-        per_thread[g].bodies.resize(13 * groups_[g].bodies());
+        work_[t][g].resize(groups_[g].topo);
+        work_[t][g].bodies.resize(13 * groups_[g].bodies());
+        // every limit row, and four contacts a world, before a step needs more
+        const int nl = static_cast<int>(groups_[g].limited.size());
+        row_work_[t].resize(2 * nl + 3 * 4, groups_[g].topo.dof_count, 4);
       }
     }
   }
@@ -253,34 +254,48 @@ class Batches final : public ArticulationBatches {
       if (G.enabled) G.factored = true;
   }
 
-  bool solves_limits(int a, const std::uint8_t* skip) const override {
-    return active(a) && !skip[a] && !groups_[slot_[a].group].limited.empty();
-  }
+  bool solves_rows(int a, const std::uint8_t* skip) const override { return active(a) && !skip[a]; }
 
-  void solve_limits(const State& in, const std::uint8_t* skip, const LimitSettings& s, Scalar dt_, Scalar* qd_io,
-                    Scalar* impulse, int threads) override {
+  void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& bc, const RowSettings& s, Scalar dt_,
+                  Scalar* qd_io, Scalar* impulse, int threads) override {
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      const int nl = static_cast<int>(G.limited.size()), nv = G.topo.dof_count, lanes = lanes_in(G, b);
-      if (nl == 0) return;
+      const BatchTopology<T>& topo = G.topo;
+      const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count, lanes = lanes_in(G, b);
       const T dt = static_cast<T>(dt_);
       const int* qd_off = &G.qd_off[b * W];
       const int* q_off = &G.q_off[b * W];
-      IntLanes<T> mine{};  // lanes solved here: worlds of this block touched by no contact
+      IntLanes<T> mine{};  // lanes solved here: worlds of this block no contact joins to another articulation
+      int listed[W] = {}, slots = 0;  // each lane's contacts, their most in a lane
       bool any_mine = false;
       for (int l = 0; l < lanes; ++l) {
-        mine[l] = skip[G.arts[b * W + l]] ? 0 : -1;
-        any_mine |= mine[l] != 0;
+        const int a = G.arts[b * W + l];
+        if (skip[a]) continue;
+        mine[l] = -1;
+        any_mine = true;
+        if (bc.start) listed[l] = bc.start[a + 1] - bc.start[a];
+        slots = std::max(slots, listed[l]);
       }
-      if (!any_mine) return;
+      if (!any_mine || (nl == 0 && slots == 0)) return;
+      RowWork& R = row_work_[omp_get_thread_num()];
+      R.resize(2 * nl + 3 * slots, nv, slots);
       gather(qd_off, qd_io, nv, w.qd.data());
-      V* col = w.rows.data();       // [limited][dof]
-      V* target = col + nl * nv;    // [limited][2]
-      V* lambda = target + 2 * nl;  // [limited][2]
-      V* active = lambda + 2 * nl;  // [limited][2] 1 where the row exists, else 0
+      const V* H = G.block_H(b);
+      int rows = 0;
+      auto add_row = [&](RowKind kind, const IntLanes<T>& on, const V& target, const V& warm) {
+        const int r = rows++;
+        R.kind[r] = kind;
+        R.normal[r] = -1;
+        R.active[r] = on;
+        R.target[r] = target;
+        R.lambda[r] = on ? warm : V{};
+        R.mu[r] = V{};
+        return r;
+      };
+
+      // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
       const V* limit = &G.limits[static_cast<size_t>(b) * 2 * nl];
-      bool any_row = false;
       for (int m = 0; m < nl; ++m) {
-        const int k = G.limited[m], c = G.topo.coord_of_dof[k];
+        const int k = G.limited[m], c = topo.coord_of_dof[k];
         V q;
         for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
         for (int side = 0; side < 2; ++side) {
@@ -289,67 +304,137 @@ class Batches final : public ArticulationBatches {
           const V gap = sign * (q - limit[2 * m + side]);
           const IntLanes<T> finite = lane_abs<T>(limit[2 * m + side]) <= std::numeric_limits<T>::max();
           const IntLanes<T> on = mine & finite & (gap + dt * sign * w.qd[k] < 0);
+          R.limit_row[2 * m + side] = -1;
+          if (!any_lane(on)) continue;
           const V depth = -gap - T(s.linear_slop);
-          target[2 * m + side] = gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt;
-          V warm;
-          for (int l = 0; l < W; ++l) warm[l] = static_cast<T>(impulse[2 * (qd_off[l] + k) + side]);
-          lambda[2 * m + side] = on ? (s.use_warmstarting ? T(s.warmstarting_factor) * warm : V{}) : V{};
-          active[2 * m + side] = on ? V{} + 1 : V{};
-          for (int l = 0; l < W; ++l) any_row |= on[l] != 0;
+          V warm{};
+          if (s.use_warmstarting)
+            for (int l = 0; l < W; ++l)
+              warm[l] = T(s.warmstarting_factor) * static_cast<T>(impulse[2 * (qd_off[l] + k) + side]);
+          const int r =
+              add_row(RowKind::Unilateral, on, gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt, warm);
+          R.limit_row[2 * m + side] = r;
+          V* J = R.J_row(r);
+          V* z = R.z_row(r);
+          std::fill(J, J + nv, V{});
+          J[k] = on ? V{} + sign : V{};
+          batch_solve_unit(topo, H, k, z);
+          for (int j = 0; j < nv; ++j) z[j] *= sign;
         }
       }
-      if (any_row) {
-        // z_m = M^-1 e_k for each limited dof k (J = +-e_k: M^-1 J^T = +-z_m, J M^-1 J^T = z_m[k]).
-        // The sweeps read qd only at limited dofs: those are kept up to date (v), the whole of qd
-        // takes the impulses once at the end
-        std::uint8_t* on_anywhere = w.row_flags.data();  // rows some lane of the block has
-        for (int r = 0; r < 2 * nl; ++r) {
-          on_anywhere[r] = 0;
-          for (int l = 0; l < W; ++l) on_anywhere[r] |= active[r][l] != 0;
-        }
-        auto dof_on_anywhere = [&](int m) { return on_anywhere[2 * m] || on_anywhere[2 * m + 1]; };
-        for (int m = 0; m < nl; ++m)
-          if (dof_on_anywhere(m)) batch_solve_unit(G.topo, G.block_H(b), G.limited[m], col + m * nv);
-        V* v = active + 2 * nl;  // [limited]
-        for (int m = 0; m < nl; ++m) v[m] = w.qd[G.limited[m]];
-        auto row_on_anywhere = [&](int r) { return on_anywhere[r] != 0; };
-        auto apply = [&](int m, const V& signed_impulse) {
-          const V* z = col + m * nv;
-          for (int n = 0; n < nl; ++n) v[n] += z[G.limited[n]] * signed_impulse;
-        };
-        for (int r = 0; r < 2 * nl; ++r)
-          if (row_on_anywhere(r)) apply(r / 2, r % 2 == 0 ? lambda[r] : -lambda[r]);
-        for (int it = 0; it < s.iterations; ++it)
-          for (int r = 0; r < 2 * nl; ++r) {
-            if (!row_on_anywhere(r)) continue;
-            const int m = r / 2;
-            const T sign = r % 2 == 0 ? 1 : -1;
-            const V W_row = col[m * nv + G.limited[m]];
-            const V inv = W_row + T(s.cfm) > T(1e-12) ? 1 / (W_row + T(s.cfm)) : V{};
-            const V step = -(sign * v[m] - target[r] + T(s.cfm) * lambda[r]) * inv;
-            const V sum = lambda[r] + step;
-            V next = sum > 0 ? sum : V{};
-            // a row of a lane without it, or gone non-finite, keeps its impulse
-            next = ((active[r] != 0) & (lane_abs<T>(next) <= std::numeric_limits<T>::max())) ? next : lambda[r];
-            apply(m, sign * (next - lambda[r]));
-            lambda[r] = next;
+
+      // contact rows: slot t of lane l is that world's t-th contact, a normal row and two friction rows
+      if (slots > 0) gather(qd_off, in.joint_qd.data(), nv, R.qd_in.data());
+      const V* S = G.block_S(b);
+      const V* o = &G.origin[3 * b];
+      for (int t = 0; t < slots; ++t) {
+        IntLanes<T> on{};
+        V p[3] = {}, d[3][3] = {}, depth{}, mu{}, restitution{}, warm[3] = {};
+        for (int j = 0; j < nv; ++j) R.coef[j] = V{};
+        for (int l = 0; l < W; ++l) {
+          const int c = t < listed[l] ? bc.list[bc.start[G.arts[b * W + l]] + t] : -1;
+          R.contact[t * W + l] = c;
+          if (c < 0) continue;
+          on[l] = -1;
+          const Contacts& C = *bc.contacts;
+          const Vec3 n = Eigen::Map<const Vec3>(&C.contact_normal[3 * c]);
+          Vec3 t1, t2;
+          contact_tangents(n, &t1, &t2);
+          for (int m = 0; m < 3; ++m) {
+            p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
+            d[0][m][l] = static_cast<T>(n[m]);
+            d[1][m][l] = static_cast<T>(t1[m]);
+            d[2][m][l] = static_cast<T>(t2[m]);
           }
-        for (int m = 0; m < nl; ++m) {
-          if (!dof_on_anywhere(m)) continue;
-          const V net = lambda[2 * m] - lambda[2 * m + 1];
-          const V* z = col + m * nv;
-          for (int j = 0; j < nv; ++j) w.qd[j] += z[j] * net;
+          depth[l] = static_cast<T>(C.contact_depth[c]);
+          mu[l] = static_cast<T>(bc.mu[c]);
+          restitution[l] = static_cast<T>(bc.restitution[c]);
+          const Scalar* previous = C.previous(c);
+          if (s.use_warmstarting && previous) {
+            const Vec3 P = s.warmstarting_factor * Eigen::Map<const Vec3>(previous);
+            warm[0][l] = static_cast<T>(std::max<Scalar>(0, P.dot(n)));
+            warm[1][l] = static_cast<T>(P.dot(t1));
+            warm[2][l] = static_cast<T>(P.dot(t2));
+          }
+          // the relative velocity is body b's point's minus body a's: +1 on b's path, -1 on a's
+          for (const auto& [link, sign] : {std::pair{bc.link_b[c], T(1)}, std::pair{bc.link_a[c], T(-1)}}) {
+            if (link < 0) continue;
+            for (int e = topo.link_dof_start[link]; e < topo.link_dof_start[link + 1]; ++e)
+              R.coef[topo.link_dofs[e]][l] += sign;
+          }
         }
+        // normal: push the penetration beyond the slop out at erp / dt, let a gap close in one step,
+        // bounce at -restitution times the approach speed above the threshold (a contact that closes
+        // within this step)
+        V target =
+            depth > T(s.linear_slop) ? T(s.erp) * (depth - T(s.linear_slop)) / dt : (depth < 0 ? depth : V{}) / dt;
+        const int first = rows;
+        for (int e = 0; e < 3; ++e) {
+          const int r = add_row(e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V{}, warm[e]);
+          V* J = R.J_row(r);
+          V* z = R.z_row(r);
+          // J_k = coef_k d . (S_lin,k + S_ang,k x p): the velocity along d of the point p moved by dof k
+          for (int j = 0; j < nv; ++j) {
+            const V* s6 = S + 6 * j;
+            const V u0 = s6[3] + s6[1] * p[2] - s6[2] * p[1];
+            const V u1 = s6[4] + s6[2] * p[0] - s6[0] * p[2];
+            const V u2 = s6[5] + s6[0] * p[1] - s6[1] * p[0];
+            J[j] = R.coef[j] * (d[e][0] * u0 + d[e][1] * u1 + d[e][2] * u2);
+          }
+          std::copy(J, J + nv, z);
+          batch_solve(topo, H, z);
+          R.normal[r] = first;
+        }
+        V v_approach{};
+        for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
+        const V bounce = -restitution * v_approach;
+        const IntLanes<T> closing = (v_approach < -T(s.restitution_threshold)) & (depth - v_approach * dt >= 0);
+        R.target[first] = closing & (bounce > target) ? bounce : target;
+        R.mu[first + 1] = mu;
       }
+
+      BatchRows<T> batch_rows;
+      batch_rows.count = rows;
+      batch_rows.dofs = nv;
+      batch_rows.kind = R.kind.data();
+      batch_rows.normal = R.normal.data();
+      batch_rows.J = R.J.data();
+      batch_rows.MinvJT = R.z.data();
+      batch_rows.target = R.target.data();
+      batch_rows.mu = R.mu.data();
+      batch_rows.active = R.active.data();
+      batch_rows.inv_mass = R.inv_mass.data();
+      batch_rows.lambda = R.lambda.data();
+      PgsSettings pgs;
+      pgs.iterations = s.iterations;
+      pgs.cfm = s.cfm;
+      pgs.friction_smoothing = s.friction_smoothing;
+      batch_pgs_solve(batch_rows, pgs, w.qd.data());
+
+      // velocities and the impulses kept for warm starting: limits per dof and side, contacts as world
+      // vectors on body b
       for (int l = 0; l < lanes; ++l) {
         if (!mine[l]) continue;
         Scalar* out = qd_io + qd_off[l];
         for (int j = 0; j < nv; ++j) out[j] = w.qd[j][l];
-        for (int r = 0; r < 2 * nl; ++r) {
-          const T x = active[r][l] != 0 ? lambda[r][l] : T(0);
-          impulse[2 * (qd_off[l] + G.limited[r / 2]) + r % 2] = std::isfinite(x) ? x : 0;
+        for (int m = 0; m < 2 * nl; ++m) {
+          const int r = R.limit_row[m];
+          const T x = r >= 0 && R.active[r][l] ? R.lambda[r][l] : T(0);
+          impulse[2 * (qd_off[l] + G.limited[m / 2]) + m % 2] = std::isfinite(x) ? x : 0;
         }
       }
+      for (int t = 0; t < slots; ++t)
+        for (int l = 0; l < W; ++l) {
+          const int c = R.contact[t * W + l];
+          if (c < 0) continue;
+          Contacts& C = *bc.contacts;
+          const Vec3 n = Eigen::Map<const Vec3>(&C.contact_normal[3 * c]);
+          Vec3 t1, t2;
+          contact_tangents(n, &t1, &t2);
+          const V* lambda = &R.lambda[rows - 3 * (slots - t)];
+          const Vec3 P = Scalar(lambda[0][l]) * n + Scalar(lambda[1][l]) * t1 + Scalar(lambda[2][l]) * t2;
+          Eigen::Map<Vec3>(&C.contact_impulse[3 * c]) = P.allFinite() ? P : Vec3::Zero();
+        }
     });
   }
 
@@ -463,8 +548,14 @@ class Batches final : public ArticulationBatches {
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
-                              &w.f_ext, &w.q_next, &w.drive, &w.rows, &w.bodies, &w.IJ})
+                              &w.f_ext, &w.q_next, &w.drive, &w.bodies, &w.IJ})
           n += v->size() * sizeof(V);
+    for (const RowWork& R : row_work_)
+      n += (R.J.size() + R.z.size() + R.target.size() + R.mu.size() + R.inv_mass.size() + R.lambda.size() +
+            R.coef.size() + R.qd_in.size()) *
+               sizeof(V) +
+           R.active.size() * sizeof(IntLanes<T>) +
+           (R.limit_row.size() + R.contact.size() + R.normal.size()) * sizeof(int) + R.kind.size() * sizeof(RowKind);
     return n;
   }
 
@@ -559,6 +650,41 @@ class Batches final : public ArticulationBatches {
     }
   }
 
+  static bool any_lane(const IntLanes<T>& m) {
+    bool any = false;
+    for (int l = 0; l < W; ++l) any |= m[l] != 0;
+    return any;
+  }
+
+  // a thread's rows of one block (solve_rows); grows to the most rows a block has had
+  struct RowWork {
+    int dofs = 0;
+    std::vector<RowKind> kind;
+    std::vector<int> normal;
+    std::vector<IntLanes<T>> active;
+    std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
+    std::vector<int> limit_row;                         // [limited][2] its row, or -1
+    std::vector<int> contact;                           // [slot][lane] the contact, or -1
+    std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
+    void resize(int rows, int dofs_, int slots) {
+      dofs = dofs_;
+      if (static_cast<int>(kind.size()) < rows) {
+        kind.resize(rows);
+        normal.resize(rows);
+        active.resize(rows);
+        for (auto* x : {&target, &mu, &inv_mass, &lambda}) x->resize(rows);
+      }
+      for (auto* x : {&J, &z})
+        if (x->size() < static_cast<size_t>(rows) * dofs) x->resize(static_cast<size_t>(rows) * dofs);
+      if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
+      if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
+      for (auto* x : {&coef, &qd_in})
+        if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
+    }
+    V* J_row(int r) { return J.data() + static_cast<size_t>(r) * dofs; }
+    V* z_row(int r) { return z.data() + static_cast<size_t>(r) * dofs; }
+  };
+
   // a world's factor copied out of its block (solve_mass), per thread
   struct LaneFactor {
     int articulation = -1;
@@ -574,6 +700,7 @@ class Batches final : public ArticulationBatches {
   std::vector<std::pair<int, int>> blocks_;      // (group, block) in order
   std::vector<Slot> slot_;                       // per articulation
   std::vector<std::vector<BatchWork<T>>> work_;  // per thread, per group
+  std::vector<RowWork> row_work_;                // per thread
 };
 
 }  // namespace

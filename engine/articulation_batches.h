@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "engine/collision.h"
 #include "engine/model.h"
 
 namespace novaphy {
@@ -55,19 +56,33 @@ class ArticulationBatches {
   virtual void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt,
                         const DynamicsOptions& options, Scalar* qd_out, Scalar* qdd_out, int* factor_failure,
                         int threads) = 0;
-  // joint-limit rows of active articulations whose lane `skip[a]` is 0 (those touched by no contact),
-  // solved here a block at a time: the same rows, warm start and PGS sweeps as the solver's scalar
-  // path, with each lane's inactive rows masked. qd [dof] and impulse [dof][2] (the warm-start
-  // impulses of the lower and upper limit) are read and written for those articulations
-  struct LimitSettings {
+  // the contacts of articulations with static bodies (the ground) or with themselves, listed per
+  // articulation for solve_rows
+  struct BlockContacts {
+    Contacts* contacts = nullptr;  // geometry and warm starts in; contact_impulse out for the listed contacts
+    const int* start = nullptr;    // [articulation + 1]: articulation a's contacts are list[start[a] .. start[a + 1])
+    const int* list = nullptr;     // contact indices, each articulation's in increasing order
+    const int* link_a = nullptr;   // [contact] the link holding body a in its articulation, -1 for a static body
+    const int* link_b = nullptr;   // [contact] likewise for body b
+    const Scalar* mu = nullptr;    // [contact] friction coefficient
+    const Scalar* restitution = nullptr;  // [contact]
+  };
+  struct RowSettings {
     int iterations = 20;
     Scalar erp = 0.2, linear_slop = 0.001, cfm = 1e-6, warmstarting_factor = 0.85;
+    Scalar restitution_threshold = 0.2, friction_smoothing = 1;
     bool use_warmstarting = true;
   };
-  virtual void solve_limits(const State& in, const std::uint8_t* skip, const LimitSettings& settings, Scalar dt,
-                            Scalar* qd, Scalar* impulse, int threads) = 0;
-  // 1 where articulation a's limit rows are solved by solve_limits (given the same skip)
-  virtual bool solves_limits(int a, const std::uint8_t* skip) const = 0;
+  // the constraint rows of active articulations with skip[a] == 0 (no contact joins them to another
+  // moving articulation), solved here a block at a time: joint-limit rows, then each world's listed
+  // contacts (a normal row and two friction rows each), with the same targets, warm start and PGS
+  // sweeps as the solver's scalar path (kernels/batch_pgs.h); a lane's absent rows are masked.
+  // qd [dof] and impulse [dof][2] (the warm-start impulses of the lower and upper limit) are read and
+  // written for those articulations; in.joint_qd (the step's initial velocity) is read for restitution
+  virtual void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& contacts,
+                          const RowSettings& settings, Scalar dt, Scalar* qd, Scalar* impulse, int threads) = 0;
+  // true where articulation a's rows are solved by solve_rows (given the same skip)
+  virtual bool solves_rows(int a, const std::uint8_t* skip) const = 0;
   // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations)
   virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) = 0;
   // body_q / body_qd of active articulations from out.joint_q / out.joint_qd

@@ -20,14 +20,6 @@ namespace novaphy {
 
 namespace {
 
-// two unit tangents completing the normal to a right-handed frame (Frisvad's construction)
-void tangents(const Vec3& n, Vec3* t1, Vec3* t2) {
-  const Scalar sign = std::copysign(Scalar(1), n.z());
-  const Scalar a = -1 / (sign + n.z()), b = n.x() * n.y() * a;
-  *t1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
-  *t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
-}
-
 void check_range(const char* name, Scalar value, Scalar lo, Scalar hi) {
   if (!(value >= lo && value <= hi)) fail("settings.", name, " must be in [", lo, ", ", hi, "], got ", value);
 }
@@ -122,7 +114,8 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   }
   diverged_.assign(model.articulation_count, 0);
   touched_.assign(model.articulation_count, 0);
-  limits_batched_.assign(model.articulation_count, 0);
+  rows_batched_.assign(model.articulation_count, 0);
+  block_contact_start_.assign(model.articulation_count + 1, 0);
   std::vector<std::uint8_t> batchable(model.articulation_count, 0);
   std::vector<std::vector<WeldedBody>> welded(model.articulation_count);
   for (int a = 0; a < model.articulation_count; ++a) {
@@ -189,21 +182,31 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   lap(stage_seconds_.dynamics);
   row_count_ = 0;
   pool_size_ = 0;
-  if (batch_step_ && !limited_joints_.empty()) {
-    // articulations touched by no contact have their limit rows solved in their blocks
-    std::fill(touched_.begin(), touched_.end(), 0);
-    for (int c = 0; c < contacts.contact_count; ++c)
-      for (const int b : {contacts.contact_body_a[c], contacts.contact_body_b[c]})
-        if (b >= 0) touched_[body_articulation_[b]] = 1;
-    ArticulationBatches::LimitSettings limits;
-    limits.iterations = settings.num_iterations;
-    limits.erp = settings.erp;
-    limits.linear_slop = settings.linear_slop;
-    limits.cfm = settings.cfm;
-    limits.warmstarting_factor = settings.warmstarting_factor;
-    limits.use_warmstarting = settings.use_warmstarting;
-    batches_->solve_limits(in, touched_.data(), limits, dt, qd_.data(), limit_impulse_.data(), thread_count());
-    for (size_t a = 0; a < art_.size(); ++a) limits_batched_[a] = batches_->solves_limits(a, touched_.data());
+  if (batch_step_ && (!limited_joints_.empty() || contacts.contact_count > 0)) {
+    // articulations no contact joins to another moving one have their limit and contact rows solved
+    // in their blocks
+    list_block_contacts(contacts);
+    ArticulationBatches::BlockContacts block;
+    block.contacts = &contacts;
+    block.start = block_contact_start_.data();
+    block.list = block_contacts_.data();
+    block.link_a = contact_link_a_.data();
+    block.link_b = contact_link_b_.data();
+    block.mu = contact_mu_.data();
+    block.restitution = contact_restitution_.data();
+    ArticulationBatches::RowSettings rows;
+    rows.iterations = settings.num_iterations;
+    rows.erp = settings.erp;
+    rows.linear_slop = settings.linear_slop;
+    rows.cfm = settings.cfm;
+    rows.warmstarting_factor = settings.warmstarting_factor;
+    rows.restitution_threshold = settings.restitution_threshold;
+    rows.friction_smoothing = settings.friction_smoothing;
+    rows.use_warmstarting = settings.use_warmstarting;
+    batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
+    for (size_t a = 0; a < art_.size(); ++a) rows_batched_[a] = batches_->solves_rows(a, touched_.data());
+  } else if (batch_step_) {
+    std::fill(rows_batched_.begin(), rows_batched_.end(), 0);
   }
   build_limit_rows(in, dt);
   lap(stage_seconds_.limit_rows);
@@ -414,12 +417,46 @@ void SolverFeatherstone::add_point_jacobian(int body, const Vec3& p, const Vec3&
       J[k] += sign * (d.dot(S.col(k).tail<3>()) + pxd.dot(S.col(k).head<3>()));
 }
 
-int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target) {
+int SolverFeatherstone::moving_articulation(int body) const {
   // a body of an articulation without dofs (welded to the world) is as static as the world
-  auto moving = [&](int body) {
-    return body >= 0 && art_[body_articulation_[body]].dof_count() > 0 ? body_articulation_[body] : -1;
-  };
-  const int art_a = moving(body_a), art_b = moving(body_b);
+  return body >= 0 && art_[body_articulation_[body]].dof_count() > 0 ? body_articulation_[body] : -1;
+}
+
+void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
+  // a contact joining two moving articulations puts both on the scalar path (touched_); every other
+  // contact of an articulation whose rows its block solves is listed for it, in contact order
+  const int n = contacts.contact_count;
+  if (static_cast<int>(block_contacts_.size()) < n) {
+    for (auto* x : {&block_contacts_, &contact_link_a_, &contact_link_b_, &contact_block_}) x->resize(n);
+    for (auto* x : {&contact_mu_, &contact_restitution_}) x->resize(n);
+  }
+  std::fill(touched_.begin(), touched_.end(), 0);
+  for (int c = 0; c < n; ++c) {
+    const int a = moving_articulation(contacts.contact_body_a[c]), b = moving_articulation(contacts.contact_body_b[c]);
+    if (a >= 0 && b >= 0 && a != b) touched_[a] = touched_[b] = 1;
+  }
+  std::fill(block_contact_start_.begin(), block_contact_start_.end(), 0);
+  for (int c = 0; c < n; ++c) {
+    const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
+    const int a = moving_articulation(ba), b = moving_articulation(bb);
+    const int art = a >= 0 ? a : b;
+    contact_block_[c] = art >= 0 && on_batch(art) && !touched_[art] ? art : -1;
+    if (contact_block_[c] < 0) continue;
+    ++block_contact_start_[art + 1];
+    contact_link_a_[c] = a >= 0 ? body_link_[ba] : -1;
+    contact_link_b_[c] = b >= 0 ? body_link_[bb] : -1;
+    const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
+    contact_mu_[c] = std::sqrt(model_.shape_mu[sa] * model_.shape_mu[sb]);
+    contact_restitution_[c] = std::max(model_.shape_restitution[sa], model_.shape_restitution[sb]);
+  }
+  for (size_t a = 0; a < art_.size(); ++a) block_contact_start_[a + 1] += block_contact_start_[a];
+  fill_.assign(block_contact_start_.begin(), block_contact_start_.end() - 1);
+  for (int c = 0; c < n; ++c)
+    if (contact_block_[c] >= 0) block_contacts_[fill_[contact_block_[c]]++] = c;
+}
+
+int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target) {
+  const int art_a = moving_articulation(body_a), art_b = moving_articulation(body_b);
   const int r = begin_row(art_a, art_b, kind, target);
   if (art_b >= 0) add_point_jacobian(body_b, p, d, 1, row_jacobian(r, art_b));
   if (art_a >= 0) add_point_jacobian(body_a, p, d, -1, row_jacobian(r, art_a));
@@ -432,7 +469,7 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
     limit_row_[2 * g] = limit_row_[2 * g + 1] = -1;
   }
   for (const int j : limited_joints_) {
-    if (limits_in_batch(model_.joint_articulation[j])) continue;
+    if (rows_in_batch(model_.joint_articulation[j])) continue;
     const int g = model_.joint_qd_start[j];
     const Scalar q = in.joint_q[model_.joint_q_start[j]];
     for (int side = 0; side < 2; ++side) {
@@ -455,6 +492,7 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
 void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt) {
   contact_row_.assign(contacts.contact_count, -1);
   for (int c = 0; c < contacts.contact_count; ++c) {
+    if (batch_step_ && contact_block_[c] >= 0) continue;  // solved in its block
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
     const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
     const Vec3 p = Eigen::Map<const Vec3>(&contacts.contact_point[3 * c]);
@@ -463,7 +501,7 @@ void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt)
     const Scalar mu = std::sqrt(model_.shape_mu[sa] * model_.shape_mu[sb]);
     const Scalar restitution = std::max(model_.shape_restitution[sa], model_.shape_restitution[sb]);
     Vec3 t1, t2;
-    tangents(n, &t1, &t2);
+    contact_tangents(n, &t1, &t2);
 
     // normal row: push the penetration beyond the slop out at erp / dt, let a gap close in one step,
     // bounce at -restitution times the approach speed above the threshold
@@ -542,14 +580,15 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
   // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
   for (int c = 0; c < contacts.contact_count; ++c) {
     const int rn = contact_row_[c];
+    if (rn < 0) continue;  // its block kept its impulse
     const Vec3 n = Eigen::Map<const Vec3>(&contacts.contact_normal[3 * c]);
     Vec3 t1, t2;
-    tangents(n, &t1, &t2);
+    contact_tangents(n, &t1, &t2);
     const Vec3 impulse = rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
     Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) = impulse.allFinite() ? impulse : Vec3::Zero();
   }
   for (const int j : limited_joints_) {
-    if (limits_in_batch(model_.joint_articulation[j])) continue;  // its block kept its impulses
+    if (rows_in_batch(model_.joint_articulation[j])) continue;  // its block kept its impulses
     for (int k = 2 * model_.joint_qd_start[j]; k < 2 * model_.joint_qd_start[j] + 2; ++k) {
       const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
       limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;

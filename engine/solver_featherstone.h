@@ -120,8 +120,13 @@ class SolverFeatherstone {
   int thread_count() const { return settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads(); }
   // true when articulation a is stepped by the batched kernels this step
   bool on_batch(int a) const { return batch_step_ && batches_->active(a); }
-  // true when articulation a's limit rows are solved in its block this step (no contact touches it)
-  bool limits_in_batch(int a) const { return batch_step_ && limits_batched_[a]; }
+  // true when articulation a's limit and contact rows are solved in its block this step (no contact
+  // joins it to another moving articulation)
+  bool rows_in_batch(int a) const { return batch_step_ && rows_batched_[a]; }
+  // the articulation body moves with, -1 for the world or a body of an articulation without dofs
+  int moving_articulation(int body) const;
+  // touched_ and the contacts each block solves (block_contact_start_, block_contacts_, contact_*_)
+  void list_block_contacts(const Contacts& contacts);
   // articulation a's scalar scratch, sized on first use
   ArticulationScratch& scratch(int a);
 
@@ -149,10 +154,15 @@ class SolverFeatherstone {
   std::vector<ArticulationScratch> scratch_;
   std::unique_ptr<ArticulationBatches> batches_;
   bool batch_step_ = false;
-  bool wrenches_ = false;                     // the step's input has a nonzero body_f
-  bool drives_ = false;                       // the step's control has a nonzero PD gain
-  std::vector<std::uint8_t> touched_;         // per articulation: 1 where a contact of this step touches it
-  std::vector<std::uint8_t> limits_batched_;  // per articulation: its limit rows solved in its block this step
+  bool wrenches_ = false;                   // the step's input has a nonzero body_f
+  bool drives_ = false;                     // the step's control has a nonzero PD gain
+  std::vector<std::uint8_t> touched_;       // per articulation: 1 where a contact joins it to another moving one
+  std::vector<std::uint8_t> rows_batched_;  // per articulation: its limit and contact rows solved in its block
+  // list_block_contacts' output: per contact its articulation when its block solves it (else -1), the
+  // links of its bodies there, its friction and restitution; per articulation its contacts
+  std::vector<int> contact_block_, contact_link_a_, contact_link_b_;
+  std::vector<Scalar> contact_mu_, contact_restitution_;
+  std::vector<int> block_contact_start_, block_contacts_, fill_;
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;
   std::vector<int> rotational_dof_;  // dofs scaled by angular damping

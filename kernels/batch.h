@@ -85,20 +85,18 @@ void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art,
 // one block's kinematics and per-link work, sized for a topology (a thread's scratch)
 template <typename T>
 struct BatchWork {
-  std::vector<Lanes<T>> Q, p, R;        // [link][4], [link][3], [link][9]: link pose in the world
-  std::vector<Lanes<T>> v, a, f;        // [link][6] velocity, acceleration, force about o
-  std::vector<Lanes<T>> I;              // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
-  std::vector<Lanes<T>> vrel;           // [link][3] Free joints: linear velocity in the parent, world axes
-  std::vector<Lanes<T>> q, qd, x;       // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
-  std::vector<Lanes<T>> q_next;         // [coord] coordinates after the step
-  std::vector<Lanes<T>> tau;            // [dof] bias forces
-  std::vector<Lanes<T>> diag;           // [dof] implicit diagonal added to H
-  std::vector<Lanes<T>> f_ext;          // [link][6] applied wrenches about o
-  std::vector<Lanes<T>> drive;          // [4][dof] PD drive gains and targets: kd, target velocity, ke, target position
-  std::vector<Lanes<T>> rows;           // the batched limit rows' work (sized by their owner)
-  std::vector<std::uint8_t> row_flags;  // and their per-row flags
-  std::vector<Lanes<T>> bodies;         // [body][13] body_q and body_qd on their way out (sized by the owner)
-  std::vector<Lanes<T>> IJ;             // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
+  std::vector<Lanes<T>> Q, p, R;   // [link][4], [link][3], [link][9]: link pose in the world
+  std::vector<Lanes<T>> v, a, f;   // [link][6] velocity, acceleration, force about o
+  std::vector<Lanes<T>> I;         // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
+  std::vector<Lanes<T>> vrel;      // [link][3] Free joints: linear velocity in the parent, world axes
+  std::vector<Lanes<T>> q, qd, x;  // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
+  std::vector<Lanes<T>> q_next;    // [coord] coordinates after the step
+  std::vector<Lanes<T>> tau;       // [dof] bias forces
+  std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
+  std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
+  std::vector<Lanes<T>> drive;     // [4][dof] PD drive gains and targets: kd, target velocity, ke, target position
+  std::vector<Lanes<T>> bodies;    // [body][13] body_q and body_qd on their way out (sized by the owner)
+  std::vector<Lanes<T>> IJ;        // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
 
   void resize(const BatchTopology<T>& topo);
 };

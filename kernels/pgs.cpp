@@ -5,6 +5,13 @@
 
 namespace novaphy {
 
+void contact_tangents(const Vec3& n, Vec3* t1, Vec3* t2) {
+  const Scalar sign = std::copysign(Scalar(1), n.z());
+  const Scalar a = -1 / (sign + n.z()), b = n.x() * n.y() * a;
+  *t1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
+  *t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
+}
+
 Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scalar* qd) {
   // the innermost loop of PGS: a vector reduction (its order is the build's, the same for every row,
   // world and thread count)

@@ -30,6 +30,9 @@ struct PgsSettings {
   Scalar friction_smoothing = 1;  // 0: box friction per tangent, 1: circular cone, between: blend
 };
 
+// two unit tangents completing a contact normal n to a right-handed frame (Frisvad's construction)
+void contact_tangents(const Vec3& n, Vec3* t1, Vec3* t2);
+
 // J qd of one row
 Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scalar* qd);
 

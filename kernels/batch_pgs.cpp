@@ -1,0 +1,81 @@
+#include "kernels/batch_pgs.h"
+
+#include <limits>
+
+namespace novaphy {
+
+namespace {
+
+template <typename T>
+using V = Lanes<T>;
+template <typename T>
+using M = IntLanes<T>;
+
+template <typename T>
+V<T> dot(const V<T>* a, const V<T>* b, int n) {
+  V<T> s{};
+  for (int k = 0; k < n; ++k) s += a[k] * b[k];
+  return s;
+}
+
+// qd += z * impulse in the lanes of `on`; the others keep their bits
+template <typename T>
+void apply(const V<T>* z, const V<T>& impulse, const M<T>& on, int n, V<T>* qd) {
+  for (int k = 0; k < n; ++k) qd[k] = on ? qd[k] + z[k] * impulse : qd[k];
+}
+
+template <typename T>
+M<T> finite(const V<T>& x) {
+  return lane_abs<T>(x) <= std::numeric_limits<T>::max();
+}
+
+}  // namespace
+
+template <typename T>
+void batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>* qd) {
+  const int n = rows.dofs;
+  const T cfm = static_cast<T>(settings.cfm), s = static_cast<T>(settings.friction_smoothing);
+  auto J = [&](int r) { return rows.J + static_cast<size_t>(r) * n; };
+  auto z = [&](int r) { return rows.MinvJT + static_cast<size_t>(r) * n; };
+  V<T>* lambda = rows.lambda;
+  for (int r = 0; r < rows.count; ++r) {
+    const V<T> W = dot<T>(J(r), z(r), n) + cfm;
+    rows.inv_mass[r] = (rows.active[r] != 0) & (W > T(1e-12)) ? 1 / W : V<T>{};
+  }
+  for (int r = 0; r < rows.count; ++r) apply<T>(z(r), lambda[r], rows.active[r], n, qd);
+  // unconstrained step of one row: the impulse that would bring J qd to its target
+  auto step = [&](int r) { return -(dot<T>(J(r), qd, n) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
+  for (int it = 0; it < settings.iterations; ++it) {
+    for (int r = 0; r < rows.count; ++r) {
+      // a lane gone non-finite keeps its impulse, so NaN does not spread through the rows
+      if (rows.kind[r] == RowKind::Unilateral) {
+        const V<T> sum = lambda[r] + step(r);
+        const V<T> next = sum > 0 ? sum : V<T>{};
+        const M<T> on = rows.active[r] & finite<T>(next);
+        apply<T>(z(r), next - lambda[r], on, n, qd);
+        lambda[r] = on ? next : lambda[r];
+        continue;
+      }
+      // friction pair: both tangents, bounded by mu * normal impulse (box, disk or a blend)
+      const int r2 = r + 1;
+      const V<T> limit = rows.mu[r] * lambda[rows.normal[r]];
+      const V<T> l1 = lambda[r] + step(r), l2 = lambda[r2] + step(r2);
+      const V<T> box1 = l1 < -limit ? -limit : (l1 > limit ? limit : l1);
+      const V<T> box2 = l2 < -limit ? -limit : (l2 > limit ? limit : l2);
+      const V<T> norm = lane_sqrt<T>(l1 * l1 + l2 * l2);
+      const V<T> scale = norm > limit ? limit / norm : V<T>{} + 1;
+      const V<T> new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
+      const M<T> on = rows.active[r] & finite<T>(new1) & finite<T>(new2);
+      apply<T>(z(r), new1 - lambda[r], on, n, qd);
+      apply<T>(z(r2), new2 - lambda[r2], on, n, qd);
+      lambda[r] = on ? new1 : lambda[r];
+      lambda[r2] = on ? new2 : lambda[r2];
+      ++r;  // the second tangent
+    }
+  }
+}
+
+template void batch_pgs_solve(const BatchRows<float>&, const PgsSettings&, Lanes<float>*);
+template void batch_pgs_solve(const BatchRows<double>&, const PgsSettings&, Lanes<double>*);
+
+}  // namespace novaphy
