@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 
@@ -289,6 +290,8 @@ class Batches final : public ArticulationBatches {
         R.target[r] = target;
         R.lambda[r] = on ? warm : V{};
         R.mu[r] = V{};
+        R.nonzero_begin[r] = nv;
+        R.nonzero_end[r] = 0;
         return r;
       };
 
@@ -318,6 +321,8 @@ class Batches final : public ArticulationBatches {
           V* z = R.z_row(r);
           std::fill(J, J + nv, V{});
           J[k] = on ? V{} + sign : V{};
+          R.nonzero_begin[r] = k;
+          R.nonzero_end[r] = k + 1;
           batch_solve_unit(topo, H, k, z);
           for (int j = 0; j < nv; ++j) z[j] *= sign;
         }
@@ -369,6 +374,12 @@ class Batches final : public ArticulationBatches {
         V target =
             depth > T(s.linear_slop) ? T(s.erp) * (depth - T(s.linear_slop)) / dt : (depth < 0 ? depth : V{}) / dt;
         const int first = rows;
+        int begin = nv, end = 0;  // the dofs on some lane's paths
+        for (int j = 0; j < nv; ++j)
+          if (any_lane(R.coef[j] != 0)) {
+            begin = std::min(begin, j);
+            end = j + 1;
+          }
         for (int e = 0; e < 3; ++e) {
           const int r = add_row(e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V{}, warm[e]);
           V* J = R.J_row(r);
@@ -384,6 +395,8 @@ class Batches final : public ArticulationBatches {
           std::copy(J, J + nv, z);
           batch_solve(topo, H, z);
           R.normal[r] = first;
+          R.nonzero_begin[r] = begin;
+          R.nonzero_end[r] = end;
         }
         V v_approach{};
         for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
@@ -399,6 +412,8 @@ class Batches final : public ArticulationBatches {
       batch_rows.kind = R.kind.data();
       batch_rows.normal = R.normal.data();
       batch_rows.J = R.J.data();
+      batch_rows.nonzero_begin = R.nonzero_begin.data();
+      batch_rows.nonzero_end = R.nonzero_end.data();
       batch_rows.MinvJT = R.z.data();
       batch_rows.target = R.target.data();
       batch_rows.mu = R.mu.data();
@@ -555,7 +570,9 @@ class Batches final : public ArticulationBatches {
             R.coef.size() + R.qd_in.size()) *
                sizeof(V) +
            R.active.size() * sizeof(IntLanes<T>) +
-           (R.limit_row.size() + R.contact.size() + R.normal.size()) * sizeof(int) + R.kind.size() * sizeof(RowKind);
+           (R.limit_row.size() + R.contact.size() + R.normal.size() + R.nonzero_begin.size() + R.nonzero_end.size()) *
+               sizeof(int) +
+           R.kind.size() * sizeof(RowKind);
     return n;
   }
 
@@ -651,9 +668,10 @@ class Batches final : public ArticulationBatches {
   }
 
   static bool any_lane(const IntLanes<T>& m) {
-    bool any = false;
-    for (int l = 0; l < W; ++l) any |= m[l] != 0;
-    return any;
+    std::uint64_t x[sizeof(m) / 8], any = 0;
+    std::memcpy(x, &m, sizeof(m));
+    for (const std::uint64_t word : x) any |= word;
+    return any != 0;
   }
 
   // a thread's rows of one block (solve_rows); grows to the most rows a block has had
@@ -661,6 +679,7 @@ class Batches final : public ArticulationBatches {
     int dofs = 0;
     std::vector<RowKind> kind;
     std::vector<int> normal;
+    std::vector<int> nonzero_begin, nonzero_end;  // [row]: where J may be nonzero
     std::vector<IntLanes<T>> active;
     std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
     std::vector<int> limit_row;                         // [limited][2] its row, or -1
@@ -676,6 +695,8 @@ class Batches final : public ArticulationBatches {
       }
       for (auto* x : {&J, &z})
         if (x->size() < static_cast<size_t>(rows) * dofs) x->resize(static_cast<size_t>(rows) * dofs);
+      for (auto* x : {&nonzero_begin, &nonzero_end})
+        if (static_cast<int>(x->size()) < rows) x->resize(rows);
       if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
       if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
       for (auto* x : {&coef, &qd_in})

@@ -44,7 +44,25 @@ void batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>
   }
   for (int r = 0; r < rows.count; ++r) apply<T>(z(r), lambda[r], rows.active[r], n, qd);
   // unconstrained step of one row: the impulse that would bring J qd to its target
-  auto step = [&](int r) { return -(dot<T>(J(r), qd, n) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
+  auto velocity = [&](int r) {
+    // four sums, of the dofs k = 0, 1, 2, 3 mod 4, so that the latency of one does not hold up the
+    // others; the dofs outside the row's range (zero terms) are skipped without changing a bit
+    const V<T>* j = J(r);
+    const int end = rows.nonzero_end[r];
+    V<T> v0{}, v1{}, v2{}, v3{};
+    int k = rows.nonzero_begin[r] & ~3;
+    for (; k + 4 <= end; k += 4) {
+      v0 += j[k] * qd[k];
+      v1 += j[k + 1] * qd[k + 1];
+      v2 += j[k + 2] * qd[k + 2];
+      v3 += j[k + 3] * qd[k + 3];
+    }
+    if (k < end) v0 += j[k] * qd[k];
+    if (k + 1 < end) v1 += j[k + 1] * qd[k + 1];
+    if (k + 2 < end) v2 += j[k + 2] * qd[k + 2];
+    return (v0 + v1) + (v2 + v3);
+  };
+  auto step = [&](int r) { return -(velocity(r) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
   for (int it = 0; it < settings.iterations; ++it) {
     for (int r = 0; r < rows.count; ++r) {
       // a lane gone non-finite keeps its impulse, so NaN does not spread through the rows

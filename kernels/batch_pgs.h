@@ -12,11 +12,14 @@ namespace novaphy {
 // a block's rows: per row its kind (the same in every lane) and per lane its numbers
 template <typename T>
 struct BatchRows {
-  int count = 0;                        // rows
-  int dofs = 0;                         // the length of each row of J and M^-1 J^T
-  const RowKind* kind = nullptr;        // [row] a FrictionPair row is followed by its second tangent
-  const int* normal = nullptr;          // [row] FrictionPair: the row holding the normal impulse
-  const Lanes<T>* J = nullptr;          // [row][dof]
+  int count = 0;                  // rows
+  int dofs = 0;                   // the length of each row of J and M^-1 J^T
+  const RowKind* kind = nullptr;  // [row] a FrictionPair row is followed by its second tangent
+  const int* normal = nullptr;    // [row] FrictionPair: the row holding the normal impulse
+  const Lanes<T>* J = nullptr;    // [row][dof]
+  // [row]: J is +-0 in every lane outside dofs nonzero_begin[r] .. nonzero_end[r] - 1, which J qd skips
+  const int* nonzero_begin = nullptr;
+  const int* nonzero_end = nullptr;
   const Lanes<T>* MinvJT = nullptr;     // [row][dof]
   const Lanes<T>* target = nullptr;     // [row] the velocity J qd the row drives towards
   const Lanes<T>* mu = nullptr;         // [row] FrictionPair: friction coefficient

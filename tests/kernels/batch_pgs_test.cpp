@@ -32,6 +32,7 @@ struct Problem {
   static constexpr int W = kLanes<T>;
   std::vector<V> J, z, target, mu, inv_mass, lambda, qd;
   std::vector<IntLanes<T>> active;
+  std::vector<int> nonzero_begin, nonzero_end;  // every row dense but the first, nonzero on dofs 2 .. 4
 
   Problem(std::mt19937& rng, bool (*absent)(int lane, int row))
       : J(kRows * kDofs),
@@ -43,6 +44,10 @@ struct Problem {
         qd(kDofs),
         active(kRows) {
     std::uniform_real_distribution<double> u(-1, 1);
+    for (int r = 0; r < kRows; ++r) {
+      nonzero_begin.push_back(r > 0 ? 0 : 2);
+      nonzero_end.push_back(r > 0 ? kDofs : 5);
+    }
     for (int l = 0; l < W; ++l) {
       Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(kDofs, kDofs, [&] { return u(rng); });
       const Eigen::MatrixXd M = A * A.transpose() + Eigen::MatrixXd::Identity(kDofs, kDofs);
@@ -52,7 +57,7 @@ struct Problem {
         const bool on = !absent(l, r);
         active[r][l] = on ? -1 : 0;
         Eigen::VectorXd j(kDofs);
-        for (int k = 0; k < kDofs; ++k) j[k] = on ? static_cast<T>(u(rng)) : 0;
+        for (int k = 0; k < kDofs; ++k) j[k] = on && (r > 0 || (k >= 2 && k < 5)) ? static_cast<T>(u(rng)) : 0;
         const Eigen::VectorXd x = llt.solve(j);
         for (int k = 0; k < kDofs; ++k) {
           J[r * kDofs + k][l] = static_cast<T>(j[k]);
@@ -72,6 +77,8 @@ struct Problem {
     b.kind = kKind;
     b.normal = kNormal;
     b.J = J.data();
+    b.nonzero_begin = nonzero_begin.data();
+    b.nonzero_end = nonzero_end.data();
     b.MinvJT = z.data();
     b.target = target.data();
     b.mu = mu.data();
