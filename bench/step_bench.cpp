@@ -45,7 +45,9 @@ void BM_NovaPhyStep(benchmark::State& bm) {
   batch.set_precision(bm.range(3) == 1 ? Precision::Float32 : Precision::Float64);
   batch.replicate(robot, worlds);
   const Model model = batch.finalize();
-  CollisionPipeline pipeline(model);
+  CollisionOptions collision;
+  collision.num_threads = static_cast<int>(bm.range(2));
+  CollisionPipeline pipeline(model, collision);
   Contacts contacts = pipeline.contacts();
   SolverFeatherstoneSettings settings;
   settings.num_threads = static_cast<int>(bm.range(2));

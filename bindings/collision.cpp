@@ -20,15 +20,16 @@ void bind_collision(py::module_& m) {
 #undef NOVAPHY_BIND_CONTACT_FIELD
 
   py::class_<CollisionPipeline>(m, "CollisionPipeline", "Broad and narrow phase for planes, spheres, boxes, capsules.")
-      .def(py::init([](const Model& model, int contact_capacity, Scalar margin, bool self_collision) {
+      .def(py::init([](const Model& model, int contact_capacity, Scalar margin, bool self_collision, int num_threads) {
              CollisionOptions options;
              options.contact_capacity = contact_capacity;
              options.margin = margin;
              options.self_collision = self_collision;
+             options.num_threads = num_threads;
              return new CollisionPipeline(model, options);
            }),
            py::arg("model"), py::kw_only(), py::arg("contact_capacity") = 0, py::arg("margin") = 0.01,
-           py::arg("self_collision") = true, py::keep_alive<1, 2>())
+           py::arg("self_collision") = true, py::arg("num_threads") = 0, py::keep_alive<1, 2>())
       .def("contacts", &CollisionPipeline::contacts, "A contacts buffer sized for this pipeline.")
       .def("collide", &CollisionPipeline::collide, py::arg("state"), py::arg("contacts"),
            py::call_guard<py::gil_scoped_release>(), "Contacts between the shapes at state.body_q.");

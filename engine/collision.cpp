@@ -1,5 +1,7 @@
 #include "engine/collision.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <numeric>
 
@@ -26,6 +28,7 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
   if (options.contact_capacity < 0) fail("contact_capacity must be >= 0, got ", options.contact_capacity);
   if (!(options.margin >= 0) || !std::isfinite(options.margin))
     fail("margin must be finite and >= 0, got ", options.margin);
+  if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
   if (options_.contact_capacity == 0) options_.contact_capacity = std::max(64, 8 * model.shape_count);
   body_parent_.assign(model.body_count, -1);
   body_articulation_.assign(model.body_count, -1);
@@ -123,36 +126,46 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   contacts.contact_dropped = 0;
 
   // broad phase per world: sweep and prune along x within each world, then the shapes every world
-  // shares against all, then each plane against the shapes of its world (all worlds for a shared one)
-  for (const int s : others_)
+  // shares against all, then each plane against the shapes of its world (all worlds for a shared one);
+  // worlds and planes spread over threads
+  const int threads = options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+  const int shapes = static_cast<int>(others_.size());
+#pragma omp parallel for schedule(static) \
+    num_threads(std::max(1, std::min(threads, shapes))) if (threads > 1 && shapes > 1)
+  for (int k = 0; k < shapes; ++k) {
+    const int s = others_[k];
     shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
+  }
   auto overlap = [&](int a, int b) {
     for (int k = 0; k < 3; ++k)
       if (lower_[3 * b + k] > upper_[3 * a + k] || lower_[3 * a + k] > upper_[3 * b + k]) return false;
     return true;
   };
-  auto test_pair = [&](int a, int b) {
-    if (overlap(a, b) && may_collide(a, b)) narrow_phase(std::min(a, b), std::max(a, b), state, contacts);
+  auto test_pair = [&](int a, int b, std::vector<Found>& out) {
+    if (overlap(a, b) && may_collide(a, b)) narrow_phase(std::min(a, b), std::max(a, b), state, out);
   };
-  for (std::vector<int>& order : world_others_) {
+  find_contacts(model_.world_count, contacts, [&](int w, std::vector<Found>& out) {
+    std::vector<int>& order = world_others_[w];
     std::sort(order.begin(), order.end(),
               [&](int x, int y) { return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y); });
     for (size_t i = 0; i < order.size(); ++i)
       for (size_t j = i + 1; j < order.size() && lower_[3 * order[j]] <= upper_[3 * order[i]]; ++j)
-        test_pair(order[i], order[j]);
-  }
-  for (size_t i = 0; i < shared_others_.size(); ++i)
+        test_pair(order[i], order[j], out);
+  });
+  find_contacts(static_cast<int>(shared_others_.size()), contacts, [&](int i, std::vector<Found>& out) {
     for (const int b : others_)
       if (b != shared_others_[i] && (model_.shape_world[b] >= 0 || b > shared_others_[i]))
-        test_pair(shared_others_[i], b);
-  for (const int p : planes_) {
+        test_pair(shared_others_[i], b, out);
+  });
+  find_contacts(static_cast<int>(planes_.size()), contacts, [&](int i, std::vector<Found>& out) {
+    const int p = planes_[i];
     const Transform X = shape_pose(model_, state, p);
     const Vec3 n = X.q * Vec3::UnitY();
     auto against = [&](const std::vector<int>& shapes) {
       for (const int s : shapes) {
         const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
         const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
-        if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, contacts);
+        if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, out);
       }
     };
     const int w = model_.shape_world[p];
@@ -162,10 +175,47 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
       against(world_others_[w]);
       against(shared_others_);
     }
-  }
+  });
 }
 
-void CollisionPipeline::narrow_phase(int a, int b, const State& state, Contacts& contacts) const {
+template <typename F>
+void CollisionPipeline::find_contacts(int count, Contacts& contacts, F&& f) {
+  // a static schedule hands thread t the t-th run of consecutive i: the threads' lists in thread
+  // order are the contacts in the order of i, and each thread writes its own after the others' before
+  const int threads = std::min(options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads(), count);
+  if (threads <= 0) return;
+  if (static_cast<int>(found_.size()) < threads) found_.resize(threads);
+  for (int t = 0; t < threads; ++t) found_[t].clear();
+  const int first = contacts.contact_count;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    const int t = omp_get_thread_num();
+#pragma omp for schedule(static)
+    for (int i = 0; i < count; ++i) f(i, found_[t]);
+    std::size_t c = first;
+    for (int u = 0; u < t; ++u) c += found_[u].size();
+    for (const Found& found : found_[t]) {
+      if (c >= static_cast<std::size_t>(contacts.contact_capacity)) break;
+      contacts.contact_shape_a[c] = found.a;
+      contacts.contact_shape_b[c] = found.b;
+      contacts.contact_body_a[c] = model_.shape_body[found.a];
+      contacts.contact_body_b[c] = model_.shape_body[found.b];
+      Eigen::Map<Vec3>(&contacts.contact_point[3 * c]) = found.point.point;
+      Eigen::Map<Vec3>(&contacts.contact_normal[3 * c]) = found.point.normal;
+      contacts.contact_depth[c] = found.point.depth;
+      contacts.contact_feature[c] = found.point.feature;
+      Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]).setZero();
+      ++c;
+    }
+  }
+  std::size_t total = 0;
+  for (int t = 0; t < threads; ++t) total += found_[t].size();
+  const int kept = static_cast<int>(std::min<std::size_t>(total, contacts.contact_capacity - first));
+  contacts.contact_count += kept;
+  contacts.contact_dropped += static_cast<int>(total) - kept;
+}
+
+void CollisionPipeline::narrow_phase(int a, int b, const State& state, std::vector<Found>& out) const {
   if (model_.shape_type[a] > model_.shape_type[b]) std::swap(a, b);
   const auto ta = static_cast<ShapeType>(model_.shape_type[a]), tb = static_cast<ShapeType>(model_.shape_type[b]);
   const Transform Xa = shape_pose(model_, state, a), Xb = shape_pose(model_, state, b);
@@ -194,22 +244,7 @@ void CollisionPipeline::narrow_phase(int a, int b, const State& state, Contacts&
       break;
     case ShapeType::Capsule: count = collide_capsule_capsule(Xa, sa.x(), sa.y(), Xb, sb.x(), sb.y(), m, points); break;
   }
-  for (int k = 0; k < count; ++k) {
-    if (contacts.contact_count == contacts.contact_capacity) {
-      ++contacts.contact_dropped;
-      continue;
-    }
-    const int c = contacts.contact_count++;
-    contacts.contact_shape_a[c] = a;
-    contacts.contact_shape_b[c] = b;
-    contacts.contact_body_a[c] = model_.shape_body[a];
-    contacts.contact_body_b[c] = model_.shape_body[b];
-    Eigen::Map<Vec3>(&contacts.contact_point[3 * c]) = points[k].point;
-    Eigen::Map<Vec3>(&contacts.contact_normal[3 * c]) = points[k].normal;
-    contacts.contact_depth[c] = points[k].depth;
-    contacts.contact_feature[c] = points[k].feature;
-    Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]).setZero();
-  }
+  for (int k = 0; k < count; ++k) out.push_back({a, b, points[k]});
 }
 
 }  // namespace novaphy

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "engine/model.h"
+#include "kernels/collide.h"
 
 namespace novaphy {
 
@@ -46,6 +47,7 @@ struct CollisionOptions {
   int contact_capacity = 0;    // 0: 8 per shape, at least 64
   Scalar margin = 0.01;        // contacts are made this far before touching
   bool self_collision = true;  // links of one articulation collide (never a parent with its child)
+  int num_threads = 0;         // threads of collide's loops over shapes, worlds and planes; 0: OpenMP's default
 };
 
 // keeps a reference to the model, which must outlive it
@@ -61,7 +63,16 @@ class CollisionPipeline {
 
  private:
   bool may_collide(int a, int b) const;
-  void narrow_phase(int a, int b, const State& state, Contacts& contacts) const;
+  // a contact found by the narrow phase, on its way into the contacts buffer
+  struct Found {
+    int a, b;
+    ContactPoint point;
+  };
+  void narrow_phase(int a, int b, const State& state, std::vector<Found>& out) const;
+  // f(i, out) for i in [0, count) on the threads, each appending its contacts to `out`; then every
+  // contact into the buffer in the order of i, so the order does not depend on the thread count
+  template <typename F>
+  void find_contacts(int count, Contacts& contacts, F&& f);
 
   const Model& model_;
   CollisionOptions options_;
@@ -73,6 +84,7 @@ class CollisionPipeline {
   // scratch
   std::vector<Scalar> lower_, upper_;  // [shape][3] world AABBs
   std::vector<int> sort_index_;
+  std::vector<std::vector<Found>> found_;  // per thread
 };
 
 }  // namespace novaphy

@@ -220,8 +220,8 @@ TEST(ArticulationBatches, ContactRowsSolvedInBlocksMatchTheScalarRows) {
     worst_impulse =
         std::max(worst_impulse, max_relative_difference(contacts.contact_impulse, contacts_scalar.contact_impulse));
     for (int c = 0; c < contacts.contact_count; ++c)
-      box_on_torso += contacts.contact_body_a[c] == box_index && contacts.contact_body_b[c] >= 0 ||
-                      contacts.contact_body_b[c] == box_index && contacts.contact_body_a[c] >= 0;
+      box_on_torso += (contacts.contact_body_a[c] == box_index && contacts.contact_body_b[c] >= 0) ||
+                      (contacts.contact_body_b[c] == box_index && contacts.contact_body_a[c] >= 0);
   }
   EXPECT_GT(box_on_torso, 0);
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 
@@ -143,6 +144,54 @@ TEST(CollisionPipeline, PreviousImpulsesAreFoundByFeature) {
   }
 }
 
+TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {
+  // 40 worlds of a floor and a pile of touching bodies: each world's pairs and each plane's contacts
+  // found on whichever thread, written in world and plane order, so the buffer is the same bit for bit;
+  // with a capacity too small, the same first contacts are kept and the same number dropped
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<Scalar> u(-0.3, 0.3);
+  ModelBuilder world;
+  world.add_ground_plane();
+  for (int k = 0; k < 6; ++k) {
+    const int body = world.add_body(RigidBody(), Transform{Vec3(u(rng), 0.15 + 0.5 * std::abs(u(rng)), u(rng))});
+    if (k % 2 == 0) world.add_shape_box(body, Vec3::Constant(0.15));
+    if (k % 2 == 1) world.add_shape_sphere(body, 0.15);
+  }
+  ModelBuilder builder;
+  builder.replicate(world, 40);
+  const Model model = builder.finalize();
+  auto collide = [&](int threads, int capacity) {
+    CollisionOptions options;
+    options.num_threads = threads;
+    options.contact_capacity = capacity;
+    CollisionPipeline pipeline(model, options);
+    Contacts contacts = pipeline.contacts();
+    pipeline.collide(model.state(), contacts);
+    return contacts;
+  };
+  for (const int capacity : {0, 300}) {
+    const Contacts one = collide(1, capacity);
+    ASSERT_GT(one.contact_count, 200);
+    for (const int threads : {2, 3}) {
+      const Contacts many = collide(threads, capacity);
+      ASSERT_EQ(many.contact_count, one.contact_count) << threads << " threads";
+      EXPECT_EQ(many.contact_dropped, one.contact_dropped);
+      const int n = one.contact_count;
+      EXPECT_TRUE(
+          std::equal(one.contact_shape_a.begin(), one.contact_shape_a.begin() + n, many.contact_shape_a.begin()));
+      EXPECT_TRUE(
+          std::equal(one.contact_shape_b.begin(), one.contact_shape_b.begin() + n, many.contact_shape_b.begin()));
+      EXPECT_TRUE(
+          std::equal(one.contact_feature.begin(), one.contact_feature.begin() + n, many.contact_feature.begin()));
+      EXPECT_TRUE(std::equal(one.contact_point.begin(), one.contact_point.begin() + 3 * n, many.contact_point.begin()));
+      EXPECT_TRUE(
+          std::equal(one.contact_normal.begin(), one.contact_normal.begin() + 3 * n, many.contact_normal.begin()));
+      EXPECT_TRUE(std::equal(one.contact_depth.begin(), one.contact_depth.begin() + n, many.contact_depth.begin()));
+    }
+  }
+  EXPECT_GT(collide(2, 300).contact_dropped, 0);
+}
+
 TEST(CollisionPipelineErrors, BadOptions) {
   ModelBuilder builder;
   builder.add_body(RigidBody());
@@ -153,6 +202,9 @@ TEST(CollisionPipelineErrors, BadOptions) {
   options = {};
   options.margin = std::nan("");
   EXPECT_NOVAPHY_ERROR(CollisionPipeline(model, options), "margin must be finite and >= 0, got nan");
+  options = {};
+  options.num_threads = -1;
+  EXPECT_NOVAPHY_ERROR(CollisionPipeline(model, options), "num_threads must be >= 0 (0: OpenMP's default), got -1");
 }
 
 }  // namespace

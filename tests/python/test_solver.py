@@ -249,3 +249,24 @@ def test_batched_precisions_follow_the_scalar_kernels():
     # float32 steps round the state to float each step: close to float64, and exactly representable
     np.testing.assert_allclose(single.joint_q, scalar.joint_q, atol=1e-4)
     assert np.array_equal(single.joint_q.astype(np.float32).astype(np.float64), single.joint_q)
+
+
+def test_collision_threads_find_the_same_contacts():
+    builder = novaphy.ModelBuilder()
+    builder.add_ground_plane()
+    body = builder.add_body(novaphy.RigidBody.from_box(1.0, [0.2, 0.2, 0.2]))
+    builder.add_shape_box(body, [0.2, 0.2, 0.2])
+    worlds = novaphy.ModelBuilder()
+    worlds.replicate(builder, 8)
+    model = worlds.finalize()
+    found = []
+    for threads in (1, 2):
+        pipeline = novaphy.CollisionPipeline(model, num_threads=threads)
+        contacts = pipeline.contacts()
+        pipeline.collide(model.state(), contacts)
+        found.append((contacts.contact_shape_b.copy(), contacts.contact_point.copy()))
+    assert len(found[0][0]) == 32
+    np.testing.assert_array_equal(found[0][0], found[1][0])
+    np.testing.assert_array_equal(found[0][1], found[1][1])
+    with pytest.raises(ValueError, match="num_threads must be >= 0"):
+        novaphy.CollisionPipeline(model, num_threads=-1)
