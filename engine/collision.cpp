@@ -128,13 +128,15 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // broad phase per world: sweep and prune along x within each world, then the shapes every world
   // shares against all, then each plane against the shapes of its world (all worlds for a shared one);
   // worlds and planes spread over threads
-  const int threads = options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
-  const int shapes = static_cast<int>(others_.size());
-#pragma omp parallel for schedule(static) \
-    num_threads(std::max(1, std::min(threads, shapes))) if (threads > 1 && shapes > 1)
-  for (int k = 0; k < shapes; ++k) {
-    const int s = others_[k];
+  auto bounds = [&](int s) {
     shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
+  };
+  const int shapes = static_cast<int>(others_.size()), threads = team(shapes, kShapesPerThread);
+  if (threads == 1) {  // (a parallel region of one thread still costs a microsecond)
+    for (const int s : others_) bounds(s);
+  } else {
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int k = 0; k < shapes; ++k) bounds(others_[k]);
   }
   auto overlap = [&](int a, int b) {
     for (int k = 0; k < 3; ++k)
@@ -178,20 +180,23 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   });
 }
 
+int CollisionPipeline::team(int count, int grain) const {
+  // no thread wakes for less than `grain` items: a small scene stays on one
+  const int threads = options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+  return std::max(1, std::min(threads, count / grain));
+}
+
 template <typename F>
 void CollisionPipeline::find_contacts(int count, Contacts& contacts, F&& f) {
   // a static schedule hands thread t the t-th run of consecutive i: the threads' lists in thread
   // order are the contacts in the order of i, and each thread writes its own after the others' before
-  const int threads = std::min(options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads(), count);
-  if (threads <= 0) return;
+  if (count <= 0) return;
+  const int threads = team(count, kWorldsPerThread);
   if (static_cast<int>(found_.size()) < threads) found_.resize(threads);
   for (int t = 0; t < threads; ++t) found_[t].clear();
   const int first = contacts.contact_count;
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
-    const int t = omp_get_thread_num();
-#pragma omp for schedule(static)
-    for (int i = 0; i < count; ++i) f(i, found_[t]);
+  // thread t's contacts into the buffer after those of the threads before it
+  auto write = [&](int t) {
     std::size_t c = first;
     for (int u = 0; u < t; ++u) c += found_[u].size();
     for (const Found& found : found_[t]) {
@@ -206,6 +211,18 @@ void CollisionPipeline::find_contacts(int count, Contacts& contacts, F&& f) {
       contacts.contact_feature[c] = found.point.feature;
       Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]).setZero();
       ++c;
+    }
+  };
+  if (threads == 1) {
+    for (int i = 0; i < count; ++i) f(i, found_[0]);
+    write(0);
+  } else {
+#pragma omp parallel num_threads(threads)
+    {
+      const int t = omp_get_thread_num();
+#pragma omp for schedule(static)
+      for (int i = 0; i < count; ++i) f(i, found_[t]);
+      write(t);
     }
   }
   std::size_t total = 0;

@@ -73,6 +73,9 @@ class CollisionPipeline {
   // contact into the buffer in the order of i, so the order does not depend on the thread count
   template <typename F>
   void find_contacts(int count, Contacts& contacts, F&& f);
+  // threads for a loop of `count` items, at least `grain` items each
+  int team(int count, int grain) const;
+  static constexpr int kShapesPerThread = 64, kWorldsPerThread = 16;  // worlds, or planes
 
   const Model& model_;
   CollisionOptions options_;
