@@ -296,7 +296,7 @@ class Batches final : public ArticulationBatches {
       };
 
       // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
-      const V* limit = &G.limits[static_cast<size_t>(b) * 2 * nl];
+      const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
       for (int m = 0; m < nl; ++m) {
         const int k = G.limited[m], c = topo.coord_of_dof[k];
         V q;
