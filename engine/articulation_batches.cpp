@@ -273,7 +273,7 @@ class Batches final : public ArticulationBatches {
         if (skip[a]) continue;
         mine[l] = -1;
         any_mine = true;
-        if (bc.start) listed[l] = bc.start[a + 1] - bc.start[a];
+        listed[l] = bc.start[a + 1] - bc.start[a];
         slots = std::max(slots, listed[l]);
       }
       if (!any_mine || (nl == 0 && slots == 0)) return;
@@ -342,8 +342,9 @@ class Batches final : public ArticulationBatches {
           if (c < 0) continue;
           on[l] = -1;
           const Contacts& C = *bc.contacts;
-          const Vec3 n = Eigen::Map<const Vec3>(&C.contact_normal[3 * c]);
-          Vec3 t1, t2;
+          Vec3* frame = &R.frame[3 * (t * W + l)];  // kept for the impulse written back
+          const Vec3& n = frame[0] = Eigen::Map<const Vec3>(&C.contact_normal[3 * c]);
+          Vec3 &t1 = frame[1], &t2 = frame[2];
           contact_tangents(n, &t1, &t2);
           for (int m = 0; m < 3; ++m) {
             p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
@@ -442,13 +443,11 @@ class Batches final : public ArticulationBatches {
         for (int l = 0; l < W; ++l) {
           const int c = R.contact[t * W + l];
           if (c < 0) continue;
-          Contacts& C = *bc.contacts;
-          const Vec3 n = Eigen::Map<const Vec3>(&C.contact_normal[3 * c]);
-          Vec3 t1, t2;
-          contact_tangents(n, &t1, &t2);
+          const Vec3* frame = &R.frame[3 * (t * W + l)];
           const V* lambda = &R.lambda[rows - 3 * (slots - t)];
-          const Vec3 P = Scalar(lambda[0][l]) * n + Scalar(lambda[1][l]) * t1 + Scalar(lambda[2][l]) * t2;
-          Eigen::Map<Vec3>(&C.contact_impulse[3 * c]) = P.allFinite() ? P : Vec3::Zero();
+          const Vec3 P =
+              Scalar(lambda[0][l]) * frame[0] + Scalar(lambda[1][l]) * frame[1] + Scalar(lambda[2][l]) * frame[2];
+          Eigen::Map<Vec3>(&bc.contacts->contact_impulse[3 * c]) = P.allFinite() ? P : Vec3::Zero();
         }
     });
   }
@@ -572,7 +571,7 @@ class Batches final : public ArticulationBatches {
            R.active.size() * sizeof(IntLanes<T>) +
            (R.limit_row.size() + R.contact.size() + R.normal.size() + R.nonzero_begin.size() + R.nonzero_end.size()) *
                sizeof(int) +
-           R.kind.size() * sizeof(RowKind);
+           R.kind.size() * sizeof(RowKind) + R.frame.size() * sizeof(Vec3);
     return n;
   }
 
@@ -684,6 +683,7 @@ class Batches final : public ArticulationBatches {
     std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
     std::vector<int> limit_row;                         // [limited][2] its row, or -1
     std::vector<int> contact;                           // [slot][lane] the contact, or -1
+    std::vector<Vec3> frame;                            // [slot][lane][3] its normal and tangents
     std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
     void resize(int rows, int dofs_, int slots) {
       dofs = dofs_;
@@ -699,6 +699,7 @@ class Batches final : public ArticulationBatches {
         if (static_cast<int>(x->size()) < rows) x->resize(rows);
       if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
       if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
+      if (frame.size() < static_cast<size_t>(slots) * W * 3) frame.resize(static_cast<size_t>(slots) * W * 3);
       for (auto* x : {&coef, &qd_in})
         if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
     }

@@ -75,7 +75,7 @@ class CollisionPipeline {
   void find_contacts(int count, Contacts& contacts, F&& f);
   // threads for a loop of `count` items, at least `grain` items each
   int team(int count, int grain) const;
-  static constexpr int kShapesPerThread = 64, kWorldsPerThread = 16;  // worlds, or planes
+  static constexpr int kShapesPerThread = 64, kWorldsPerThread = 16;  // worlds (or planes, or shared shapes)
 
   const Model& model_;
   CollisionOptions options_;

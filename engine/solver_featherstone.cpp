@@ -20,6 +20,12 @@ namespace novaphy {
 
 namespace {
 
+// friction and restitution of a contact between shapes a and b
+Scalar contact_mu(const Model& model, int a, int b) { return std::sqrt(model.shape_mu[a] * model.shape_mu[b]); }
+Scalar contact_restitution(const Model& model, int a, int b) {
+  return std::max(model.shape_restitution[a], model.shape_restitution[b]);
+}
+
 void check_range(const char* name, Scalar value, Scalar lo, Scalar hi) {
   if (!(value >= lo && value <= hi)) fail("settings.", name, " must be in [", lo, ", ", hi, "], got ", value);
 }
@@ -205,8 +211,6 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     rows.use_warmstarting = settings.use_warmstarting;
     batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
     for (size_t a = 0; a < art_.size(); ++a) rows_batched_[a] = batches_->solves_rows(a, touched_.data());
-  } else if (batch_step_) {
-    std::fill(rows_batched_.begin(), rows_batched_.end(), 0);
   }
   build_limit_rows(in, dt);
   lap(stage_seconds_.limit_rows);
@@ -446,8 +450,8 @@ void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
     contact_link_a_[c] = a >= 0 ? body_link_[ba] : -1;
     contact_link_b_[c] = b >= 0 ? body_link_[bb] : -1;
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
-    contact_mu_[c] = std::sqrt(model_.shape_mu[sa] * model_.shape_mu[sb]);
-    contact_restitution_[c] = std::max(model_.shape_restitution[sa], model_.shape_restitution[sb]);
+    contact_mu_[c] = contact_mu(model_, sa, sb);
+    contact_restitution_[c] = contact_restitution(model_, sa, sb);
   }
   for (size_t a = 0; a < art_.size(); ++a) block_contact_start_[a + 1] += block_contact_start_[a];
   fill_.assign(block_contact_start_.begin(), block_contact_start_.end() - 1);
@@ -498,8 +502,8 @@ void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt)
     const Vec3 p = Eigen::Map<const Vec3>(&contacts.contact_point[3 * c]);
     const Vec3 n = Eigen::Map<const Vec3>(&contacts.contact_normal[3 * c]);
     const Scalar depth = contacts.contact_depth[c];
-    const Scalar mu = std::sqrt(model_.shape_mu[sa] * model_.shape_mu[sb]);
-    const Scalar restitution = std::max(model_.shape_restitution[sa], model_.shape_restitution[sb]);
+    const Scalar mu = contact_mu(model_, sa, sb);
+    const Scalar restitution = contact_restitution(model_, sa, sb);
     Vec3 t1, t2;
     contact_tangents(n, &t1, &t2);
 
