@@ -10,17 +10,13 @@
 
 namespace novaphy {
 
-std::uint64_t Contacts::key(int shape_a, int shape_b, int feature) {
-  return (static_cast<std::uint64_t>(shape_a) << 40) | (static_cast<std::uint64_t>(shape_b) << 16) |
-         static_cast<std::uint64_t>(feature & 0xffff);
-}
-
 const Scalar* Contacts::previous(int c) const {
-  const std::uint64_t k = key(contact_shape_a[c], contact_shape_b[c], contact_feature[c]);
-  const auto end = previous_key.begin() + previous_count;
-  const auto it = std::lower_bound(previous_key.begin(), end, k);
-  if (it == end || *it != k) return nullptr;
-  return &previous_impulse[3 * (it - previous_key.begin())];
+  // collide() matched each contact; a buffer edited since then finds nothing where the keys differ
+  const int m = c < static_cast<int>(previous_match.size()) ? previous_match[c] : -1;
+  if (m < 0 || m >= previous_count ||
+      previous_key[m] != key(contact_shape_a[c], contact_shape_b[c], contact_feature[c]))
+    return nullptr;
+  return &previous_impulse[3 * m];
 }
 
 CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions& options)
@@ -40,17 +36,20 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     body_articulation_[model.joint_child[j]] = model.joint_articulation[j];
   }
   world_others_.resize(model.world_count);
+  world_planes_.resize(model.world_count);
   for (int s = 0; s < model.shape_count; ++s) {
     // a shape with an empty group or mask never collides: the broad phase never sees it
     if (model.shape_collision_group[s] == 0 || model.shape_collision_mask[s] == 0) continue;
+    const int w = model.shape_world[s];
     if (model.shape_type[s] == static_cast<int>(ShapeType::Plane)) {
       planes_.push_back(s);
+      (w < 0 ? shared_planes_ : world_planes_[w]).push_back(s);
       continue;
     }
     others_.push_back(s);
-    const int w = model.shape_world[s];
     (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
   }
+  world_sweep_ = world_others_;
   lower_.resize(3 * model.shape_count);
   upper_.resize(3 * model.shape_count);
 }
@@ -64,6 +63,7 @@ Contacts CollisionPipeline::contacts() const {
 #undef NOVAPHY_ALLOCATE_CONTACT
   c.previous_key.resize(c.contact_capacity);
   c.previous_impulse.resize(3 * c.contact_capacity);
+  c.previous_match.assign(c.contact_capacity, -1);
   return c;
 }
 
@@ -110,34 +110,21 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
 
-  // keep this step's contacts, sorted by key, for warm starting
-  sort_index_.resize(contacts.contact_count);
-  std::iota(sort_index_.begin(), sort_index_.end(), 0);
-  auto key_of = [&](int c) {
-    return Contacts::key(contacts.contact_shape_a[c], contacts.contact_shape_b[c], contacts.contact_feature[c]);
-  };
-  std::sort(sort_index_.begin(), sort_index_.end(), [&](int x, int y) { return key_of(x) < key_of(y); });
-  for (int k = 0; k < contacts.contact_count; ++k) {
-    contacts.previous_key[k] = key_of(sort_index_[k]);
-    for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * k + i] = contacts.contact_impulse[3 * sort_index_[k] + i];
+  // this step's contacts, in their order, become the previous ones for warm starting
+  for (int c = 0; c < contacts.contact_count; ++c) {
+    contacts.previous_key[c] =
+        Contacts::key(contacts.contact_shape_a[c], contacts.contact_shape_b[c], contacts.contact_feature[c]);
+    for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * c + i] = contacts.contact_impulse[3 * c + i];
   }
   contacts.previous_count = contacts.contact_count;
   contacts.contact_count = 0;
   contacts.contact_dropped = 0;
 
-  // broad phase per world: sweep and prune along x within each world, then the shapes every world
-  // shares against all, then each plane against the shapes of its world (all worlds for a shared one);
-  // worlds and planes spread over threads
-  auto bounds = [&](int s) {
-    shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
-  };
-  const int shapes = static_cast<int>(others_.size()), threads = team(shapes, kShapesPerThread);
-  if (threads == 1) {  // (a parallel region of one thread still costs a microsecond)
-    for (const int s : others_) bounds(s);
-  } else {
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int k = 0; k < shapes; ++k) bounds(others_[k]);
-  }
+  // the bounds of the shapes of no world first: every world meets them. Then per world, while its
+  // shapes' bounds are in cache: sweep and prune along x, then its planes and the shared ones against
+  // its shapes. Then the shapes of no world against all others, and every plane against them. Worlds
+  // (and shared shapes, and planes) spread over threads
+  for (const int s : shared_others_) bounds(state, s);
   auto overlap = [&](int a, int b) {
     for (int k = 0; k < 3; ++k)
       if (lower_[3 * b + k] > upper_[3 * a + k] || lower_[3 * a + k] > upper_[3 * b + k]) return false;
@@ -147,37 +134,72 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     if (overlap(a, b) && may_collide(a, b)) narrow_phase(std::min(a, b), std::max(a, b), state, out);
   };
   find_contacts(model_.world_count, contacts, [&](int w, std::vector<Found>& out) {
-    std::vector<int>& order = world_others_[w];
+    for (const int s : world_others_[w]) bounds(state, s);
+    std::vector<int>& order = world_sweep_[w];
     std::sort(order.begin(), order.end(),
               [&](int x, int y) { return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y); });
     for (size_t i = 0; i < order.size(); ++i)
       for (size_t j = i + 1; j < order.size() && lower_[3 * order[j]] <= upper_[3 * order[i]]; ++j)
         test_pair(order[i], order[j], out);
+    // the world's planes and the shared ones, in index order
+    const std::vector<int>& own = world_planes_[w];
+    for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
+      const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
+      against_plane(take_own ? own[i++] : shared_planes_[j++], world_others_[w], state, out);
+    }
   });
   find_contacts(static_cast<int>(shared_others_.size()), contacts, [&](int i, std::vector<Found>& out) {
     for (const int b : others_)
       if (b != shared_others_[i] && (model_.shape_world[b] >= 0 || b > shared_others_[i]))
         test_pair(shared_others_[i], b, out);
   });
-  find_contacts(static_cast<int>(planes_.size()), contacts, [&](int i, std::vector<Found>& out) {
-    const int p = planes_[i];
-    const Transform X = shape_pose(model_, state, p);
-    const Vec3 n = X.q * Vec3::UnitY();
-    auto against = [&](const std::vector<int>& shapes) {
-      for (const int s : shapes) {
-        const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
-        const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
-        if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, out);
+  find_contacts(static_cast<int>(planes_.size()), contacts,
+                [&](int i, std::vector<Found>& out) { against_plane(planes_[i], shared_others_, state, out); });
+  match_previous(contacts);
+}
+
+void CollisionPipeline::bounds(const State& state, int s) {
+  shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
+}
+
+void CollisionPipeline::against_plane(int p, const std::vector<int>& shapes, const State& state,
+                                      std::vector<Found>& out) const {
+  const Transform X = shape_pose(model_, state, p);
+  const Vec3 n = X.q * Vec3::UnitY();
+  for (const int s : shapes) {
+    const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
+    const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
+    if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, out);
+  }
+}
+
+void CollisionPipeline::match_previous(Contacts& contacts) {
+  // a contact is most often found where it was, right after the contact matched before it; otherwise
+  // among the previous contacts sorted by key (sorted once per collide, when first needed)
+  const int n = contacts.previous_count;
+  const std::vector<std::uint64_t>& key = contacts.previous_key;
+  previous_order_.clear();
+  int next = 0;
+  for (int c = 0; c < contacts.contact_count; ++c) {
+    const std::uint64_t k =
+        Contacts::key(contacts.contact_shape_a[c], contacts.contact_shape_b[c], contacts.contact_feature[c]);
+    int m = -1;
+    if (next < n && key[next] == k) {
+      m = next;
+    } else if (n > 0) {
+      if (previous_order_.empty()) {
+        previous_order_.resize(n);
+        std::iota(previous_order_.begin(), previous_order_.end(), 0);
+        std::sort(previous_order_.begin(), previous_order_.end(),
+                  [&](int x, int y) { return key[x] < key[y] || (key[x] == key[y] && x < y); });
       }
-    };
-    const int w = model_.shape_world[p];
-    if (w < 0) {
-      against(others_);
-    } else {
-      against(world_others_[w]);
-      against(shared_others_);
+      const auto it = std::lower_bound(previous_order_.begin(), previous_order_.end(), k,
+                                       [&](int x, std::uint64_t value) { return key[x] < value; });
+      if (it != previous_order_.end() && key[*it] == k) m = *it;
     }
-  });
+    contacts.previous_match[c] = m;
+    if (m >= 0) next = m + 1;
+  }
 }
 
 int CollisionPipeline::team(int count, int grain) const {

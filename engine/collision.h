@@ -33,13 +33,18 @@ struct Contacts : ModelCounts {
   NOVAPHY_CONTACT_FIELDS(NOVAPHY_DECLARE_CONTACT)
 #undef NOVAPHY_DECLARE_CONTACT
 
-  // the previous collide()'s contacts, sorted by key, with the impulses the solver applied to them
+  // the previous collide()'s contacts in their order, with the impulses the solver applied to them, and
+  // where each of this collide()'s contacts was among them (-1: a new contact)
   std::vector<std::uint64_t> previous_key;
   std::vector<Scalar> previous_impulse;  // [previous][3]
   int previous_count = 0;
+  std::vector<int> previous_match;  // [contact]
 
-  static std::uint64_t key(int shape_a, int shape_b, int feature);
-  // impulse applied to the same contact at the previous step, or nullptr
+  static std::uint64_t key(int shape_a, int shape_b, int feature) {
+    return (static_cast<std::uint64_t>(shape_a) << 40) | (static_cast<std::uint64_t>(shape_b) << 16) |
+           static_cast<std::uint64_t>(feature & 0xffff);
+  }
+  // impulse applied to the same contact (same shapes and feature) at the previous step, or nullptr
   const Scalar* previous(int contact) const;
 };
 
@@ -68,25 +73,33 @@ class CollisionPipeline {
     int a, b;
     ContactPoint point;
   };
+  // shape s's world AABB (lower_, upper_) at the body poses of `state`
+  void bounds(const State& state, int s);
   void narrow_phase(int a, int b, const State& state, std::vector<Found>& out) const;
+  // the plane p against each shape of `shapes` whose AABB reaches it
+  void against_plane(int p, const std::vector<int>& shapes, const State& state, std::vector<Found>& out) const;
+  // where each contact of the buffer was among the previous ones (Contacts::previous_match)
+  void match_previous(Contacts& contacts);
   // f(i, out) for i in [0, count) on the threads, each appending its contacts to `out`; then every
   // contact into the buffer in the order of i, so the order does not depend on the thread count
   template <typename F>
   void find_contacts(int count, Contacts& contacts, F&& f);
   // threads for a loop of `count` items, at least `grain` items each
   int team(int count, int grain) const;
-  static constexpr int kShapesPerThread = 64, kWorldsPerThread = 16;  // worlds (or planes, or shared shapes)
+  static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes)
 
   const Model& model_;
   CollisionOptions options_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
-  std::vector<int> planes_, others_;            // shape indices: planes, and every other shape
-  std::vector<std::vector<int>> world_others_;  // non-plane shapes of each world, sorted along x by collide
-  std::vector<int> shared_others_;              // non-plane shapes of no world: every world meets them
+  std::vector<int> planes_, others_;                // shape indices: planes, and every other shape
+  std::vector<std::vector<int>> world_others_;      // non-plane shapes of each world, in index order
+  std::vector<std::vector<int>> world_sweep_;       // the same, sorted along x by the last collide
+  std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
+  std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch
-  std::vector<Scalar> lower_, upper_;  // [shape][3] world AABBs
-  std::vector<int> sort_index_;
+  std::vector<Scalar> lower_, upper_;      // [shape][3] world AABBs
+  std::vector<int> previous_order_;        // previous contacts by key, when a contact is not where it was
   std::vector<std::vector<Found>> found_;  // per thread
 };
 

@@ -322,13 +322,18 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
   const Vec3 inc_center = inc.p + inc_sign * hi[j] * Ri.col(j);
   const Vec3 du = hi[u] * Ri.col(u), dv = hi[v] * Ri.col(v);
 
-  // polygon with an id per vertex: 0..3 incident corners, 4 + 4 * plane + edge for clipped points
+  // polygon with an id per vertex, unique within the pair: 0..3 incident corners, 4 + 4 * plane + edge
+  // where an incident edge crosses a side plane, 20 + corner where two side planes cross (a corner of
+  // the reference face); `along` is what the edge to the next vertex lies on: an incident edge 0..3 or
+  // the side plane 4 + plane
   struct Vertex {
     Vec3 p;
-    int id;
+    int id, along;
   };
-  std::array<Vertex, 16> poly{
-      {{inc_center + du + dv, 0}, {inc_center - du + dv, 1}, {inc_center - du - dv, 2}, {inc_center + du - dv, 3}}},
+  std::array<Vertex, 16> poly{{{inc_center + du + dv, 0, 0},
+                               {inc_center - du + dv, 1, 1},
+                               {inc_center - du - dv, 2, 2},
+                               {inc_center + du - dv, 3, 3}}},
       clipped;
   int count = 4;
   const int ru = (k + 1) % 3, rv = (k + 2) % 3;
@@ -341,8 +346,13 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
       const Vertex& q = poly[(e + 1) % count];
       const Scalar dp = axis.dot(p.p - ref.p) - limit, dq = axis.dot(q.p - ref.p) - limit;
       if (dp <= 0) clipped[next++] = p;
-      if ((dp < 0) != (dq < 0) && dp != dq)
-        clipped[next++] = {p.p + (dp / (dp - dq)) * (q.p - p.p), 4 + 4 * plane + e % 4};
+      if ((dp < 0) != (dq < 0) && dp != dq) {
+        // the crossing; leaving the face, the polygon goes on along this side plane
+        const int side = p.along - 4;  // (planes 0, 1 cross 2, 3; parallel ones never meet)
+        const int id =
+            p.along < 4 ? 4 + 4 * plane + p.along : 20 + 2 * (side < 2 ? side : plane) + (side < 2 ? plane : side) - 2;
+        clipped[next++] = {p.p + (dp / (dp - dq)) * (q.p - p.p), id, dp < 0 ? 4 + plane : p.along};
+      }
     }
     count = next;
     std::copy(clipped.begin(), clipped.begin() + count, poly.begin());

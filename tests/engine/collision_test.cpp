@@ -144,6 +144,50 @@ TEST(CollisionPipeline, PreviousImpulsesAreFoundByFeature) {
   }
 }
 
+TEST(CollisionPipeline, PreviousImpulsesFollowTheirContactsWhenTheListChanges) {
+  // three spheres on a floor; the middle one lifted off, then put back: the others keep their
+  // impulses though their places in the buffer move, and the returning contact starts without one
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  std::vector<int> spheres;
+  for (int k = 0; k < 3; ++k) {
+    spheres.push_back(builder.add_body(RigidBody(), Transform{Vec3(k, 0.09, 0)}));
+    builder.add_shape_sphere(spheres.back(), 0.1);
+  }
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  State state = model.state();
+  auto mark = [&] {  // impulse y = 10 + the sphere's body
+    for (int c = 0; c < contacts.contact_count; ++c)
+      contacts.contact_impulse[3 * c + 1] = 10 + contacts.contact_body_b[c];
+  };
+  auto expect_marked = [&](int missing) {
+    for (int c = 0; c < contacts.contact_count; ++c) {
+      const Scalar* previous = contacts.previous(c);
+      if (contacts.contact_body_b[c] == missing) {
+        EXPECT_EQ(previous, nullptr);
+        continue;
+      }
+      ASSERT_NE(previous, nullptr) << "contact " << c;
+      EXPECT_EQ(previous[1], 10 + contacts.contact_body_b[c]);
+    }
+  };
+  pipeline.collide(state, contacts);
+  ASSERT_EQ(contacts.contact_count, 3);
+  mark();
+  state.body_q[7 * spheres[1] + 1] = 1;
+  pipeline.collide(state, contacts);
+  ASSERT_EQ(contacts.contact_count, 2);
+  expect_marked(-1);
+  mark();
+  state.body_q[7 * spheres[1] + 1] = 0.09;
+  pipeline.collide(state, contacts);
+  ASSERT_EQ(contacts.contact_count, 3);
+  EXPECT_EQ(contacts.contact_body_b[1], spheres[1]);  // back in the middle of the buffer
+  expect_marked(spheres[1]);
+}
+
 TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {
   // 40 worlds of a floor and a pile of touching bodies: each world's pairs and each plane's contacts
   // found on whichever thread, written in world and plane order, so the buffer is the same bit for bit;

@@ -135,5 +135,29 @@ TEST(Collide, BoxBoxDepthMatchesSupportScan) {
   }
 }
 
+TEST(Collide, BoxBoxFeaturesAreDistinctWithinAPair) {
+  // warm starts find a contact by its pair and feature: no two points of one pair may share one (a
+  // clipped point's id once came from its index in the clipped polygon, and repeated)
+  std::mt19937 rng(12);
+  std::normal_distribution<Scalar> g;
+  int multi = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 ha(0.1 + 0.2 * std::abs(g(rng)), 0.1 + 0.2 * std::abs(g(rng)), 0.1 + 0.2 * std::abs(g(rng)));
+    const Vec3 hb(0.1 + 0.2 * std::abs(g(rng)), 0.1 + 0.2 * std::abs(g(rng)), 0.1 + 0.2 * std::abs(g(rng)));
+    // b tilted a little from a's axes and resting on one of a's faces, slid sideways
+    const Quat tilt = about(Vec3(g(rng), g(rng), g(rng)), 0.15 * g(rng));
+    const int axis = trial % 3;
+    Vec3 offset = 0.3 * Vec3(g(rng), g(rng), g(rng));
+    offset[axis] = (trial % 2 ? 1 : -1) * (ha[axis] + hb[axis] - 0.01);
+    ContactPoint c[kMaxPairContacts];
+    const int n = collide_box_box(Transform{Vec3::Zero()}, ha, Transform{offset, tilt}, hb, 0.01, c);
+    multi += n > 2;
+    std::set<int> features;
+    for (int k = 0; k < n; ++k) features.insert(c[k].feature);
+    EXPECT_EQ(features.size(), static_cast<size_t>(n)) << "trial " << trial;
+  }
+  EXPECT_GT(multi, 500);  // face contacts, clipped, were seen
+}
+
 }  // namespace
 }  // namespace novaphy
