@@ -17,6 +17,9 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("linear_slop", &Settings::linear_slop, "Penetration (m) the position correction leaves alone.")
       .def_readwrite("erp", &Settings::erp, "Share of the penetration beyond the slop removed per step, in [0, 1].")
       .def_readwrite("cfm", &Settings::cfm, "Constraint force mixing: softens every constraint row.")
+      .def_readwrite("pgs_tolerance", &Settings::pgs_tolerance,
+                     "Stop the PGS sweeps once one sweep changed no row's velocity by more than this (m/s, "
+                     "rad/s), per world; 0: all num_iterations sweeps.")
       .def_readwrite("warmstarting_factor", &Settings::warmstarting_factor, "Share of last step's impulses reused.")
       .def_readwrite("restitution_threshold", &Settings::restitution_threshold, "Approach speed below which no bounce.")
       .def_readwrite("use_warmstarting", &Settings::use_warmstarting)

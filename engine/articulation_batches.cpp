@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <map>
 
@@ -308,7 +307,7 @@ class Batches final : public ArticulationBatches {
           const IntLanes<T> finite = lane_abs<T>(limit[2 * m + side]) <= std::numeric_limits<T>::max();
           const IntLanes<T> on = mine & finite & (gap + dt * sign * w.qd[k] < 0);
           R.limit_row[2 * m + side] = -1;
-          if (!any_lane(on)) continue;
+          if (!any_lane<T>(on)) continue;
           const V depth = -gap - T(s.linear_slop);
           V warm{};
           if (s.use_warmstarting)
@@ -377,7 +376,7 @@ class Batches final : public ArticulationBatches {
         const int first = rows;
         int begin = nv, end = 0;  // the dofs on some lane's paths
         for (int j = 0; j < nv; ++j)
-          if (any_lane(R.coef[j] != 0)) {
+          if (any_lane<T>(R.coef[j] != 0)) {
             begin = std::min(begin, j);
             end = j + 1;
           }
@@ -425,6 +424,7 @@ class Batches final : public ArticulationBatches {
       pgs.iterations = s.iterations;
       pgs.cfm = s.cfm;
       pgs.friction_smoothing = s.friction_smoothing;
+      pgs.tolerance = s.tolerance;
       batch_pgs_solve(batch_rows, pgs, w.qd.data());
 
       // velocities and the impulses kept for warm starting: limits per dof and side, contacts as world
@@ -502,13 +502,6 @@ class Batches final : public ArticulationBatches {
         quat_product(&w.Q[4 * weld.link], weld.q, Q);
         put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
       }
-      // the next block's bodies are fetched for writing while this block's are written
-      if (b + 1 < G.blocks)
-        for (int l = 0; l < W * nb; ++l) {
-          const int next = G.body[static_cast<size_t>(b + 1) * W * nb + l];
-          __builtin_prefetch(out.body_q.data() + 7 * next, 1);
-          __builtin_prefetch(out.body_qd.data() + 6 * next, 1);
-        }
       for (int l = 0; l < lanes; ++l)
         for (int k = 0; k < nb; ++k) {
           const V* x = x_all + 13 * k;
@@ -664,13 +657,6 @@ class Batches final : public ArticulationBatches {
       if (!G.enabled) continue;
       f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
     }
-  }
-
-  static bool any_lane(const IntLanes<T>& m) {
-    std::uint64_t x[sizeof(m) / 8], any = 0;
-    std::memcpy(x, &m, sizeof(m));
-    for (const std::uint64_t word : x) any |= word;
-    return any != 0;
   }
 
   // a thread's rows of one block (solve_rows); grows to the most rows a block has had

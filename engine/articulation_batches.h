@@ -70,7 +70,7 @@ class ArticulationBatches {
   struct RowSettings {
     int iterations = 20;
     Scalar erp = 0.2, linear_slop = 0.001, cfm = 1e-6, warmstarting_factor = 0.85;
-    Scalar restitution_threshold = 0.2, friction_smoothing = 1;
+    Scalar restitution_threshold = 0.2, friction_smoothing = 1, tolerance = 0;
     bool use_warmstarting = true;
   };
   // the constraint rows of active articulations with skip[a] == 0 (no contact joins them to another

@@ -43,6 +43,7 @@ void SolverFeatherstoneSettings::check() const {
   check_range("linear_slop", linear_slop, 0, 1e3);
   check_range("erp", erp, 0, 1);
   check_range("cfm", cfm, 0, 1e6);
+  check_range("pgs_tolerance", pgs_tolerance, 0, 1e6);
   check_range("warmstarting_factor", warmstarting_factor, 0, 1);
   check_range("restitution_threshold", restitution_threshold, 0, 1e6);
   check_range("angular_damping", angular_damping, 0, inf);
@@ -208,6 +209,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     rows.warmstarting_factor = settings.warmstarting_factor;
     rows.restitution_threshold = settings.restitution_threshold;
     rows.friction_smoothing = settings.friction_smoothing;
+    rows.tolerance = settings.pgs_tolerance;
     rows.use_warmstarting = settings.use_warmstarting;
     batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
     for (size_t a = 0; a < art_.size(); ++a) rows_batched_[a] = batches_->solves_rows(a, touched_.data());
@@ -569,6 +571,7 @@ void SolverFeatherstone::solve_islands() {
   pgs.iterations = settings.num_iterations;
   pgs.cfm = settings.cfm;
   pgs.friction_smoothing = settings.friction_smoothing;
+  pgs.tolerance = settings.pgs_tolerance;
   for_each_articulation([&](int island) {
     const int begin = island_start_[island], count = island_start_[island + 1] - begin;
     const int* order = island_rows_.data() + begin;

@@ -23,7 +23,10 @@ namespace novaphy {
 enum class DivergencePolicy : int { Raise = 0, Flag = 1, Reset = 2 };
 
 struct SolverFeatherstoneSettings {
-  int num_iterations = 20;             // PGS sweeps
+  int num_iterations = 20;  // PGS sweeps (at most, with a pgs_tolerance)
+  // the sweeps stop once one sweep changed no row's own velocity by more than this (m/s, rad/s),
+  // per world (a world's result does not depend on its block-mates); 0: every sweep runs
+  Scalar pgs_tolerance = 0;
   Scalar linear_slop = 0.001;          // penetration (m) left alone by the position correction
   Scalar erp = 0.2;                    // fraction of the penetration beyond the slop removed per step
   Scalar cfm = 1e-6;                   // constraint force mixing: softens every row

@@ -32,7 +32,7 @@ M<T> finite(const V<T>& x) {
 }  // namespace
 
 template <typename T>
-void batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>* qd) {
+int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>* qd) {
   const int n = rows.dofs;
   const T cfm = static_cast<T>(settings.cfm), s = static_cast<T>(settings.friction_smoothing);
   auto J = [&](int r) { return rows.J + static_cast<size_t>(r) * n; };
@@ -63,14 +63,22 @@ void batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>
     return (v0 + v1) + (v2 + v3);
   };
   auto step = [&](int r) { return -(velocity(r) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
-  for (int it = 0; it < settings.iterations; ++it) {
+  // a lane sweeps while some row's impulse in it moved by more than tolerance / (J M^-1 J^T) in the
+  // sweep before: a lane that stopped keeps its bits, as if alone in its block
+  const T tolerance = static_cast<T>(settings.tolerance);
+  auto moved = [&](int r, const V<T>& change) { return lane_abs<T>(change) > tolerance * rows.inv_mass[r]; };
+  M<T> live = ~M<T>{};
+  int it = 0;
+  for (; it < settings.iterations && any_lane<T>(live); ++it) {
+    M<T> moving = tolerance == 0 ? live : M<T>{};
     for (int r = 0; r < rows.count; ++r) {
       // a lane gone non-finite keeps its impulse, so NaN does not spread through the rows
       if (rows.kind[r] == RowKind::Unilateral) {
         const V<T> sum = lambda[r] + step(r);
         const V<T> next = sum > 0 ? sum : V<T>{};
-        const M<T> on = rows.active[r] & finite<T>(next);
+        const M<T> on = live & rows.active[r] & finite<T>(next);
         apply<T>(z(r), next - lambda[r], on, n, qd);
+        moving |= on & moved(r, next - lambda[r]);
         lambda[r] = on ? next : lambda[r];
         continue;
       }
@@ -83,17 +91,20 @@ void batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>
       const V<T> norm = lane_sqrt<T>(l1 * l1 + l2 * l2);
       const V<T> scale = norm > limit ? limit / norm : V<T>{} + 1;
       const V<T> new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
-      const M<T> on = rows.active[r] & finite<T>(new1) & finite<T>(new2);
+      const M<T> on = live & rows.active[r] & finite<T>(new1) & finite<T>(new2);
       apply<T>(z(r), new1 - lambda[r], on, n, qd);
       apply<T>(z(r2), new2 - lambda[r2], on, n, qd);
+      moving |= on & (moved(r, new1 - lambda[r]) | moved(r2, new2 - lambda[r2]));
       lambda[r] = on ? new1 : lambda[r];
       lambda[r2] = on ? new2 : lambda[r2];
       ++r;  // the second tangent
     }
+    live = moving;
   }
+  return it;
 }
 
-template void batch_pgs_solve(const BatchRows<float>&, const PgsSettings&, Lanes<float>*);
-template void batch_pgs_solve(const BatchRows<double>&, const PgsSettings&, Lanes<double>*);
+template int batch_pgs_solve(const BatchRows<float>&, const PgsSettings&, Lanes<float>*);
+template int batch_pgs_solve(const BatchRows<double>&, const PgsSettings&, Lanes<double>*);
 
 }  // namespace novaphy

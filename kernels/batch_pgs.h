@@ -29,8 +29,9 @@ struct BatchRows {
 };
 
 // the rows' effective masses, the warm start applied to qd [dof], then the sweeps in row order:
-// the same steps, per lane, as the solver's scalar path (finish_row, apply_impulse, pgs_solve)
+// the same steps, per lane, as the solver's scalar path (finish_row, apply_impulse, pgs_solve); with a
+// tolerance, each lane stops where pgs_solve would stop it. Returns the sweeps run (the most of any lane)
 template <typename T>
-void batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, Lanes<T>* qd);
+int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, Lanes<T>* qd);
 
 }  // namespace novaphy

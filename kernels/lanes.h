@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 namespace novaphy {
 
@@ -41,6 +42,16 @@ using Lanes = typename LaneTypes<T>::type;
 // the signed integers of T's width: comparison masks and quadrant numbers
 template <typename T>
 using IntLanes = typename LaneTypes<T>::mask;
+
+// true when some lane of the mask m is set (read as words: a vector compare and a branch per lane
+// would cost more than the test it guards)
+template <typename T>
+inline bool any_lane(const IntLanes<T>& m) {
+  std::uint64_t x[sizeof(m) / 8], any = 0;
+  std::memcpy(x, &m, sizeof(m));
+  for (const std::uint64_t word : x) any |= word;
+  return any != 0;
+}
 
 template <typename T>
 inline Lanes<T> lane_sqrt(Lanes<T> x) {

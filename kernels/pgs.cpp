@@ -34,13 +34,18 @@ void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar 
   }
 }
 
-void pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
-               const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd) {
+int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
+              const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd) {
   // unconstrained step of one row: the impulse that would bring J qd to its target
   auto step = [&](const PgsRow& row) {
     return -(row_velocity(row, J, qd) - row.target + settings.cfm * row.lambda) * row.inv_mass;
   };
-  for (int it = 0; it < settings.iterations; ++it) {
+  // a row whose impulse moved by more than tolerance / (J M^-1 J^T) keeps the sweeps going
+  auto moved = [&](const PgsRow& row, Scalar change) { return std::abs(change) > settings.tolerance * row.inv_mass; };
+  int it = 0;
+  bool moving = true;
+  for (; it < settings.iterations && moving; ++it) {
+    moving = settings.tolerance == 0;
     for (int k = 0; k < count; ++k) {
       const int r = order[k];
       PgsRow& row = rows[r];
@@ -49,6 +54,7 @@ void pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std
         const Scalar lambda = std::max<Scalar>(0, row.lambda + step(row));
         if (!std::isfinite(lambda)) continue;
         apply_impulse(row, MinvJT, lambda - row.lambda, qd);
+        moving |= moved(row, lambda - row.lambda);
         row.lambda = lambda;
         continue;
       }
@@ -66,10 +72,12 @@ void pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std
       if (!std::isfinite(new1) || !std::isfinite(new2)) continue;
       apply_impulse(row, MinvJT, new1 - row.lambda, qd);
       apply_impulse(second, MinvJT, new2 - second.lambda, qd);
+      moving |= moved(row, new1 - row.lambda) || moved(second, new2 - second.lambda);
       row.lambda = new1;
       second.lambda = new2;
     }
   }
+  return it;
 }
 
 }  // namespace novaphy

@@ -25,9 +25,12 @@ struct PgsRow {
 };
 
 struct PgsSettings {
-  int iterations = 20;
+  int iterations = 20;  // sweeps at most
   Scalar cfm = 0;
   Scalar friction_smoothing = 1;  // 0: box friction per tangent, 1: circular cone, between: blend
+  // the sweeps stop early once one sweep moved no row's impulse by more than tolerance / (J M^-1 J^T),
+  // i.e. no row's own velocity by more than tolerance (m/s, rad/s); 0: every sweep runs
+  Scalar tolerance = 0;
 };
 
 // two unit tangents completing a contact normal n to a right-handed frame (Frisvad's construction)
@@ -41,8 +44,8 @@ void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar 
 
 // sweeps the rows order[0 .. count) in that order (a friction pair's second row follows its first)
 // inputs:  rows with lambda as the warm start (already applied to qd), the pools
-// outputs: rows[].lambda, qd
-void pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
-               const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd);
+// outputs: rows[].lambda, qd; returns the sweeps run
+int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
+              const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd);
 
 }  // namespace novaphy

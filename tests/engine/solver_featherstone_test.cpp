@@ -311,6 +311,9 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
   SolverFeatherstoneSettings bad;
   bad.friction_smoothing = -1;
   EXPECT_NOVAPHY_ERROR(SolverFeatherstone(scene.model, bad), "settings.friction_smoothing must be in [0, 1], got -1");
+  bad = {};
+  bad.pgs_tolerance = std::nan("");
+  EXPECT_NOVAPHY_ERROR(SolverFeatherstone(scene.model, bad), "settings.pgs_tolerance must be in [0, 1000000], got nan");
 }
 
 // ---- determinism: same inputs, bit-identical states ----

@@ -111,6 +111,8 @@ def test_settings_mirror_the_constructor_and_are_writable():
     s.num_iterations = 50
     s.linear_slop = 0.002
     assert solver.settings.num_iterations == 50 and solver.settings.linear_slop == 0.002
+    s.pgs_tolerance = 1e-5
+    assert solver.settings.pgs_tolerance == 1e-5
     for name in ["erp", "cfm", "warmstarting_factor", "restitution_threshold", "use_warmstarting"]:
         assert hasattr(s, name)
 
@@ -139,6 +141,10 @@ def test_bad_step_arguments():
     solver.settings.erp = 0.2
     solver.settings.num_iterations = -3
     with pytest.raises(ValueError, match="settings.num_iterations must be >= 0, got -3"):
+        solver.step(state, state, control, contacts, 0.01)
+    solver.settings.num_iterations = 20
+    solver.settings.pgs_tolerance = -1.0
+    with pytest.raises(ValueError, match=r"settings.pgs_tolerance must be in \[0, 1000000\], got -1"):
         solver.step(state, state, control, contacts, 0.01)
 
 
