@@ -380,18 +380,21 @@ class Batches final : public ArticulationBatches {
             begin = std::min(begin, j);
             end = j + 1;
           }
+        // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
+        V* u = R.point.data();
+        for (int j = 0; j < nv; ++j) {
+          const V* s6 = S + 6 * j;
+          u[3 * j] = s6[3] + s6[1] * p[2] - s6[2] * p[1];
+          u[3 * j + 1] = s6[4] + s6[2] * p[0] - s6[0] * p[2];
+          u[3 * j + 2] = s6[5] + s6[0] * p[1] - s6[1] * p[0];
+        }
         for (int e = 0; e < 3; ++e) {
           const int r = add_row(e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V{}, warm[e]);
           V* J = R.J_row(r);
           V* z = R.z_row(r);
-          // J_k = coef_k d . (S_lin,k + S_ang,k x p): the velocity along d of the point p moved by dof k
-          for (int j = 0; j < nv; ++j) {
-            const V* s6 = S + 6 * j;
-            const V u0 = s6[3] + s6[1] * p[2] - s6[2] * p[1];
-            const V u1 = s6[4] + s6[2] * p[0] - s6[0] * p[2];
-            const V u2 = s6[5] + s6[0] * p[1] - s6[1] * p[0];
-            J[j] = R.coef[j] * (d[e][0] * u0 + d[e][1] * u1 + d[e][2] * u2);
-          }
+          // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
+          for (int j = 0; j < nv; ++j)
+            J[j] = R.coef[j] * (d[e][0] * u[3 * j] + d[e][1] * u[3 * j + 1] + d[e][2] * u[3 * j + 2]);
           std::copy(J, J + nv, z);
           batch_solve(topo, H, z);
           R.normal[r] = first;
@@ -671,6 +674,7 @@ class Batches final : public ArticulationBatches {
     std::vector<int> contact;                           // [slot][lane] the contact, or -1
     std::vector<Vec3> frame;                            // [slot][lane][3] its normal and tangents
     std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
+    std::vector<V> point;  // [dof][3] the velocity of a slot's contact point moved by each dof
     void resize(int rows, int dofs_, int slots) {
       dofs = dofs_;
       if (static_cast<int>(kind.size()) < rows) {
@@ -688,6 +692,7 @@ class Batches final : public ArticulationBatches {
       if (frame.size() < static_cast<size_t>(slots) * W * 3) frame.resize(static_cast<size_t>(slots) * W * 3);
       for (auto* x : {&coef, &qd_in})
         if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
+      if (static_cast<int>(point.size()) < 3 * dofs) point.resize(3 * dofs);
     }
     V* J_row(int r) { return J.data() + static_cast<size_t>(r) * dofs; }
     V* z_row(int r) { return z.data() + static_cast<size_t>(r) * dofs; }
