@@ -92,7 +92,7 @@ def step_tables(path):
     for (scene, precision), (solver, state, h) in sorted(memory.items()):
         lines.append(f"| {STEP_SCENES[scene]} | {PRECISION[precision]} | {solver:,.0f} | {state:,.0f} "
                      f"| {solver + state:,.0f} | {state + h:,.0f} | {(solver + state) / (state + h):.2f} "
-                     f"| {mjdata.get(scene, 0):,.0f} |")
+                     f"| {mjdata.get(MUJOCO_SCENE.get(scene, scene), 0):,.0f} |")
     return lines, rate, all_threads, context
 
 
