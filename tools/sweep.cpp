@@ -56,7 +56,8 @@ struct Setting {
   int iterations = 20;
   int interval = 1;
   bool tile = false, fuse = true, warm = true;
-  double coriolis = 0;  // coriolis_implicitness
+  double coriolis = 0;       // coriolis_implicitness
+  double pgs_tolerance = 0;  // settings.pgs_tolerance
 };
 
 struct Result {
@@ -122,6 +123,7 @@ Result run(const Model& model, const Scene& scene, const State& start, const Set
   settings.fuse_cholesky = setting.fuse;
   settings.use_warmstarting = setting.warm;
   settings.coriolis_implicitness = setting.coriolis;
+  settings.pgs_tolerance = setting.pgs_tolerance;
   settings.angular_damping = 0;
   settings.on_divergence = DivergencePolicy::Flag;
   settings.num_threads = o.threads;
@@ -235,6 +237,12 @@ std::vector<Setting> settings_to_sweep() {
   s.warm = false;
   s.label = "warm starting off";
   sweep.push_back(s);
+  for (const double tolerance : {1e-5, 1e-3}) {
+    s = Setting{};
+    s.pgs_tolerance = tolerance;
+    s.label = tolerance == 1e-5 ? "pgs_tolerance 1e-5" : "pgs_tolerance 1e-3";
+    sweep.push_back(s);
+  }
   return sweep;
 }
 
@@ -304,7 +312,7 @@ int sweep(const Options& o) {
   const std::string path = (o.out.empty() ? "sweep_" + scene.name : o.out) + ".csv";
   std::ofstream csv(path);
   csv << "scene,setting,dt,num_iterations,update_mass_matrix_interval,precision,use_tile_gemm,fuse_cholesky,"
-         "use_warmstarting,coriolis_implicitness,robot_steps_per_s,robot_seconds_per_s";
+         "use_warmstarting,coriolis_implicitness,pgs_tolerance,robot_steps_per_s,robot_seconds_per_s";
   for (const double t : o.seconds) csv << ",error_" << seconds_name(t);
   csv << ",energy_error_j_per_kg,max_penetration_m,max_limit_overshoot,diverged_steps";
   for (const double t : o.seconds) csv << ",mujoco_rk4_error_" << seconds_name(t);
@@ -312,8 +320,8 @@ int sweep(const Options& o) {
   csv.precision(6);
   auto row = [&](const Setting& s, const Result& r) {
     csv << scene.name << ",\"" << s.label << "\"," << s.dt << "," << s.iterations << "," << s.interval << ",float64,"
-        << s.tile << "," << s.fuse << "," << s.warm << "," << s.coriolis << "," << r.robot_steps_per_s << ","
-        << r.robot_steps_per_s * s.dt;
+        << s.tile << "," << s.fuse << "," << s.warm << "," << s.coriolis << "," << s.pgs_tolerance << ","
+        << r.robot_steps_per_s << "," << r.robot_steps_per_s * s.dt;
     for (size_t k = 0; k < o.seconds.size(); ++k) csv << "," << max_difference(r.q[k], ref.q[k]);
     csv << "," << std::abs(r.energy - ref.energy) / total_mass << "," << std::max<Scalar>(0, r.penetration) << ","
         << std::max<Scalar>(0, r.overshoot) << "," << r.diverged_steps;
