@@ -110,7 +110,13 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
 
-  // this step's contacts, in their order, become the previous ones for warm starting
+  // this step's contacts, in their order, become the previous ones for warm starting (a buffer not
+  // made by contacts() gets its bookkeeping here)
+  if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) {
+    contacts.previous_key.resize(contacts.contact_capacity);
+    contacts.previous_impulse.resize(3 * static_cast<size_t>(contacts.contact_capacity));
+    contacts.previous_match.assign(contacts.contact_capacity, -1);
+  }
   for (int c = 0; c < contacts.contact_count; ++c) {
     contacts.previous_key[c] =
         Contacts::key(contacts.contact_shape_a[c], contacts.contact_shape_b[c], contacts.contact_feature[c]);

@@ -188,6 +188,26 @@ TEST(CollisionPipeline, PreviousImpulsesFollowTheirContactsWhenTheListChanges) {
   expect_marked(spheres[1]);
 }
 
+TEST(CollisionPipeline, ABufferWithoutItsWarmStartBookkeepingGetsIt) {
+  // a buffer copied field by field (the contact arrays only) still warm starts after one collide
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  builder.add_shape_sphere(builder.add_body(RigidBody(), Transform{Vec3(0, 0.09, 0)}), 0.1);
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  contacts.previous_key.clear();
+  contacts.previous_impulse.clear();
+  contacts.previous_match.clear();
+  pipeline.collide(model.state(), contacts);
+  ASSERT_EQ(contacts.contact_count, 1);
+  EXPECT_EQ(contacts.previous(0), nullptr);
+  contacts.contact_impulse[1] = 3;
+  pipeline.collide(model.state(), contacts);
+  ASSERT_NE(contacts.previous(0), nullptr);
+  EXPECT_EQ(contacts.previous(0)[1], 3);
+}
+
 TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {
   // 40 worlds of a floor and a pile of touching bodies: each world's pairs and each plane's contacts
   // found on whichever thread, written in world and plane order, so the buffer is the same bit for bit;
