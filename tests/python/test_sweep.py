@@ -27,7 +27,7 @@ def sweep(tmp_path, scene, seconds):
 
 def test_chain_sweep_converges_in_dt_and_matches_mujoco_rk4(tmp_path):
     rows, prefix, out = sweep(tmp_path, "chain15", "0.5,1")
-    assert len(rows) == 26 and "Pareto front" in out
+    assert len(rows) == 28 and "Pareto front" in out
     ref = rows["reference"]
     assert float(ref["error_0.5s"]) == 0 and float(ref["mujoco_rk4_error_0.5s"]) < 1e-3
     e = [float(rows[f"dt 1/{n} it 20"]["error_0.5s"]) for n in (120, 240, 480)]
@@ -39,7 +39,7 @@ def test_chain_sweep_converges_in_dt_and_matches_mujoco_rk4(tmp_path):
                                                                rel=1e-4)
     with open(prefix + ".md") as f:
         table = f.read().splitlines()
-    assert len(table) == 2 + 26 and "✓" in "".join(table)
+    assert len(table) == 2 + 28 and "✓" in "".join(table)
     assert os.path.getsize(prefix + ".png") > 10_000
 
 
@@ -49,6 +49,10 @@ def test_quadruped_sweep_measures_penetration(tmp_path):
     assert float(coarse["max_penetration_m"]) > 5 * float(fine["max_penetration_m"]) > 0
     assert coarse["mujoco_rk4_error_1s"] == ""  # contacts: no MuJoCo reference
     assert all(r["diverged_steps"] == "0" for r in rows.values())
+    # the PGS tolerance trades error for sweeps: 1e-5 m/s stays near the fixed sweeps, 1e-3 m/s drifts more
+    tight, loose = rows["pgs_tolerance 1e-5"], rows["pgs_tolerance 1e-3"]
+    assert float(tight["error_1s"]) < 1e-5 < float(loose["error_1s"])
+    assert float(tight["pgs_tolerance"]) == 1e-5
 
 
 def test_bad_arguments_are_named(tmp_path):
