@@ -423,12 +423,7 @@ class Batches final : public ArticulationBatches {
       batch_rows.active = R.active.data();
       batch_rows.inv_mass = R.inv_mass.data();
       batch_rows.lambda = R.lambda.data();
-      PgsSettings pgs;
-      pgs.iterations = s.iterations;
-      pgs.cfm = s.cfm;
-      pgs.friction_smoothing = s.friction_smoothing;
-      pgs.tolerance = s.tolerance;
-      batch_pgs_solve(batch_rows, pgs, w.qd.data());
+      batch_pgs_solve(batch_rows, s.pgs, w.qd.data());
 
       // velocities and the impulses kept for warm starting: limits per dof and side, contacts as world
       // vectors on body b
@@ -562,7 +557,7 @@ class Batches final : public ArticulationBatches {
           n += v->size() * sizeof(V);
     for (const RowWork& R : row_work_)
       n += (R.J.size() + R.z.size() + R.target.size() + R.mu.size() + R.inv_mass.size() + R.lambda.size() +
-            R.coef.size() + R.qd_in.size()) *
+            R.coef.size() + R.qd_in.size() + R.point.size()) *
                sizeof(V) +
            R.active.size() * sizeof(IntLanes<T>) +
            (R.limit_row.size() + R.contact.size() + R.normal.size() + R.nonzero_begin.size() + R.nonzero_end.size()) *

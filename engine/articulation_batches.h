@@ -12,6 +12,7 @@
 
 #include "engine/collision.h"
 #include "engine/model.h"
+#include "kernels/pgs.h"
 
 namespace novaphy {
 
@@ -68,9 +69,8 @@ class ArticulationBatches {
     const Scalar* restitution = nullptr;  // [contact]
   };
   struct RowSettings {
-    int iterations = 20;
-    Scalar erp = 0.2, linear_slop = 0.001, cfm = 1e-6, warmstarting_factor = 0.85;
-    Scalar restitution_threshold = 0.2, friction_smoothing = 1, tolerance = 0;
+    PgsSettings pgs;  // the sweeps: iterations, cfm, friction cone, tolerance
+    Scalar erp = 0.2, linear_slop = 0.001, warmstarting_factor = 0.85, restitution_threshold = 0.2;
     bool use_warmstarting = true;
   };
   // the constraint rows of active articulations with skip[a] == 0 (no contact joins them to another

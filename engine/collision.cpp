@@ -10,12 +10,21 @@
 
 namespace novaphy {
 
+namespace {
+
+// the warm-start bookkeeping of a buffer of contact_capacity contacts
+void size_previous(Contacts& c) {
+  c.previous_key.resize(c.contact_capacity);
+  c.previous_impulse.resize(3 * static_cast<size_t>(c.contact_capacity));
+  c.previous_match.assign(c.contact_capacity, -1);
+}
+
+}  // namespace
+
 const Scalar* Contacts::previous(int c) const {
   // collide() matched each contact; a buffer edited since then finds nothing where the keys differ
   const int m = c < static_cast<int>(previous_match.size()) ? previous_match[c] : -1;
-  if (m < 0 || m >= previous_count ||
-      previous_key[m] != key(contact_shape_a[c], contact_shape_b[c], contact_feature[c]))
-    return nullptr;
+  if (m < 0 || m >= previous_count || previous_key[m] != key_of(c)) return nullptr;
   return &previous_impulse[3 * m];
 }
 
@@ -61,9 +70,7 @@ Contacts CollisionPipeline::contacts() const {
 #define NOVAPHY_ALLOCATE_CONTACT(T, name, count, width) c.name.assign(static_cast<size_t>(c.count) * (width), T{});
   NOVAPHY_CONTACT_FIELDS(NOVAPHY_ALLOCATE_CONTACT)
 #undef NOVAPHY_ALLOCATE_CONTACT
-  c.previous_key.resize(c.contact_capacity);
-  c.previous_impulse.resize(3 * c.contact_capacity);
-  c.previous_match.assign(c.contact_capacity, -1);
+  size_previous(c);
   return c;
 }
 
@@ -112,14 +119,9 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
 
   // this step's contacts, in their order, become the previous ones for warm starting (a buffer not
   // made by contacts() gets its bookkeeping here)
-  if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) {
-    contacts.previous_key.resize(contacts.contact_capacity);
-    contacts.previous_impulse.resize(3 * static_cast<size_t>(contacts.contact_capacity));
-    contacts.previous_match.assign(contacts.contact_capacity, -1);
-  }
+  if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
   for (int c = 0; c < contacts.contact_count; ++c) {
-    contacts.previous_key[c] =
-        Contacts::key(contacts.contact_shape_a[c], contacts.contact_shape_b[c], contacts.contact_feature[c]);
+    contacts.previous_key[c] = contacts.key_of(c);
     for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * c + i] = contacts.contact_impulse[3 * c + i];
   }
   contacts.previous_count = contacts.contact_count;
@@ -187,8 +189,7 @@ void CollisionPipeline::match_previous(Contacts& contacts) {
   previous_order_.clear();
   int next = 0;
   for (int c = 0; c < contacts.contact_count; ++c) {
-    const std::uint64_t k =
-        Contacts::key(contacts.contact_shape_a[c], contacts.contact_shape_b[c], contacts.contact_feature[c]);
+    const std::uint64_t k = contacts.key_of(c);
     int m = -1;
     if (next < n && key[next] == k) {
       m = next;

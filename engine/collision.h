@@ -44,6 +44,9 @@ struct Contacts : ModelCounts {
     return (static_cast<std::uint64_t>(shape_a) << 40) | (static_cast<std::uint64_t>(shape_b) << 16) |
            static_cast<std::uint64_t>(feature & 0xffff);
   }
+  std::uint64_t key_of(int contact) const {
+    return key(contact_shape_a[contact], contact_shape_b[contact], contact_feature[contact]);
+  }
   // impulse applied to the same contact (same shapes and feature) at the previous step, or nullptr
   const Scalar* previous(int contact) const;
 };

@@ -202,14 +202,11 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     block.mu = contact_mu_.data();
     block.restitution = contact_restitution_.data();
     ArticulationBatches::RowSettings rows;
-    rows.iterations = settings.num_iterations;
+    rows.pgs = pgs_settings();
     rows.erp = settings.erp;
     rows.linear_slop = settings.linear_slop;
-    rows.cfm = settings.cfm;
     rows.warmstarting_factor = settings.warmstarting_factor;
     rows.restitution_threshold = settings.restitution_threshold;
-    rows.friction_smoothing = settings.friction_smoothing;
-    rows.tolerance = settings.pgs_tolerance;
     rows.use_warmstarting = settings.use_warmstarting;
     batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
     for (size_t a = 0; a < art_.size(); ++a) rows_batched_[a] = batches_->solves_rows(a, touched_.data());
@@ -562,16 +559,21 @@ void SolverFeatherstone::group_islands() {
   for (int r = 0; r < row_count_; ++r) island_rows_[island_fill_[island_of_row_[r]]++] = r;
 }
 
-void SolverFeatherstone::solve_islands() {
-  // islands of articulations joined by rows are independent: each one's rows get M^-1 J^T, their
-  // warm start and the PGS sweeps in row order on one thread, islands in parallel (the same bits
-  // as one sweep over all rows)
-  group_islands();
+PgsSettings SolverFeatherstone::pgs_settings() const {
   PgsSettings pgs;
   pgs.iterations = settings.num_iterations;
   pgs.cfm = settings.cfm;
   pgs.friction_smoothing = settings.friction_smoothing;
   pgs.tolerance = settings.pgs_tolerance;
+  return pgs;
+}
+
+void SolverFeatherstone::solve_islands() {
+  // islands of articulations joined by rows are independent: each one's rows get M^-1 J^T, their
+  // warm start and the PGS sweeps in row order on one thread, islands in parallel (the same bits
+  // as one sweep over all rows)
+  group_islands();
+  const PgsSettings pgs = pgs_settings();
   for_each_articulation([&](int island) {
     const int begin = island_start_[island], count = island_start_[island + 1] - begin;
     const int* order = island_rows_.data() + begin;

@@ -116,6 +116,8 @@ class SolverFeatherstone {
   void build_limit_rows(const State& in, Scalar dt);
   void group_islands();
   void solve_islands();
+  // the sweeps' settings, for the scalar islands and the blocks alike
+  PgsSettings pgs_settings() const;
   void solve_constraints(Contacts& contacts);
   void integrate(const State& in, State& out, Scalar dt);
   template <typename F>

@@ -165,20 +165,18 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
   }
 }
 
-TEST(BatchPgs, LanesMatchTheScalarSolveFloat64) {
-  expect_lanes_match_the_scalar_solve<double>(1);
-  expect_lanes_match_the_scalar_solve<double>(0);
-  expect_lanes_match_the_scalar_solve<double>(0.5);
-  expect_lanes_match_the_scalar_solve<double>(1, 1e-3);
-  expect_lanes_match_the_scalar_solve<double>(0, 1e-3);
+// friction smoothing 1, 0 and 0.5 with every sweep; 1 and 0 with a tolerance
+template <typename T>
+void expect_lanes_match_the_scalar_solve_in_every_setting() {
+  for (const auto& [smoothing, tolerance] :
+       {std::pair{1.0, 0.0}, std::pair{0.0, 0.0}, std::pair{0.5, 0.0}, std::pair{1.0, 1e-3}, std::pair{0.0, 1e-3}}) {
+    SCOPED_TRACE(testing::Message() << "friction_smoothing " << smoothing << ", tolerance " << tolerance);
+    expect_lanes_match_the_scalar_solve<T>(smoothing, tolerance);
+  }
 }
-TEST(BatchPgs, LanesMatchTheScalarSolveFloat32) {
-  expect_lanes_match_the_scalar_solve<float>(1);
-  expect_lanes_match_the_scalar_solve<float>(0);
-  expect_lanes_match_the_scalar_solve<float>(0.5);
-  expect_lanes_match_the_scalar_solve<float>(1, 1e-3);
-  expect_lanes_match_the_scalar_solve<float>(0, 1e-3);
-}
+
+TEST(BatchPgs, LanesMatchTheScalarSolveFloat64) { expect_lanes_match_the_scalar_solve_in_every_setting<double>(); }
+TEST(BatchPgs, LanesMatchTheScalarSolveFloat32) { expect_lanes_match_the_scalar_solve_in_every_setting<float>(); }
 
 template <typename T>
 void expect_absent_rows_change_no_bit(double tolerance) {
