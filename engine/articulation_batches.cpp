@@ -331,43 +331,58 @@ class Batches final : public ArticulationBatches {
       if (slots > 0) gather(qd_off, in.joint_qd.data(), nv, R.qd_in.data());
       const V* S = G.block_S(b);
       const V* o = &G.origin[3 * b];
+      const Contacts& C = *bc.contacts;
       for (int t = 0; t < slots; ++t) {
+        // each lane's t-th contact, read from the buffer lane by lane
         IntLanes<T> on{};
-        V p[3] = {}, d[3][3] = {}, depth{}, mu{}, restitution{}, warm[3] = {};
-        for (int j = 0; j < nv; ++j) R.coef[j] = V{};
+        V n[3] = {}, p[3] = {}, depth{}, mu{}, restitution{}, previous[3] = {};
+        int link[W][2];    // its links (b, a), -1 for static bodies
+        int uniform = -1;  // the lane whose links every other lane with a contact shares, if any
         for (int l = 0; l < W; ++l) {
           const int c = t < listed[l] ? bc.list[bc.start[G.arts[b * W + l]] + t] : -1;
           R.contact[t * W + l] = c;
           if (c < 0) continue;
           on[l] = -1;
-          const Contacts& C = *bc.contacts;
-          Vec3* frame = &R.frame[3 * (t * W + l)];  // kept for the impulse written back
-          const Vec3& n = frame[0] = Eigen::Map<const Vec3>(&C.contact_normal[3 * c]);
-          Vec3 &t1 = frame[1], &t2 = frame[2];
-          contact_tangents(n, &t1, &t2);
           for (int m = 0; m < 3; ++m) {
+            n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
             p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
-            d[0][m][l] = static_cast<T>(n[m]);
-            d[1][m][l] = static_cast<T>(t1[m]);
-            d[2][m][l] = static_cast<T>(t2[m]);
           }
           depth[l] = static_cast<T>(C.contact_depth[c]);
           mu[l] = static_cast<T>(bc.mu[c]);
           restitution[l] = static_cast<T>(bc.restitution[c]);
-          const Scalar* previous = C.previous(c);
-          if (s.use_warmstarting && previous) {
-            const Vec3 P = s.warmstarting_factor * Eigen::Map<const Vec3>(previous);
-            warm[0][l] = static_cast<T>(std::max<Scalar>(0, P.dot(n)));
-            warm[1][l] = static_cast<T>(P.dot(t1));
-            warm[2][l] = static_cast<T>(P.dot(t2));
-          }
-          // the relative velocity is body b's point's minus body a's: +1 on b's path, -1 on a's
-          for (const auto& [link, sign] : {std::pair{bc.link_b[c], T(1)}, std::pair{bc.link_a[c], T(-1)}}) {
-            if (link < 0) continue;
-            for (int e = topo.link_dof_start[link]; e < topo.link_dof_start[link + 1]; ++e)
-              R.coef[topo.link_dofs[e]][l] += sign;
-          }
+          if (const Scalar* P = s.use_warmstarting ? C.previous(c) : nullptr)
+            for (int m = 0; m < 3; ++m) previous[m][l] = static_cast<T>(P[m]);
+          link[l][0] = bc.link_b[c];
+          link[l][1] = bc.link_a[c];
+          if (uniform == -1) uniform = l;
+          if (uniform >= 0 && (link[l][0] != link[uniform][0] || link[l][1] != link[uniform][1])) uniform = -2;
         }
+        // coef_k: +1 for the dofs on body b's path, -1 on body a's (the relative velocity is b's point's
+        // minus a's), set for all lanes at once where they share their links
+        for (int j = 0; j < nv; ++j) R.coef[j] = V{};
+        auto add_paths = [&](int l, auto&& add) {
+          for (int side = 0; side < 2; ++side) {
+            if (link[l][side] < 0) continue;
+            for (int e = topo.link_dof_start[link[l][side]]; e < topo.link_dof_start[link[l][side] + 1]; ++e)
+              add(topo.link_dofs[e], side == 0 ? T(1) : T(-1));
+          }
+        };
+        if (uniform >= 0) {
+          const V one = on ? V{} + 1 : V{};
+          add_paths(uniform, [&](int j, T sign) { R.coef[j] += sign * one; });
+        } else {
+          for (int l = 0; l < W; ++l)
+            if (on[l]) add_paths(l, [&](int j, T sign) { R.coef[j][l] += sign; });
+        }
+        // the normal and two tangents (contact_tangents' frame) in lanes, kept for the impulses written back
+        V* d = &R.frame[9 * t];
+        lane_tangents<T>(n, d);
+        // warm starts: the previous impulse along the new frame (no pull along the normal)
+        V warm[3];
+        for (int e = 0; e < 3; ++e)
+          warm[e] = T(s.warmstarting_factor) *
+                    (previous[0] * d[3 * e] + previous[1] * d[3 * e + 1] + previous[2] * d[3 * e + 2]);
+        warm[0] = warm[0] > 0 ? warm[0] : V{};
         // normal: push the penetration beyond the slop out at erp / dt, let a gap close in one step,
         // bounce at -restitution times the approach speed above the threshold (a contact that closes
         // within this step)
@@ -391,16 +406,16 @@ class Batches final : public ArticulationBatches {
         for (int e = 0; e < 3; ++e) {
           const int r = add_row(e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V{}, warm[e]);
           V* J = R.J_row(r);
-          V* z = R.z_row(r);
           // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
+          const V* de = d + 3 * e;
           for (int j = 0; j < nv; ++j)
-            J[j] = R.coef[j] * (d[e][0] * u[3 * j] + d[e][1] * u[3 * j + 1] + d[e][2] * u[3 * j + 2]);
-          std::copy(J, J + nv, z);
-          batch_solve(topo, H, z);
+            J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
+          std::copy(J, J + nv, R.z_row(r));
           R.normal[r] = first;
           R.nonzero_begin[r] = begin;
           R.nonzero_end[r] = end;
         }
+        batch_solve_three(topo, H, end, R.z_row(first), nv);
         V v_approach{};
         for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
         const V bounce = -restitution * v_approach;
@@ -437,16 +452,19 @@ class Batches final : public ArticulationBatches {
           impulse[2 * (qd_off[l] + G.limited[m / 2]) + m % 2] = std::isfinite(x) ? x : 0;
         }
       }
-      for (int t = 0; t < slots; ++t)
+      for (int t = 0; t < slots; ++t) {
+        const V* d = &R.frame[9 * t];
+        const V* lambda = &R.lambda[rows - 3 * (slots - t)];
+        V P[3];
+        for (int m = 0; m < 3; ++m) P[m] = lambda[0] * d[m] + lambda[1] * d[3 + m] + lambda[2] * d[6 + m];
+        IntLanes<T> finite = ~IntLanes<T>{};
+        for (int m = 0; m < 3; ++m) finite &= lane_abs<T>(P[m]) <= std::numeric_limits<T>::max();
         for (int l = 0; l < W; ++l) {
           const int c = R.contact[t * W + l];
           if (c < 0) continue;
-          const Vec3* frame = &R.frame[3 * (t * W + l)];
-          const V* lambda = &R.lambda[rows - 3 * (slots - t)];
-          const Vec3 P =
-              Scalar(lambda[0][l]) * frame[0] + Scalar(lambda[1][l]) * frame[1] + Scalar(lambda[2][l]) * frame[2];
-          Eigen::Map<Vec3>(&bc.contacts->contact_impulse[3 * c]) = P.allFinite() ? P : Vec3::Zero();
+          for (int m = 0; m < 3; ++m) bc.contacts->contact_impulse[3 * c + m] = finite[l] ? P[m][l] : 0;
         }
+      }
     });
   }
 
@@ -557,12 +575,12 @@ class Batches final : public ArticulationBatches {
           n += v->size() * sizeof(V);
     for (const RowWork& R : row_work_)
       n += (R.J.size() + R.z.size() + R.target.size() + R.mu.size() + R.inv_mass.size() + R.lambda.size() +
-            R.coef.size() + R.qd_in.size() + R.point.size()) *
+            R.coef.size() + R.qd_in.size() + R.point.size() + R.frame.size()) *
                sizeof(V) +
            R.active.size() * sizeof(IntLanes<T>) +
            (R.limit_row.size() + R.contact.size() + R.normal.size() + R.nonzero_begin.size() + R.nonzero_end.size()) *
                sizeof(int) +
-           R.kind.size() * sizeof(RowKind) + R.frame.size() * sizeof(Vec3);
+           R.kind.size() * sizeof(RowKind);
     return n;
   }
 
@@ -667,7 +685,7 @@ class Batches final : public ArticulationBatches {
     std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
     std::vector<int> limit_row;                         // [limited][2] its row, or -1
     std::vector<int> contact;                           // [slot][lane] the contact, or -1
-    std::vector<Vec3> frame;                            // [slot][lane][3] its normal and tangents
+    std::vector<V> frame;                               // [slot][3][3] the normal and tangents
     std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
     std::vector<V> point;  // [dof][3] the velocity of a slot's contact point moved by each dof
     void resize(int rows, int dofs_, int slots) {
@@ -684,7 +702,7 @@ class Batches final : public ArticulationBatches {
         if (static_cast<int>(x->size()) < rows) x->resize(rows);
       if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
       if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
-      if (frame.size() < static_cast<size_t>(slots) * W * 3) frame.resize(static_cast<size_t>(slots) * W * 3);
+      if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
       for (auto* x : {&coef, &qd_in})
         if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
       if (static_cast<int>(point.size()) < 3 * dofs) point.resize(3 * dofs);

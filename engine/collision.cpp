@@ -21,13 +21,6 @@ void size_previous(Contacts& c) {
 
 }  // namespace
 
-const Scalar* Contacts::previous(int c) const {
-  // collide() matched each contact; a buffer edited since then finds nothing where the keys differ
-  const int m = c < static_cast<int>(previous_match.size()) ? previous_match[c] : -1;
-  if (m < 0 || m >= previous_count || previous_key[m] != key_of(c)) return nullptr;
-  return &previous_impulse[3 * m];
-}
-
 CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions& options)
     : model_(model), options_(options) {
   if (options.contact_capacity < 0) fail("contact_capacity must be >= 0, got ", options.contact_capacity);

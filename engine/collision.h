@@ -47,8 +47,13 @@ struct Contacts : ModelCounts {
   std::uint64_t key_of(int contact) const {
     return key(contact_shape_a[contact], contact_shape_b[contact], contact_feature[contact]);
   }
-  // impulse applied to the same contact (same shapes and feature) at the previous step, or nullptr
-  const Scalar* previous(int contact) const;
+  // impulse applied to the same contact (same shapes and feature) at the previous step, or nullptr.
+  // collide() matched each contact; a buffer edited since then finds nothing where the keys differ
+  const Scalar* previous(int contact) const {
+    const int m = contact < static_cast<int>(previous_match.size()) ? previous_match[contact] : -1;
+    if (m < 0 || m >= previous_count || previous_key[m] != key_of(contact)) return nullptr;
+    return &previous_impulse[3 * static_cast<size_t>(m)];
+  }
 };
 
 struct CollisionOptions {

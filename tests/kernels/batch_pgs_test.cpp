@@ -195,6 +195,43 @@ void expect_absent_rows_change_no_bit(double tolerance) {
   for (int r = 0; r < kRows; ++r) EXPECT_EQ(std::memcmp(&with.lambda[r][1], &without.lambda[r][1], sizeof(T)), 0);
 }
 
+// the lanes' contact frames against contact_tangents in double: random unit normals and the axes,
+// signed zeros included; each frame orthonormal with t1 x t2 = n
+template <typename T>
+void expect_lane_tangents_match_contact_tangents() {
+  using V = Lanes<T>;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  std::vector<Vec3> normals = {Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, -1, 0), Vec3(0, 1, -0.0)};
+  while (normals.size() < 64 * kLanes<T>) normals.push_back(Vec3(g(rng), g(rng), g(rng)).normalized());
+  double worst = 0;
+  for (size_t first = 0; first < normals.size(); first += kLanes<T>) {
+    V n[3], d[9];
+    for (int l = 0; l < kLanes<T>; ++l)
+      for (int m = 0; m < 3; ++m) n[m][l] = static_cast<T>(normals[first + l][m]);
+    lane_tangents<T>(n, d);
+    for (int l = 0; l < kLanes<T>; ++l) {
+      const Vec3 normal(n[0][l], n[1][l], n[2][l]);
+      Vec3 t1, t2;
+      contact_tangents(normal, &t1, &t2);
+      const Vec3 ref[3] = {normal, t1, t2};
+      Vec3 lane[3];
+      for (int e = 0; e < 3; ++e) {
+        lane[e] = Vec3(d[3 * e][l], d[3 * e + 1][l], d[3 * e + 2][l]);
+        worst = std::max(worst, (lane[e] - ref[e]).cwiseAbs().maxCoeff() / kEps<T>);
+      }
+      EXPECT_NEAR(lane[1].dot(lane[0]), 0, 8 * kEps<T>);
+      EXPECT_NEAR(lane[2].dot(lane[0]), 0, 8 * kEps<T>);
+      EXPECT_NEAR(lane[1].dot(lane[2]), 0, 8 * kEps<T>);
+      EXPECT_NEAR((lane[1].cross(lane[2]) - lane[0]).norm(), 0, 8 * kEps<T>);
+    }
+  }
+  EXPECT_LT(worst, 8);
+}
+
+TEST(BatchPgs, LaneTangentsMatchContactTangentsFloat64) { expect_lane_tangents_match_contact_tangents<double>(); }
+TEST(BatchPgs, LaneTangentsMatchContactTangentsFloat32) { expect_lane_tangents_match_contact_tangents<float>(); }
+
 TEST(BatchPgs, AbsentRowsChangeNoBitOfTheirLane) {
   for (const double tolerance : {0.0, 1e-3}) {
     expect_absent_rows_change_no_bit<double>(tolerance);
