@@ -51,9 +51,26 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     others_.push_back(s);
     (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
   }
-  world_sweep_ = world_others_;
-  lower_.resize(3 * model.shape_count);
-  upper_.resize(3 * model.shape_count);
+  world_sweep_.resize(model.world_count);
+  world_pair_start_.assign(model.world_count, -1);
+  for (int w = 0; w < model.world_count; ++w) {
+    const std::vector<int>& shapes = world_others_[w];
+    if (shapes.size() > kMaskedWorldShapes) continue;
+    world_pair_start_[w] = static_cast<int>(world_pairs_.size());
+    for (size_t i = 0; i < shapes.size(); ++i) {
+      std::uint64_t mask = 0;
+      for (size_t j = i + 1; j < shapes.size(); ++j)
+        if (may_collide(shapes[i], shapes[j])) mask |= std::uint64_t{1} << j;
+      world_pairs_.push_back(mask);
+    }
+  }
+  for (int w = 0; w < model.world_count; ++w)
+    if (world_pair_start_[w] < 0) {
+      world_sweep_[w].resize(world_others_[w].size());
+      std::iota(world_sweep_[w].begin(), world_sweep_[w].end(), 0);
+    }
+  plane_pose_.resize(model.shape_count);
+  shared_boxes_.resize(shared_others_.size());
 }
 
 Contacts CollisionPipeline::contacts() const {
@@ -88,21 +105,25 @@ Transform shape_pose(const Model& model, const State& state, int s) {
   return b < 0 ? local : Transform::from_array(&state.body_q[7 * b]) * local;
 }
 
-// world AABB of a sphere, box or capsule
-void shape_bounds(const Model& model, const Transform& X, int s, Scalar margin, Scalar* lower, Scalar* upper) {
-  const Vec3 scale = Eigen::Map<const Vec3>(&model.shape_scale[3 * s]);
+}  // namespace
+
+CollisionPipeline::Box CollisionPipeline::box(const State& state, int s) const {
+  // the world AABB of a sphere, box or capsule
+  Box x;
+  x.pose = shape_pose(model_, state, s);
+  const Transform& X = x.pose;
+  const Vec3 scale = Eigen::Map<const Vec3>(&model_.shape_scale[3 * s]);
   Vec3 extent = Vec3::Zero();
-  switch (static_cast<ShapeType>(model.shape_type[s])) {
+  switch (static_cast<ShapeType>(model_.shape_type[s])) {
     case ShapeType::Sphere: extent = Vec3::Constant(scale.x()); break;
     case ShapeType::Box: extent = X.rotation().cwiseAbs() * scale; break;
     case ShapeType::Capsule: extent = (X.q * Vec3(0, scale.y(), 0)).cwiseAbs() + Vec3::Constant(scale.x()); break;
     case ShapeType::Plane: break;
   }
-  Eigen::Map<Vec3>{lower} = X.p - extent - Vec3::Constant(margin);
-  Eigen::Map<Vec3>{upper} = X.p + extent + Vec3::Constant(margin);
+  x.lower = X.p - extent - Vec3::Constant(options_.margin);
+  x.upper = X.p + extent + Vec3::Constant(options_.margin);
+  return x;
 }
-
-}  // namespace
 
 void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   model_.check(state);
@@ -121,56 +142,76 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   contacts.contact_count = 0;
   contacts.contact_dropped = 0;
 
-  // the bounds of the shapes of no world first: every world meets them. Then per world, while its
-  // shapes' bounds are in cache: sweep and prune along x, then its planes and the shared ones against
-  // its shapes. Then the shapes of no world against all others, and every plane against them. Worlds
-  // (and shared shapes, and planes) spread over threads
-  for (const int s : shared_others_) bounds(state, s);
-  auto overlap = [&](int a, int b) {
-    for (int k = 0; k < 3; ++k)
-      if (lower_[3 * b + k] > upper_[3 * a + k] || lower_[3 * a + k] > upper_[3 * b + k]) return false;
-    return true;
+  // the planes' poses and the boxes of the shapes of no world first: every world meets them. Then per
+  // world, its shapes' boxes into the thread's scratch (in cache while used): its pairs (those its
+  // masks allow whose bounds overlap, in index order; a world of many shapes sweeps and prunes along
+  // x), then its planes and the shared ones against its shapes. Then the shapes of no world against
+  // all others, and every plane against them. Worlds (and shared shapes, and planes) spread over threads
+  for (const int p : planes_) plane_pose_[p] = shape_pose(model_, state, p);
+  for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
+  auto overlap = [](const Box& a, const Box& b) {
+    return (b.lower.x() <= a.upper.x()) & (a.lower.x() <= b.upper.x()) & (b.lower.y() <= a.upper.y()) &
+           (a.lower.y() <= b.upper.y()) & (b.lower.z() <= a.upper.z()) & (a.lower.z() <= b.upper.z());
   };
-  auto test_pair = [&](int a, int b, std::vector<Found>& out) {
-    if (overlap(a, b) && may_collide(a, b)) narrow_phase(std::min(a, b), std::max(a, b), state, out);
+  auto test_pair = [&](int a, const Box& A, int b, const Box& B, std::vector<Found>& out) {
+    if (!overlap(A, B) || !may_collide(a, b)) return;
+    if (a < b)
+      narrow_phase(a, A.pose, b, B.pose, out);
+    else
+      narrow_phase(b, B.pose, a, A.pose, out);
   };
-  find_contacts(model_.world_count, contacts, [&](int w, std::vector<Found>& out) {
-    for (const int s : world_others_[w]) bounds(state, s);
-    std::vector<int>& order = world_sweep_[w];
-    std::sort(order.begin(), order.end(),
-              [&](int x, int y) { return lower_[3 * x] < lower_[3 * y] || (lower_[3 * x] == lower_[3 * y] && x < y); });
-    for (size_t i = 0; i < order.size(); ++i)
-      for (size_t j = i + 1; j < order.size() && lower_[3 * order[j]] <= upper_[3 * order[i]]; ++j)
-        test_pair(order[i], order[j], out);
+  find_contacts(model_.world_count, contacts, [&](int w, Scratch& scratch) {
+    std::vector<Found>& out = scratch.found;
+    const std::vector<int>& shapes = world_others_[w];
+    const int n = static_cast<int>(shapes.size());
+    std::vector<Box>& boxes = scratch.boxes;
+    if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
+    for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
+    if (world_pair_start_[w] >= 0) {
+      const std::uint64_t* mask = &world_pairs_[world_pair_start_[w]];
+      for (int i = 0; i < n; ++i)
+        for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
+          const int j = __builtin_ctzll(m);
+          if (overlap(boxes[i], boxes[j])) narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out);
+        }
+    } else {
+      std::vector<int>& order = world_sweep_[w];  // local indices
+      std::sort(order.begin(), order.end(), [&](int x, int y) {
+        return boxes[x].lower.x() < boxes[y].lower.x() || (boxes[x].lower.x() == boxes[y].lower.x() && x < y);
+      });
+      for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n && boxes[order[j]].lower.x() <= boxes[order[i]].upper.x(); ++j)
+          test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out);
+    }
     // the world's planes and the shared ones, in index order
     const std::vector<int>& own = world_planes_[w];
     for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
       const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
-      against_plane(take_own ? own[i++] : shared_planes_[j++], world_others_[w], state, out);
+      against_plane(take_own ? own[i++] : shared_planes_[j++], shapes.data(), boxes.data(), n, out);
     }
   });
-  find_contacts(static_cast<int>(shared_others_.size()), contacts, [&](int i, std::vector<Found>& out) {
+  find_contacts(static_cast<int>(shared_others_.size()), contacts, [&](int i, Scratch& scratch) {
+    const int a = shared_others_[i];
     for (const int b : others_)
-      if (b != shared_others_[i] && (model_.shape_world[b] >= 0 || b > shared_others_[i]))
-        test_pair(shared_others_[i], b, out);
+      if (b != a && (model_.shape_world[b] >= 0 || b > a))
+        test_pair(a, shared_boxes_[i], b, box(state, b), scratch.found);
   });
-  find_contacts(static_cast<int>(planes_.size()), contacts,
-                [&](int i, std::vector<Found>& out) { against_plane(planes_[i], shared_others_, state, out); });
+  find_contacts(static_cast<int>(planes_.size()), contacts, [&](int i, Scratch& scratch) {
+    against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), static_cast<int>(shared_others_.size()),
+                  scratch.found);
+  });
   match_previous(contacts);
 }
 
-void CollisionPipeline::bounds(const State& state, int s) {
-  shape_bounds(model_, shape_pose(model_, state, s), s, options_.margin, &lower_[3 * s], &upper_[3 * s]);
-}
-
-void CollisionPipeline::against_plane(int p, const std::vector<int>& shapes, const State& state,
+void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes, int count,
                                       std::vector<Found>& out) const {
-  const Transform X = shape_pose(model_, state, p);
+  const Transform& X = plane_pose_[p];
   const Vec3 n = X.q * Vec3::UnitY();
-  for (const int s : shapes) {
-    const Vec3 lo = Eigen::Map<const Vec3>(&lower_[3 * s]), hi = Eigen::Map<const Vec3>(&upper_[3 * s]);
-    const Scalar distance = n.dot(0.5 * (lo + hi) - X.p) - 0.5 * (hi - lo).cwiseAbs().dot(n.cwiseAbs());
-    if (distance <= 0 && may_collide(p, s)) narrow_phase(p, s, state, out);
+  for (int i = 0; i < count; ++i) {
+    const Box& b = boxes[i];
+    const Scalar distance =
+        n.dot(0.5 * (b.lower + b.upper) - X.p) - 0.5 * (b.upper - b.lower).cwiseAbs().dot(n.cwiseAbs());
+    if (distance <= 0 && may_collide(p, shapes[i])) narrow_phase(p, X, shapes[i], b.pose, out);
   }
 }
 
@@ -214,14 +255,14 @@ void CollisionPipeline::find_contacts(int count, Contacts& contacts, F&& f) {
   // order are the contacts in the order of i, and each thread writes its own after the others' before
   if (count <= 0) return;
   const int threads = team(count, kWorldsPerThread);
-  if (static_cast<int>(found_.size()) < threads) found_.resize(threads);
-  for (int t = 0; t < threads; ++t) found_[t].clear();
+  if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
+  for (int t = 0; t < threads; ++t) scratch_[t].found.clear();
   const int first = contacts.contact_count;
   // thread t's contacts into the buffer after those of the threads before it
   auto write = [&](int t) {
     std::size_t c = first;
-    for (int u = 0; u < t; ++u) c += found_[u].size();
-    for (const Found& found : found_[t]) {
+    for (int u = 0; u < t; ++u) c += scratch_[u].found.size();
+    for (const Found& found : scratch_[t].found) {
       if (c >= static_cast<std::size_t>(contacts.contact_capacity)) break;
       contacts.contact_shape_a[c] = found.a;
       contacts.contact_shape_b[c] = found.b;
@@ -236,28 +277,30 @@ void CollisionPipeline::find_contacts(int count, Contacts& contacts, F&& f) {
     }
   };
   if (threads == 1) {
-    for (int i = 0; i < count; ++i) f(i, found_[0]);
+    for (int i = 0; i < count; ++i) f(i, scratch_[0]);
     write(0);
   } else {
 #pragma omp parallel num_threads(threads)
     {
       const int t = omp_get_thread_num();
 #pragma omp for schedule(static)
-      for (int i = 0; i < count; ++i) f(i, found_[t]);
+      for (int i = 0; i < count; ++i) f(i, scratch_[t]);
       write(t);
     }
   }
   std::size_t total = 0;
-  for (int t = 0; t < threads; ++t) total += found_[t].size();
+  for (int t = 0; t < threads; ++t) total += scratch_[t].found.size();
   const int kept = static_cast<int>(std::min<std::size_t>(total, contacts.contact_capacity - first));
   contacts.contact_count += kept;
   contacts.contact_dropped += static_cast<int>(total) - kept;
 }
 
-void CollisionPipeline::narrow_phase(int a, int b, const State& state, std::vector<Found>& out) const {
-  if (model_.shape_type[a] > model_.shape_type[b]) std::swap(a, b);
+void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b,
+                                     std::vector<Found>& out) const {
+  const bool swap = model_.shape_type[a] > model_.shape_type[b];
+  if (swap) std::swap(a, b);
   const auto ta = static_cast<ShapeType>(model_.shape_type[a]), tb = static_cast<ShapeType>(model_.shape_type[b]);
-  const Transform Xa = shape_pose(model_, state, a), Xb = shape_pose(model_, state, b);
+  const Transform &Xa = swap ? pose_b : pose_a, &Xb = swap ? pose_a : pose_b;
   const Vec3 sa = Eigen::Map<const Vec3>(&model_.shape_scale[3 * a]);
   const Vec3 sb = Eigen::Map<const Vec3>(&model_.shape_scale[3 * b]);
   const Scalar m = options_.margin;

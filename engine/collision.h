@@ -81,34 +81,54 @@ class CollisionPipeline {
     int a, b;
     ContactPoint point;
   };
-  // shape s's world AABB (lower_, upper_) at the body poses of `state`
-  void bounds(const State& state, int s);
-  void narrow_phase(int a, int b, const State& state, std::vector<Found>& out) const;
-  // the plane p against each shape of `shapes` whose AABB reaches it
-  void against_plane(int p, const std::vector<int>& shapes, const State& state, std::vector<Found>& out) const;
+  // a shape at this collide: its world pose and AABB
+  struct Box {
+    Transform pose;
+    Vec3 lower, upper;
+  };
+  // shape s's box at the body poses of `state`
+  Box box(const State& state, int s) const;
+  // shapes a < b at those poses
+  void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
+  // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
+  void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
   // where each contact of the buffer was among the previous ones (Contacts::previous_match)
   void match_previous(Contacts& contacts);
-  // f(i, out) for i in [0, count) on the threads, each appending its contacts to `out`; then every
-  // contact into the buffer in the order of i, so the order does not depend on the thread count
+  // f(i, scratch) for i in [0, count) on the threads, each appending its contacts to its scratch's
+  // `found`; then every contact into the buffer in the order of i, so the order does not depend on the
+  // thread count
   template <typename F>
   void find_contacts(int count, Contacts& contacts, F&& f);
   // threads for a loop of `count` items, at least `grain` items each
   int team(int count, int grain) const;
   static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes)
+  // a world of at most this many shapes tests the pairs may_collide allows, from a bit mask per shape
+  // worked out once; a larger one sweeps and prunes
+  static constexpr int kMaskedWorldShapes = 64;
 
   const Model& model_;
   CollisionOptions options_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
-  std::vector<int> planes_, others_;                // shape indices: planes, and every other shape
-  std::vector<std::vector<int>> world_others_;      // non-plane shapes of each world, in index order
-  std::vector<std::vector<int>> world_sweep_;       // the same, sorted along x by the last collide
+  std::vector<int> planes_, others_;            // shape indices: planes, and every other shape
+  std::vector<std::vector<int>> world_others_;  // non-plane shapes of each world, in index order
+  std::vector<std::vector<int>> world_sweep_;   // per world of many shapes: theirs, sorted along x
+  // per world of few shapes, where its masks start in world_pairs_ (-1: it sweeps); per shape of it,
+  // bit j set where it may collide with the world's shape j after it
+  std::vector<int> world_pair_start_;
+  std::vector<std::uint64_t> world_pairs_;
   std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
   std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch
-  std::vector<Scalar> lower_, upper_;      // [shape][3] world AABBs
-  std::vector<int> previous_order_;        // previous contacts by key, when a contact is not where it was
-  std::vector<std::vector<Found>> found_;  // per thread
+  std::vector<Box> shared_boxes_;      // [shared_others_]
+  std::vector<Transform> plane_pose_;  // [shape] of the planes
+  std::vector<int> previous_order_;    // previous contacts by key, when a contact is not where it was
+  // per thread: the contacts it found, the boxes of the world it is at
+  struct Scratch {
+    std::vector<Found> found;
+    std::vector<Box> boxes;
+  };
+  std::vector<Scratch> scratch_;
 };
 
 }  // namespace novaphy
