@@ -89,13 +89,16 @@ void check_finite_state(const State& state, bool* any_wrench) {
 }
 
 void check_finite_control(const Control& control, bool* any_drive) {
-#define NOVAPHY_CHECK_FINITE_CONTROL(T, name, count, width) check_finite(control.name, #name);
+  // each field read once: a drive is on where a PD gain is nonzero
+  bool drive = false;
+#define NOVAPHY_CHECK_FINITE_CONTROL(T, name, count, width)                                                       \
+  {                                                                                                               \
+    const bool nonzero = check_finite(control.name, #name);                                                       \
+    if (&control.name == &control.joint_target_ke || &control.name == &control.joint_target_kd) drive |= nonzero; \
+  }
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FINITE_CONTROL)
 #undef NOVAPHY_CHECK_FINITE_CONTROL
-  // (per dof: small beside the per-body arrays)
-  if (any_drive)
-    *any_drive = check_finite(control.joint_target_ke, "joint_target_ke") ||
-                 check_finite(control.joint_target_kd, "joint_target_kd");
+  if (any_drive) *any_drive = drive;
 }
 
 void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state) {

@@ -98,6 +98,11 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     if (type == JointType::Ball || type == JointType::Free)
       for (int k = 0; k < 3; ++k) rotational_dof_.push_back(dof + k);
   }
+  std::stable_sort(limited_joints_.begin(), limited_joints_.end(),
+                   [&](int x, int y) { return model.joint_articulation[x] < model.joint_articulation[y]; });
+  limited_start_.assign(model.articulation_count + 1, 0);
+  for (const int j : limited_joints_) ++limited_start_[model.joint_articulation[j] + 1];
+  for (int a = 0; a < model.articulation_count; ++a) limited_start_[a + 1] += limited_start_[a];
   dof_articulation_.resize(model.joint_dof_count);
   for (int a = 0; a < model.articulation_count; ++a)
     std::fill_n(dof_articulation_.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
@@ -121,7 +126,6 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   }
   diverged_.assign(model.articulation_count, 0);
   touched_.assign(model.articulation_count, 0);
-  rows_batched_.assign(model.articulation_count, 0);
   block_contact_start_.assign(model.articulation_count + 1, 0);
   std::vector<std::uint8_t> batchable(model.articulation_count, 0);
   std::vector<std::vector<WeldedBody>> welded(model.articulation_count);
@@ -189,6 +193,8 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   lap(stage_seconds_.dynamics);
   row_count_ = 0;
   pool_size_ = 0;
+  scalar_rows_.clear();
+  scalar_contacts_.clear();
   if (batch_step_ && (!limited_joints_.empty() || contacts.contact_count > 0)) {
     // articulations no contact joins to another moving one have their limit and contact rows solved
     // in their blocks
@@ -209,7 +215,11 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     rows.restitution_threshold = settings.restitution_threshold;
     rows.use_warmstarting = settings.use_warmstarting;
     batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
-    for (size_t a = 0; a < art_.size(); ++a) rows_batched_[a] = batches_->solves_rows(a, touched_.data());
+    for (int a = 0; a < static_cast<int>(art_.size()); ++a)
+      if (!batches_->solves_rows(a, touched_.data())) scalar_rows_.push_back(a);
+  } else {
+    for (int a = 0; a < static_cast<int>(art_.size()); ++a) scalar_rows_.push_back(a);
+    for (int c = 0; c < contacts.contact_count; ++c) scalar_contacts_.push_back(c);
   }
   build_limit_rows(in, dt);
   lap(stage_seconds_.limit_rows);
@@ -455,7 +465,10 @@ void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
   for (size_t a = 0; a < art_.size(); ++a) block_contact_start_[a + 1] += block_contact_start_[a];
   fill_.assign(block_contact_start_.begin(), block_contact_start_.end() - 1);
   for (int c = 0; c < n; ++c)
-    if (contact_block_[c] >= 0) block_contacts_[fill_[contact_block_[c]]++] = c;
+    if (contact_block_[c] >= 0)
+      block_contacts_[fill_[contact_block_[c]]++] = c;
+    else
+      scalar_contacts_.push_back(c);
 }
 
 int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target) {
@@ -467,12 +480,16 @@ int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec
 }
 
 void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
-  for (const int j : limited_joints_) {
+  // the limited joints of the articulations whose rows the scalar path builds
+  auto for_each_limited = [&](auto&& f) {
+    for (const int a : scalar_rows_)
+      for (int k = limited_start_[a]; k < limited_start_[a + 1]; ++k) f(a, limited_joints_[k]);
+  };
+  for_each_limited([&](int, int j) {
     const int g = model_.joint_qd_start[j];
     limit_row_[2 * g] = limit_row_[2 * g + 1] = -1;
-  }
-  for (const int j : limited_joints_) {
-    if (rows_in_batch(model_.joint_articulation[j])) continue;
+  });
+  for_each_limited([&](int a, int j) {
     const int g = model_.joint_qd_start[j];
     const Scalar q = in.joint_q[model_.joint_q_start[j]];
     for (int side = 0; side < 2; ++side) {
@@ -483,19 +500,17 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
       const Scalar gap = sign * (q - limit);
       if (gap + dt * sign * qd_[g] >= 0) continue;
       const Scalar target = gap >= 0 ? -gap / dt : settings.erp * std::max<Scalar>(-gap - settings.linear_slop, 0) / dt;
-      const int a = model_.joint_articulation[j];
       const int r = begin_row(a, -1, RowKind::Unilateral, target);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
       if (settings.use_warmstarting) rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[2 * g + side];
       limit_row_[2 * g + side] = r;
     }
-  }
+  });
 }
 
 void SolverFeatherstone::build_contact_rows(const Contacts& contacts, Scalar dt) {
-  contact_row_.assign(contacts.contact_count, -1);
-  for (int c = 0; c < contacts.contact_count; ++c) {
-    if (batch_step_ && contact_block_[c] >= 0) continue;  // solved in its block
+  if (static_cast<int>(contact_row_.size()) < contacts.contact_count) contact_row_.resize(contacts.contact_count);
+  for (const int c : scalar_contacts_) {
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
     const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
     const Vec3 p = Eigen::Map<const Vec3>(&contacts.contact_point[3 * c]);
@@ -587,22 +602,22 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
   if (row_count_ > 0) solve_islands();  // nothing to solve without rows
 
   // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
-  for (int c = 0; c < contacts.contact_count; ++c) {
+  for (const int c : scalar_contacts_) {
     const int rn = contact_row_[c];
-    if (rn < 0) continue;  // its block kept its impulse
     const Vec3 n = Eigen::Map<const Vec3>(&contacts.contact_normal[3 * c]);
     Vec3 t1, t2;
     contact_tangents(n, &t1, &t2);
     const Vec3 impulse = rows_[rn].lambda * n + rows_[rn + 1].lambda * t1 + rows_[rn + 2].lambda * t2;
     Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]) = impulse.allFinite() ? impulse : Vec3::Zero();
   }
-  for (const int j : limited_joints_) {
-    if (rows_in_batch(model_.joint_articulation[j])) continue;  // its block kept its impulses
-    for (int k = 2 * model_.joint_qd_start[j]; k < 2 * model_.joint_qd_start[j] + 2; ++k) {
-      const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
-      limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
+  for (const int a : scalar_rows_)  // the blocks kept the others' impulses
+    for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
+      const int g = model_.joint_qd_start[limited_joints_[m]];
+      for (int k = 2 * g; k < 2 * g + 2; ++k) {
+        const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
+        limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
+      }
     }
-  }
 }
 
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
@@ -627,8 +642,11 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
       if (diverged_[a])
         fail("step diverged in articulation ", a, " (a non-finite state or a speed beyond ", settings.divergence_speed,
              "; dt ", dt, " too large for the model's stiffness or forces?)");
-  std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
-  std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
+  for_each_articulation([&](int a) {
+    const ArticulationView& art = art_[a];
+    std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
+    std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
+  });
   if (&out != &in) out.body_f = in.body_f;
   if (batch_step_) batches_->store_bodies(out, thread_count());
   for_each_articulation([&](int a) {

@@ -125,9 +125,6 @@ class SolverFeatherstone {
   int thread_count() const { return settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads(); }
   // true when articulation a is stepped by the batched kernels this step
   bool on_batch(int a) const { return batch_step_ && batches_->active(a); }
-  // true when articulation a's limit and contact rows are solved in its block this step (no contact
-  // joins it to another moving articulation)
-  bool rows_in_batch(int a) const { return batch_step_ && rows_batched_[a]; }
   // the articulation body moves with, -1 for the world or a body of an articulation without dofs
   int moving_articulation(int body) const;
   // touched_ and the contacts each block solves (block_contact_start_, block_contacts_, contact_*_)
@@ -159,10 +156,13 @@ class SolverFeatherstone {
   std::vector<ArticulationScratch> scratch_;
   std::unique_ptr<ArticulationBatches> batches_;
   bool batch_step_ = false;
-  bool wrenches_ = false;                   // the step's input has a nonzero body_f
-  bool drives_ = false;                     // the step's control has a nonzero PD gain
-  std::vector<std::uint8_t> touched_;       // per articulation: 1 where a contact joins it to another moving one
-  std::vector<std::uint8_t> rows_batched_;  // per articulation: its limit and contact rows solved in its block
+  bool wrenches_ = false;              // the step's input has a nonzero body_f
+  bool drives_ = false;                // the step's control has a nonzero PD gain
+  std::vector<std::uint8_t> touched_;  // per articulation: 1 where a contact joins it to another moving one
+  // this step's rows on the scalar path: the articulations whose limits it builds (their blocks solve the
+  // others' limit and contact rows; no contact joins those to another moving articulation), the contacts
+  // it solves
+  std::vector<int> scalar_rows_, scalar_contacts_;
   // list_block_contacts' output: per contact its articulation when its block solves it (else -1), the
   // links of its bodies there, its friction and restitution; per articulation its contacts
   std::vector<int> contact_block_, contact_link_a_, contact_link_b_;
@@ -194,10 +194,11 @@ class SolverFeatherstone {
   std::vector<VecX> factored_diag_;                     // per articulation: the implicit diagonal in s.H's factor
   std::vector<std::uint8_t> constant_mass_;             // per articulation: 1 for Prismatic and Fixed joints only
   std::vector<MatX> constant_H_;                        // per articulation: its H once computed, where constant
-  std::vector<int> contact_row_;                        // first row of each contact, -1
-  std::vector<int> limited_joints_;                     // Revolute and Prismatic joints with a finite limit
-  std::vector<int> limit_row_;                          // [dof][2] row of each active limit, -1
-  std::vector<Scalar> limit_impulse_;                   // [dof][2] impulses of the previous step's limit rows
+  std::vector<int> contact_row_;                        // first row of each of scalar_contacts_
+  // Revolute and Prismatic joints with a finite limit, by articulation: a's are from limited_start_[a]
+  std::vector<int> limited_joints_, limited_start_;
+  std::vector<int> limit_row_;         // [dof][2] row of each active limit, -1
+  std::vector<Scalar> limit_impulse_;  // [dof][2] impulses of the previous step's limit rows
   SolverStageSeconds stage_seconds_;
 };
 
