@@ -134,7 +134,9 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // this step's contacts, in their order, become the previous ones for warm starting (a buffer not
   // made by contacts() gets its bookkeeping here)
   if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
-  for (int c = 0; c < contacts.contact_count; ++c) {
+  const int previous = contacts.contact_count, threads = team(previous, 1024);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (int c = 0; c < previous; ++c) {
     contacts.previous_key[c] = contacts.key_of(c);
     for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * c + i] = contacts.contact_impulse[3 * c + i];
   }

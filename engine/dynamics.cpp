@@ -17,12 +17,14 @@ namespace novaphy {
 namespace {
 
 // throws Error naming x's first non-finite entry; returns whether x has a nonzero entry. One
-// vectorised pass (x * 0 is NaN exactly for inf and NaN), the search only on failure
-bool check_finite(const std::vector<Scalar>& x, const char* name) {
+// vectorised pass (x * 0 is NaN exactly for inf and NaN), on `threads` threads for a long x (the sums
+// are tested for 0 only, which no order changes), the search only on failure
+bool check_finite(const std::vector<Scalar>& x, const char* name, int threads = 1) {
   Scalar nan_seen = 0;
   Scalar magnitude = 0;
-#pragma omp simd reduction(+ : nan_seen, magnitude)
-  for (size_t k = 0; k < x.size(); ++k) {
+  const long n = static_cast<long>(x.size());
+#pragma omp parallel for simd reduction(+ : nan_seen, magnitude) num_threads(threads) if (threads > 1 && n >= 65536)
+  for (long k = 0; k < n; ++k) {
     nan_seen += x[k] * 0;
     magnitude += std::abs(x[k]);
   }
@@ -81,19 +83,19 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
 
 }  // namespace
 
-void check_finite_state(const State& state, bool* any_wrench) {
-  check_finite(state.joint_q, "joint_q");
-  check_finite(state.joint_qd, "joint_qd");
-  const bool any = check_finite(state.body_f, "body_f");
+void check_finite_state(const State& state, bool* any_wrench, int threads) {
+  check_finite(state.joint_q, "joint_q", threads);
+  check_finite(state.joint_qd, "joint_qd", threads);
+  const bool any = check_finite(state.body_f, "body_f", threads);
   if (any_wrench) *any_wrench = any;
 }
 
-void check_finite_control(const Control& control, bool* any_drive) {
+void check_finite_control(const Control& control, bool* any_drive, int threads) {
   // each field read once: a drive is on where a PD gain is nonzero
   bool drive = false;
 #define NOVAPHY_CHECK_FINITE_CONTROL(T, name, count, width)                                                       \
   {                                                                                                               \
-    const bool nonzero = check_finite(control.name, #name);                                                       \
+    const bool nonzero = check_finite(control.name, #name, threads);                                              \
     if (&control.name == &control.joint_target_ke || &control.name == &control.joint_target_kd) drive |= nonzero; \
   }
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FINITE_CONTROL)

@@ -43,9 +43,9 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
 
 // throws Error naming the first non-finite entry of state.joint_q / joint_qd / body_f; any_wrench
 // (when given) is set to whether body_f holds a nonzero entry
-void check_finite_state(const State& state, bool* any_wrench = nullptr);
+void check_finite_state(const State& state, bool* any_wrench = nullptr, int threads = 1);
 // throws Error naming the first non-finite entry of any control array
 // any_drive (when given) is set to whether a PD gain (joint_target_ke or joint_target_kd) is nonzero
-void check_finite_control(const Control& control, bool* any_drive = nullptr);
+void check_finite_control(const Control& control, bool* any_drive = nullptr, int threads = 1);
 
 }  // namespace novaphy

@@ -242,8 +242,8 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   if (!same_layout(contacts, model_))
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
-  check_finite_state(in, &wrenches_);
-  check_finite_control(control, &drives_);
+  check_finite_state(in, &wrenches_, thread_count());
+  check_finite_control(control, &drives_, thread_count());
 }
 
 void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt) {
@@ -437,31 +437,44 @@ int SolverFeatherstone::moving_articulation(int body) const {
 
 void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
   // a contact joining two moving articulations puts both on the scalar path (touched_); every other
-  // contact of an articulation whose rows its block solves is listed for it, in contact order
+  // contact of an articulation whose rows its block solves is listed for it, in contact order. The
+  // contacts' lookups on the threads, the lists in one pass after
   const int n = contacts.contact_count;
   if (static_cast<int>(block_contacts_.size()) < n) {
     for (auto* x : {&block_contacts_, &contact_link_a_, &contact_link_b_, &contact_block_}) x->resize(n);
     for (auto* x : {&contact_mu_, &contact_restitution_}) x->resize(n);
   }
   std::fill(touched_.begin(), touched_.end(), 0);
-  for (int c = 0; c < n; ++c) {
-    const int a = moving_articulation(contacts.contact_body_a[c]), b = moving_articulation(contacts.contact_body_b[c]);
-    if (a >= 0 && b >= 0 && a != b) touched_[a] = touched_[b] = 1;
+  const int threads = std::min(thread_count(), std::max(1, n / 1024));
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+#pragma omp for schedule(static)
+    for (int c = 0; c < n; ++c) {
+      const int a = moving_articulation(contacts.contact_body_a[c]);
+      const int b = moving_articulation(contacts.contact_body_b[c]);
+      if (a < 0 || b < 0 || a == b) continue;
+#pragma omp atomic write
+      touched_[a] = 1;
+#pragma omp atomic write
+      touched_[b] = 1;
+    }
+#pragma omp for schedule(static)
+    for (int c = 0; c < n; ++c) {
+      const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
+      const int a = moving_articulation(ba), b = moving_articulation(bb);
+      const int art = a >= 0 ? a : b;
+      contact_block_[c] = art >= 0 && on_batch(art) && !touched_[art] ? art : -1;
+      if (contact_block_[c] < 0) continue;
+      contact_link_a_[c] = a >= 0 ? body_link_[ba] : -1;
+      contact_link_b_[c] = b >= 0 ? body_link_[bb] : -1;
+      const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
+      contact_mu_[c] = contact_mu(model_, sa, sb);
+      contact_restitution_[c] = contact_restitution(model_, sa, sb);
+    }
   }
   std::fill(block_contact_start_.begin(), block_contact_start_.end(), 0);
-  for (int c = 0; c < n; ++c) {
-    const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
-    const int a = moving_articulation(ba), b = moving_articulation(bb);
-    const int art = a >= 0 ? a : b;
-    contact_block_[c] = art >= 0 && on_batch(art) && !touched_[art] ? art : -1;
-    if (contact_block_[c] < 0) continue;
-    ++block_contact_start_[art + 1];
-    contact_link_a_[c] = a >= 0 ? body_link_[ba] : -1;
-    contact_link_b_[c] = b >= 0 ? body_link_[bb] : -1;
-    const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
-    contact_mu_[c] = contact_mu(model_, sa, sb);
-    contact_restitution_[c] = contact_restitution(model_, sa, sb);
-  }
+  for (int c = 0; c < n; ++c)
+    if (contact_block_[c] >= 0) ++block_contact_start_[contact_block_[c] + 1];
   for (size_t a = 0; a < art_.size(); ++a) block_contact_start_[a + 1] += block_contact_start_[a];
   fill_.assign(block_contact_start_.begin(), block_contact_start_.end() - 1);
   for (int c = 0; c < n; ++c)

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <limits>
 #include <memory>
 
 #include "engine/builder.h"
@@ -246,6 +247,29 @@ TEST(SolverFeatherstone, JointSupport) {
   for (const char* joint : {"Distance", "D6", "Cable"}) EXPECT_FALSE(support.supports(joint));
   EXPECT_NE(support.to_string().find("D6: no"), std::string::npos);
   EXPECT_NOVAPHY_ERROR(support.supports("Hinge"), "unknown joint type 'Hinge'");
+}
+
+// the finite checks of a state long enough to be split over threads still name the first bad entry
+TEST(SolverFeatherstoneErrors, ANonFiniteEntryOfALargeStateIsNamedOnAnyThreadCount) {
+  ModelBuilder world, builder;
+  add_box(world, Vec3(0, 0.5, 0));
+  builder.replicate(world, 12000);  // 84000 coordinates, 72000 body_f entries
+  const Model model = builder.finalize();
+  for (const int threads : {1, 2}) {
+    SolverFeatherstoneSettings settings;
+    settings.num_threads = threads;
+    SolverFeatherstone solver(model, settings);
+    CollisionPipeline pipeline(model);
+    Contacts contacts = pipeline.contacts();
+    State state = model.state();
+    const Control control = model.control();
+    state.body_f[6 * 11999 + 4] = std::numeric_limits<Scalar>::infinity();
+    state.body_f[6 * 11999 + 5] = std::nan("");
+    EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), "body_f[71998] is not finite: inf");
+    state.body_f = model.state().body_f;
+    state.joint_q[7 * 9000 + 2] = std::nan("");
+    EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), "joint_q[63002] is not finite: nan");
+  }
 }
 
 TEST(SolverFeatherstoneErrors, BadStepArguments) {
