@@ -415,7 +415,7 @@ class Batches final : public ArticulationBatches {
           R.nonzero_begin[r] = begin;
           R.nonzero_end[r] = end;
         }
-        batch_solve_three(topo, H, end, R.z_row(first), nv);
+        batch_solve_many(topo, H, end, R.z_row(first), 3, nv);
         V v_approach{};
         for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
         const V bounce = -restitution * v_approach;

@@ -564,38 +564,35 @@ void batch_solve_unit(const BatchTopology<T>& topo, const V<T>* L, int unit, V<T
 }
 
 template <typename T>
-void batch_solve_three(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int stride) {
-  V<T>* a = x;
-  V<T>* b = x + stride;
-  V<T>* c = x + 2 * stride;
+void batch_solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int count, int stride) {
+  // each entry of L loaded once for all right-hand sides, whose chains are independent
+  auto rhs = [&](int r) { return x + static_cast<size_t>(r) * stride; };
   // L^T y = x: a dof past `end` has no descendant before it, so its entry stays zero
   for (int k = end - 1; k >= 0; --k) {
     const V<T>* Lk = L + topo.row_start[k];
-    const V<T> ya = a[k] * Lk[k], yb = b[k] * Lk[k], yc = c[k] * Lk[k];
-    a[k] = ya;
-    b[k] = yb;
-    c[k] = yc;
+    const V<T> d = Lk[k];
+    for (int r = 0; r < count; ++r) rhs(r)[k] *= d;
     for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p) {
       const int i = topo.ancestors[p];
       const V<T> l = Lk[i];
-      a[i] -= l * ya;
-      b[i] -= l * yb;
-      c[i] -= l * yc;
+      for (int r = 0; r < count; ++r) {
+        V<T>* y = rhs(r);
+        y[i] -= l * y[k];
+      }
     }
   }
   for (int k = 0; k < topo.dof_count; ++k) {
     const V<T>* Lk = L + topo.row_start[k];
-    V<T> ya = a[k], yb = b[k], yc = c[k];
     for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p) {
       const int i = topo.ancestors[p];
       const V<T> l = Lk[i];
-      ya -= l * a[i];
-      yb -= l * b[i];
-      yc -= l * c[i];
+      for (int r = 0; r < count; ++r) {
+        V<T>* y = rhs(r);
+        y[k] -= l * y[i];
+      }
     }
-    a[k] = ya * Lk[k];
-    b[k] = yb * Lk[k];
-    c[k] = yc * Lk[k];
+    const V<T> d = Lk[k];
+    for (int r = 0; r < count; ++r) rhs(r)[k] *= d;
   }
 }
 
@@ -678,7 +675,7 @@ void batch_integrate(const BatchTopology<T>& topo, const V<T>* q, const V<T>* qd
   template void batch_solve(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                      \
   template void batch_solve_lower(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                                \
   template void batch_solve_unit(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*);                            \
-  template void batch_solve_three(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*, int);                      \
+  template void batch_solve_many(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*, int, int);                  \
   template void batch_lane_factor(const BatchTopology<T>&, const Lanes<T>*, int, double*);                             \
   template void batch_solve_packed(const BatchTopology<T>&, const double*, double*);                                   \
   template void batch_integrate(const BatchTopology<T>&, const Lanes<T>*, const Lanes<T>*, T, Lanes<T>*);

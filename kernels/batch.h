@@ -149,11 +149,11 @@ void batch_solve_lower(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>
 // x = H^-1 e_unit (a column of the inverse), the first half only along unit's ancestors
 template <typename T>
 void batch_solve_unit(const BatchTopology<T>& topo, const Lanes<T>* L, int unit, Lanes<T>* x);
-// x_r = H^-1 x_r for the three right-hand sides x + r stride (a contact's normal and tangent rows),
-// every lane of each zero at the dofs from `end` on: batch_solve's arithmetic on each (the same
-// values for a finite factor), the three dependency chains interleaved and the zero tail skipped
+// x_r = H^-1 x_r for `count` right-hand sides x + r stride (a contact's normal and tangent rows),
+// every lane of each zero at the dofs from `end` on: batch_solve's arithmetic on each (the same values
+// for a finite factor), the right-hand sides' independent chains side by side, the zero tail skipped
 template <typename T>
-void batch_solve_three(const BatchTopology<T>& topo, const Lanes<T>* L, int end, Lanes<T>* x, int stride);
+void batch_solve_many(const BatchTopology<T>& topo, const Lanes<T>* L, int end, Lanes<T>* x, int count, int stride);
 
 // the factor of the world in one lane, copied out packed in double (packed_size entries), and
 // x = H^-1 x with such a copy: the constraint rows' M^-1 J^T, many rows to one copy
