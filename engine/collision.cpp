@@ -134,11 +134,16 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // this step's contacts, in their order, become the previous ones for warm starting (a buffer not
   // made by contacts() gets its bookkeeping here)
   if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
-  const int previous = contacts.contact_count, threads = team(previous, 1024);
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
-  for (int c = 0; c < previous; ++c) {
+  auto keep = [&contacts](int c) {
     contacts.previous_key[c] = contacts.key_of(c);
     for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * c + i] = contacts.contact_impulse[3 * c + i];
+  };
+  const int previous = contacts.contact_count, threads = team(previous, 1024);
+  if (threads > 1) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int c = 0; c < previous; ++c) keep(c);
+  } else {
+    for (int c = 0; c < previous; ++c) keep(c);
   }
   contacts.previous_count = contacts.contact_count;
   contacts.contact_count = 0;

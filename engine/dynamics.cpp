@@ -23,15 +23,25 @@ namespace {
 // on `threads` threads for a long x, the search only on failure
 bool check_finite(const std::vector<Scalar>& x, const char* name, int threads = 1) {
   static_assert(sizeof(Scalar) == sizeof(std::uint64_t));
-  constexpr std::uint64_t kExponent = 0x7ff0000000000000;
   std::uint64_t not_finite = 0, nonzero = 0;
+  auto scan = [&x](long begin, long end, std::uint64_t& not_finite_out, std::uint64_t& nonzero_out) {
+    constexpr std::uint64_t kExponent = 0x7ff0000000000000;
+    std::uint64_t bad = 0, any = 0;
+    for (long k = begin; k < end; ++k) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &x[k], sizeof(bits));
+      bad |= (bits & kExponent) == kExponent;
+      any |= bits << 1;
+    }
+    not_finite_out |= bad;
+    nonzero_out |= any;
+  };
   const long n = static_cast<long>(x.size());
-#pragma omp parallel for reduction(| : not_finite, nonzero) num_threads(threads) if (threads > 1 && n >= 65536)
-  for (long k = 0; k < n; ++k) {
-    std::uint64_t bits;
-    std::memcpy(&bits, &x[k], sizeof(bits));
-    not_finite |= (bits & kExponent) == kExponent;
-    nonzero |= bits << 1;
+  if (threads > 1 && n >= 65536) {  // (a parallel region costs a short array more than its scan)
+#pragma omp parallel for reduction(| : not_finite, nonzero) num_threads(threads)
+    for (int t = 0; t < threads; ++t) scan(n * t / threads, n * (t + 1) / threads, not_finite, nonzero);
+  } else {
+    scan(0, n, not_finite, nonzero);
   }
   if (not_finite == 0) return nonzero != 0;
   for (size_t k = 0; k < x.size(); ++k)

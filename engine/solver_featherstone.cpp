@@ -445,32 +445,39 @@ void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
     for (auto* x : {&contact_mu_, &contact_restitution_}) x->resize(n);
   }
   std::fill(touched_.begin(), touched_.end(), 0);
-  const int threads = std::min(thread_count(), std::max(1, n / 1024));
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
-#pragma omp for schedule(static)
-    for (int c = 0; c < n; ++c) {
-      const int a = moving_articulation(contacts.contact_body_a[c]);
-      const int b = moving_articulation(contacts.contact_body_b[c]);
-      if (a < 0 || b < 0 || a == b) continue;
+  auto touch = [&](int c) {
+    const int a = moving_articulation(contacts.contact_body_a[c]);
+    const int b = moving_articulation(contacts.contact_body_b[c]);
+    if (a < 0 || b < 0 || a == b) return;
 #pragma omp atomic write
-      touched_[a] = 1;
+    touched_[a] = 1;
 #pragma omp atomic write
-      touched_[b] = 1;
-    }
+    touched_[b] = 1;
+  };
+  auto look_up = [&](int c) {
+    const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
+    const int a = moving_articulation(ba), b = moving_articulation(bb);
+    const int art = a >= 0 ? a : b;
+    contact_block_[c] = art >= 0 && on_batch(art) && !touched_[art] ? art : -1;
+    if (contact_block_[c] < 0) return;
+    contact_link_a_[c] = a >= 0 ? body_link_[ba] : -1;
+    contact_link_b_[c] = b >= 0 ? body_link_[bb] : -1;
+    const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
+    contact_mu_[c] = contact_mu(model_, sa, sb);
+    contact_restitution_[c] = contact_restitution(model_, sa, sb);
+  };
+  const int threads = std::min(thread_count(), n / 1024);
+  if (threads > 1) {
+#pragma omp parallel num_threads(threads)
+    {
 #pragma omp for schedule(static)
-    for (int c = 0; c < n; ++c) {
-      const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
-      const int a = moving_articulation(ba), b = moving_articulation(bb);
-      const int art = a >= 0 ? a : b;
-      contact_block_[c] = art >= 0 && on_batch(art) && !touched_[art] ? art : -1;
-      if (contact_block_[c] < 0) continue;
-      contact_link_a_[c] = a >= 0 ? body_link_[ba] : -1;
-      contact_link_b_[c] = b >= 0 ? body_link_[bb] : -1;
-      const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
-      contact_mu_[c] = contact_mu(model_, sa, sb);
-      contact_restitution_[c] = contact_restitution(model_, sa, sb);
+      for (int c = 0; c < n; ++c) touch(c);
+#pragma omp for schedule(static)
+      for (int c = 0; c < n; ++c) look_up(c);
     }
+  } else {
+    for (int c = 0; c < n; ++c) touch(c);
+    for (int c = 0; c < n; ++c) look_up(c);
   }
   std::fill(block_contact_start_.begin(), block_contact_start_.end(), 0);
   for (int c = 0; c < n; ++c)
@@ -655,11 +662,16 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
       if (diverged_[a])
         fail("step diverged in articulation ", a, " (a non-finite state or a speed beyond ", settings.divergence_speed,
              "; dt ", dt, " too large for the model's stiffness or forces?)");
-  for_each_articulation([&](int a) {
-    const ArticulationView& art = art_[a];
-    std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
-    std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
-  });
+  if (std::min<std::size_t>(thread_count(), art_.size()) > 1) {
+    for_each_articulation([&](int a) {
+      const ArticulationView& art = art_[a];
+      std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
+      std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
+    });
+  } else {
+    std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
+    std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
+  }
   if (&out != &in) out.body_f = in.body_f;
   if (batch_step_) batches_->store_bodies(out, thread_count());
   for_each_articulation([&](int a) {
