@@ -174,8 +174,14 @@ void SolverFeatherstone::for_each_articulation(F&& f) {
   // articulations are independent here: a static schedule over threads, no shared writes
   const int count = static_cast<int>(art_.size());
   const int threads = std::min(thread_count(), count);
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
-  for (int a = 0; a < count; ++a) f(a);
+  // one thread: no parallel region (one costs more than a small step's stage), unless this runs inside
+  // another, where only a region of its own numbers its thread 0 (the per-thread scratch)
+  if (threads > 1 || omp_in_parallel()) {
+#pragma omp parallel for schedule(static) num_threads(std::max(threads, 1))
+    for (int a = 0; a < count; ++a) f(a);
+  } else {
+    for (int a = 0; a < count; ++a) f(a);
+  }
 }
 
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {

@@ -301,5 +301,32 @@ TEST(ArticulationBatches, OneThreadAndAllThreadsAreBitIdentical) {
   }
 }
 
+// solvers stepped on the threads of a user's own parallel loop (more threads than the machine's cores
+// here): each uses its scratch of thread 0 and steps as it does alone, bit for bit
+TEST(ArticulationBatches, SolversSteppedInsideAUsersParallelLoopStepAsAlone) {
+  constexpr int kSolvers = 4;
+  Model model = replicated(quadruped(true), 40, Precision::Float32);
+  State initial = model.state();
+  const int nb = model.body_count / 40, nq = model.joint_coord_count / 40;
+  for (int w = 0; w < 40; ++w) randomize_world(model, initial, w, w * nb, nb, w * nq, nq);
+  std::vector<State> alone(kSolvers, model.state()), inside(kSolvers, model.state());
+  for (int k = 0; k < kSolvers; ++k) {
+    alone[k].assign(initial);
+    inside[k].assign(initial);
+    alone[k].joint_qd[k] = inside[k].joint_qd[k] = 0.1 * (k + 1);  // each solver its own trajectory
+    step(model, alone[k], 20);
+  }
+#pragma omp parallel for num_threads(kSolvers)
+  for (int k = 0; k < kSolvers; ++k) step(model, inside[k], 20);
+  for (int k = 0; k < kSolvers; ++k) {
+    EXPECT_EQ(std::memcmp(alone[k].joint_q.data(), inside[k].joint_q.data(), alone[k].joint_q.size() * sizeof(Scalar)),
+              0)
+        << "solver " << k;
+    EXPECT_EQ(std::memcmp(alone[k].body_qd.data(), inside[k].body_qd.data(), alone[k].body_qd.size() * sizeof(Scalar)),
+              0)
+        << "solver " << k;
+  }
+}
+
 }  // namespace
 }  // namespace novaphy
