@@ -48,7 +48,6 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
       (w < 0 ? shared_planes_ : world_planes_[w]).push_back(s);
       continue;
     }
-    others_.push_back(s);
     (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
   }
   world_sweep_.resize(model.world_count);
@@ -152,8 +151,9 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // the planes' poses and the boxes of the shapes of no world first: every world meets them. Then per
   // world, its shapes' boxes into the thread's scratch (in cache while used): its pairs (those its
   // masks allow whose bounds overlap, in index order; a world of many shapes sweeps and prunes along
-  // x), then its planes and the shared ones against its shapes. Then the shapes of no world against
-  // all others, and every plane against them. Worlds (and shared shapes, and planes) spread over threads
+  // x), the shapes of no world against its shapes, then its planes and the shared ones against its
+  // shapes. Then the shapes of no world against each other, and every plane against them. Worlds (and
+  // shared shapes, and planes) spread over threads
   for (const int p : planes_) plane_pose_[p] = shape_pose(model_, state, p);
   for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
   auto overlap = [](const Box& a, const Box& b) {
@@ -190,6 +190,8 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
         for (int j = i + 1; j < n && boxes[order[j]].lower.x() <= boxes[order[i]].upper.x(); ++j)
           test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out);
     }
+    for (size_t i = 0; i < shared_others_.size(); ++i)
+      for (int j = 0; j < n; ++j) test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out);
     // the world's planes and the shared ones, in index order
     const std::vector<int>& own = world_planes_[w];
     for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
@@ -198,10 +200,8 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     }
   });
   find_contacts(static_cast<int>(shared_others_.size()), contacts, [&](int i, Scratch& scratch) {
-    const int a = shared_others_[i];
-    for (const int b : others_)
-      if (b != a && (model_.shape_world[b] >= 0 || b > a))
-        test_pair(a, shared_boxes_[i], b, box(state, b), scratch.found);
+    for (size_t k = i + 1; k < shared_others_.size(); ++k)
+      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
   });
   find_contacts(static_cast<int>(planes_.size()), contacts, [&](int i, Scratch& scratch) {
     against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), static_cast<int>(shared_others_.size()),

@@ -110,7 +110,7 @@ class CollisionPipeline {
   CollisionOptions options_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
-  std::vector<int> planes_, others_;            // shape indices: planes, and every other shape
+  std::vector<int> planes_;                     // shape indices of the planes
   std::vector<std::vector<int>> world_others_;  // non-plane shapes of each world, in index order
   std::vector<std::vector<int>> world_sweep_;   // per world of many shapes: theirs, sorted along x
   // per world of few shapes, where its masks start in world_pairs_ (-1: it sweeps); per shape of it,

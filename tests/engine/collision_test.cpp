@@ -260,6 +260,41 @@ TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {
   EXPECT_GT(collide(2, 300).contact_dropped, 0);
 }
 
+// static shapes of no world meet every world's shapes, each world's in its pass: a box under 40 worlds'
+// spheres touches each sphere once, the same contacts in the same order on one thread and two
+TEST(CollisionPipeline, ShapesOfNoWorldMeetEveryWorld) {
+  ModelBuilder world, builder;
+  const int ball = world.add_body(RigidBody::from_sphere(1, 0.2), Transform{Vec3(0, 0.5, 0)});
+  world.add_shape_sphere(ball, 0.2);
+  builder.replicate(world, 40);
+  ShapeOptions placed;
+  placed.xform.p = Vec3(0, 0, 0);
+  const int floor_box = builder.add_shape_box(-1, Vec3(1, 0.35, 1), placed);
+  placed.xform.p = Vec3(5, 0, 0);
+  builder.add_shape_box(-1, Vec3(1, 0.35, 1), placed);  // touches nothing
+  const Model model = builder.finalize();
+  auto collide = [&](int threads) {
+    CollisionOptions options;
+    options.num_threads = threads;
+    CollisionPipeline pipeline(model, options);
+    Contacts contacts = pipeline.contacts();
+    pipeline.collide(model.state(), contacts);
+    return contacts;
+  };
+  const Contacts one = collide(1), two = collide(2);
+  ASSERT_EQ(one.contact_count, 40);
+  std::set<int> spheres;
+  for (int c = 0; c < one.contact_count; ++c) {
+    const int a = one.contact_shape_a[c], b = one.contact_shape_b[c];
+    EXPECT_TRUE(a == floor_box || b == floor_box) << "contact " << c;
+    spheres.insert(a == floor_box ? b : a);
+  }
+  EXPECT_EQ(spheres.size(), 40u);
+  ASSERT_EQ(two.contact_count, one.contact_count);
+  EXPECT_TRUE(std::equal(one.contact_shape_a.begin(), one.contact_shape_a.begin() + 40, two.contact_shape_a.begin()));
+  EXPECT_TRUE(std::equal(one.contact_shape_b.begin(), one.contact_shape_b.begin() + 40, two.contact_shape_b.begin()));
+}
+
 TEST(CollisionPipelineErrors, BadOptions) {
   ModelBuilder builder;
   builder.add_body(RigidBody());
