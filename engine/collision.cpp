@@ -175,7 +175,7 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
     for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
     if (world_pair_start_[w] >= 0) {
-      const std::uint64_t* mask = &world_pairs_[world_pair_start_[w]];
+      const std::uint64_t* mask = world_pairs_.data() + world_pair_start_[w];
       for (int i = 0; i < n; ++i)
         for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
           const int j = __builtin_ctzll(m);
