@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include "engine/parallel.h"
 #include "kernels/batch.h"
 #include "kernels/batch_pgs.h"
 
@@ -667,18 +668,10 @@ class Batches final : public ArticulationBatches {
     // no more threads than blocks: a team with idle members still pays for waking them at every call
     const int n =
         std::min({threads > 0 ? threads : static_cast<int>(work_.size()), static_cast<int>(work_.size()), count});
-    auto run = [&](int k) {
+    parallel_for(n, count, [&](int k) {
       Group& G = groups_[blocks_[k].first];
       if (G.enabled) f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
-    };
-    // one thread: no parallel region (one costs more than a small step's stage), unless this runs inside
-    // another, where only a region of its own numbers its thread 0
-    if (n > 1 || omp_in_parallel()) {
-#pragma omp parallel for schedule(static) num_threads(n)
-      for (int k = 0; k < count; ++k) run(k);
-    } else {
-      for (int k = 0; k < count; ++k) run(k);
-    }
+    });
   }
 
   // a thread's rows of one block (solve_rows); grows to the most rows a block has had

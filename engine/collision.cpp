@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "engine/error.h"
+#include "engine/parallel.h"
 #include "kernels/collide.h"
 
 namespace novaphy {
@@ -54,7 +55,11 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
   world_pair_start_.assign(model.world_count, -1);
   for (int w = 0; w < model.world_count; ++w) {
     const std::vector<int>& shapes = world_others_[w];
-    if (shapes.size() > kMaskedWorldShapes) continue;
+    if (shapes.size() > kMaskedWorldShapes) {
+      world_sweep_[w].resize(shapes.size());
+      std::iota(world_sweep_[w].begin(), world_sweep_[w].end(), 0);
+      continue;
+    }
     world_pair_start_[w] = static_cast<int>(world_pairs_.size());
     for (size_t i = 0; i < shapes.size(); ++i) {
       std::uint64_t mask = 0;
@@ -63,11 +68,6 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
       world_pairs_.push_back(mask);
     }
   }
-  for (int w = 0; w < model.world_count; ++w)
-    if (world_pair_start_[w] < 0) {
-      world_sweep_[w].resize(world_others_[w].size());
-      std::iota(world_sweep_[w].begin(), world_sweep_[w].end(), 0);
-    }
   plane_pose_.resize(model.shape_count);
   shared_boxes_.resize(shared_others_.size());
 }
@@ -137,13 +137,7 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     contacts.previous_key[c] = contacts.key_of(c);
     for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * c + i] = contacts.contact_impulse[3 * c + i];
   };
-  const int previous = contacts.contact_count, threads = team(previous, 1024);
-  if (threads > 1) {
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int c = 0; c < previous; ++c) keep(c);
-  } else {
-    for (int c = 0; c < previous; ++c) keep(c);
-  }
+  parallel_for(team(contacts.contact_count, 1024), contacts.contact_count, keep);
   contacts.previous_count = contacts.contact_count;
   contacts.contact_count = 0;
   contacts.contact_dropped = 0;

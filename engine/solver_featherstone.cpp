@@ -9,6 +9,7 @@
 
 #include "engine/dynamics.h"
 #include "engine/error.h"
+#include "engine/parallel.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -173,15 +174,7 @@ template <typename F>
 void SolverFeatherstone::for_each_articulation(F&& f) {
   // articulations are independent here: a static schedule over threads, no shared writes
   const int count = static_cast<int>(art_.size());
-  const int threads = std::min(thread_count(), count);
-  // one thread: no parallel region (one costs more than a small step's stage), unless this runs inside
-  // another, where only a region of its own numbers its thread 0 (the per-thread scratch)
-  if (threads > 1 || omp_in_parallel()) {
-#pragma omp parallel for schedule(static) num_threads(std::max(threads, 1))
-    for (int a = 0; a < count; ++a) f(a);
-  } else {
-    for (int a = 0; a < count; ++a) f(a);
-  }
+  parallel_for(std::min(thread_count(), count), count, f);
 }
 
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
@@ -473,18 +466,8 @@ void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
     contact_restitution_[c] = contact_restitution(model_, sa, sb);
   };
   const int threads = std::min(thread_count(), n / 1024);
-  if (threads > 1) {
-#pragma omp parallel num_threads(threads)
-    {
-#pragma omp for schedule(static)
-      for (int c = 0; c < n; ++c) touch(c);
-#pragma omp for schedule(static)
-      for (int c = 0; c < n; ++c) look_up(c);
-    }
-  } else {
-    for (int c = 0; c < n; ++c) touch(c);
-    for (int c = 0; c < n; ++c) look_up(c);
-  }
+  parallel_for(threads, n, touch);
+  parallel_for(threads, n, look_up);
   std::fill(block_contact_start_.begin(), block_contact_start_.end(), 0);
   for (int c = 0; c < n; ++c)
     if (contact_block_[c] >= 0) ++block_contact_start_[contact_block_[c] + 1];
