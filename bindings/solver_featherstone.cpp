@@ -45,7 +45,8 @@ void bind_solver_featherstone(py::module_& m) {
                      "Step articulations that share joints, frames and axes (replicated worlds) a SIMD block of "
                      "worlds at a time, in the model's precision; off: the scalar kernels for all.")
       .def_readwrite("profile_stages", &Settings::profile_stages,
-                     "Accumulate each stage's wall time into solver.stage_seconds.")
+                     "Accumulate each stage's wall time into solver.stage_seconds; the batched blocks then run each "
+                     "stage over all blocks in turn rather than a block's whole step at a time (same arithmetic).")
       .def_readwrite("num_threads", &Settings::num_threads,
                      "OpenMP threads over articulations (0: all available); results are bit-identical for any count.")
       .def_readwrite("on_divergence", &Settings::on_divergence,

@@ -58,8 +58,9 @@ class Batches final : public ArticulationBatches {
     // per block: the parameters (BatchParams' arrays in order, then, with welded bodies, every
     // body's own centre of mass), H and its factor, the motion subspace and o of the last kinematics
     std::vector<V> params, H, S, origin;
-    std::vector<int> limited;  // Revolute / Prismatic dofs with a finite limit in some world
-    std::vector<V> limits;     // per block: [limited][2] lower and upper limit
+    std::vector<int> rotational;  // dofs angular damping scales: Revolute ones and Ball's and Free's angular ones
+    std::vector<int> limited;     // Revolute / Prismatic dofs with a finite limit in some world
+    std::vector<V> limits;        // per block: [limited][2] lower and upper limit
     bool enabled = true;
     bool factored = false;  // H of every block factored by an earlier step
     bool refactor = true;   // this step computes and factors H
@@ -123,6 +124,13 @@ class Batches final : public ArticulationBatches {
         for (const WeldedBody& b : welded[a]) G.body.push_back(b.body);
       }
       const int nv = G.topo.dof_count;
+      const ArticulationView& first = art[G.arts[0]];
+      for (int i = 0; i < first.link_count(); ++i) {
+        const JointType type = first.type(i);
+        if (type == JointType::Revolute) G.rotational.push_back(first.qd_start(i));
+        if (type == JointType::Ball || type == JointType::Free)
+          for (int k = 0; k < 3; ++k) G.rotational.push_back(first.qd_start(i) + k);
+      }
       G.param_size = batch_param_count(G.topo) + (G.welds.empty() ? 0 : 3 * G.bodies());
       G.params.resize(static_cast<size_t>(G.blocks) * G.param_size);
       G.H.resize(static_cast<size_t>(G.blocks) * G.topo.packed_size());
@@ -148,6 +156,7 @@ class Batches final : public ArticulationBatches {
           }
       for (int b = 0; b < G.blocks; ++b) blocks_.push_back({g, b});
     }
+    no_skip_.assign(art.size(), 0);
     work_.resize(std::max(1, omp_get_max_threads()));
     std::size_t packed = 0;
     for (const Group& G : groups_) packed = std::max<std::size_t>(packed, G.topo.packed_size());
@@ -166,320 +175,49 @@ class Batches final : public ArticulationBatches {
   }
 
   void enable(int max_dofs) override {
+    active_count_ = 0;
     for (Group& G : groups_) {
       G.enabled = G.topo.dof_count < max_dofs;
       if (!G.enabled) G.factored = false;
+      if (G.enabled) active_count_ += G.world_count;
     }
   }
+
+  int active_count() const override { return active_count_; }
 
   bool active(int a) const override { return slot_[a].group >= 0 && groups_[slot_[a].group].enabled; }
 
   void dynamics(const State& in, const Control& control, const Scalar* tau, Scalar dt_, const DynamicsOptions& options,
                 Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) override {
-    for (Group& G : groups_) G.refactor = options.refactor || !G.factored;
-    ++step_;  // factors copied out by solve_mass before are stale
-    // one copy per thread of the rows' parallel loop (grows only when the thread count does)
-    if (static_cast<int>(lane_factor_.size()) < threads)
-      lane_factor_.resize(threads, LaneFactor{-1, 0, lane_factor_[0].L});
+    begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      const T dt = static_cast<T>(dt_);
-      const BatchTopology<T>& topo = G.topo;
-      const int nv = topo.dof_count;
-      const int* q_off = &G.q_off[b * W];
-      const int* qd_off = &G.qd_off[b * W];
-      gather(q_off, in.joint_q.data(), topo.coord_count, w.q.data());
-      gather(qd_off, in.joint_qd.data(), nv, w.qd.data());
-      V* o = &G.origin[3 * b];
-      V* S = G.block_S(b);
-      const BatchParams<T> P = G.block_params(b);
-      batch_kinematics(topo, w.q.data(), w, o);
-      batch_subspace(topo, w, o, S);
-      batch_velocity(topo, S, w.qd.data(), w);
-      batch_link_inertia(topo, P, o, w);
-      const V* f_ext = options.wrenches && gather_wrenches(G, b, in.body_f.data(), o, w) ? w.f_ext.data() : nullptr;
-      V g[3];
-      for (int k = 0; k < 3; ++k) g[k] = V{} + static_cast<T>(gravity_[k]);
-      batch_bias(topo, S, g, f_ext, w, w.tau.data());
-
-      // x = tau - bias - damping qd + kd (v_t - qd) - K_s (q_end - q_ref) + ke (q_t - q_end), q_end = q + dt qd
-      V* x = w.x.data();
-      gather(qd_off, tau, nv, x);
-      V* kd = w.drive.data();
-      V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv;
-      if (options.drives) {
-        gather(qd_off, control.joint_target_kd.data(), nv, kd);
-        gather(qd_off, control.joint_target_vel.data(), nv, vt);
-        gather(qd_off, control.joint_target_ke.data(), nv, ke);
-        gather(qd_off, control.joint_target_pos.data(), nv, qt);
-      } else {
-        std::fill(w.drive.begin(), w.drive.end(), V{});
-      }
-      for (int k = 0; k < nv; ++k) {
-        const V qd = w.qd[k];
-        x[k] += -w.tau[k] - P.damping[k] * qd + kd[k] * (vt[k] - qd);
-        w.diag[k] = dt * (P.damping[k] + kd[k]);
-        const int c = topo.coord_of_dof[k];
-        if (c < 0) continue;
-        const V q_end = w.q[c] + dt * qd;
-        x[k] += -P.stiffness[k] * (q_end - P.q_ref[k]) + ke[k] * (qt[k] - q_end);
-        w.diag[k] += dt * dt * (P.stiffness[k] + ke[k]);
-      }
-
-      V* H = G.block_H(b);
-      IntLanes<T> bad = IntLanes<T>{} - 1;
-      if (G.refactor) {
-        if (options.tile_gemm)
-          batch_mass_matrix_gemm(topo, P, S, w, H);
-        else
-          batch_mass_matrix(topo, P, S, w, H);
-        for (int k = 0; k < nv; ++k) H[topo.row_start[k] + k] += w.diag[k];
-        bad = batch_factor(topo, H, options.fuse ? x : nullptr);
-        if (options.fuse)
-          batch_solve_lower(topo, H, x);
-        else
-          batch_solve(topo, H, x);
-      } else {
-        batch_solve(topo, H, x);
-      }
-      for (int l = 0; l < lanes_in(G, b); ++l) {
-        if (bad[l] >= 0) factor_failure[G.arts[b * W + l]] = qd_off[l] + static_cast<int>(bad[l]);
-        if (qdd_out)
-          for (int k = 0; k < nv; ++k) qdd_out[qd_off[l] + k] = x[k][l];
-      }
-      if (!qd_out) return;
-      for (int k = 0; k < nv; ++k) x[k] = w.qd[k] + dt * x[k];
-      for (int l = 0; l < lanes_in(G, b); ++l)
-        for (int k = 0; k < nv; ++k) qd_out[qd_off[l] + k] = x[k][l];
+      dynamics_block(G, b, w, in, control, tau, dt_, options, qd_out, qdd_out, factor_failure);
     });
-    for (Group& G : groups_)
-      if (G.enabled) G.factored = true;
+    end_dynamics();
   }
 
   bool solves_rows(int a, const std::uint8_t* skip) const override { return active(a) && !skip[a]; }
 
   void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& bc, const RowSettings& s, Scalar dt_,
                   Scalar* qd_io, Scalar* impulse, int threads) override {
-    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      const BatchTopology<T>& topo = G.topo;
-      const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count, lanes = lanes_in(G, b);
-      const T dt = static_cast<T>(dt_);
-      const int* qd_off = &G.qd_off[b * W];
-      const int* q_off = &G.q_off[b * W];
-      IntLanes<T> mine{};  // lanes solved here: worlds of this block no contact joins to another articulation
-      int listed[W] = {}, slots = 0;  // each lane's contacts, their most in a lane
-      bool any_mine = false;
-      for (int l = 0; l < lanes; ++l) {
-        const int a = G.arts[b * W + l];
-        if (skip[a]) continue;
-        mine[l] = -1;
-        any_mine = true;
-        listed[l] = bc.start[a + 1] - bc.start[a];
-        slots = std::max(slots, listed[l]);
-      }
-      if (!any_mine || (nl == 0 && slots == 0)) return;
-      RowWork& R = row_work_[omp_get_thread_num()];
-      R.resize(2 * nl + 3 * slots, nv, slots);
-      gather(qd_off, qd_io, nv, w.qd.data());
-      const V* H = G.block_H(b);
-      int rows = 0;
-      auto add_row = [&](RowKind kind, const IntLanes<T>& on, const V& target, const V& warm) {
-        const int r = rows++;
-        R.kind[r] = kind;
-        R.normal[r] = -1;
-        R.active[r] = on;
-        R.target[r] = target;
-        R.lambda[r] = on ? warm : V{};
-        R.mu[r] = V{};
-        R.nonzero_begin[r] = nv;
-        R.nonzero_end[r] = 0;
-        return r;
-      };
-
-      // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
-      const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
-      for (int m = 0; m < nl; ++m) {
-        const int k = G.limited[m], c = topo.coord_of_dof[k];
-        V q;
-        for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
-        for (int side = 0; side < 2; ++side) {
-          // gap >= 0 inside the range; the row keeps sign * qd >= target
-          const T sign = side == 0 ? 1 : -1;
-          const V gap = sign * (q - limit[2 * m + side]);
-          const IntLanes<T> finite = lane_abs<T>(limit[2 * m + side]) <= std::numeric_limits<T>::max();
-          const IntLanes<T> on = mine & finite & (gap + dt * sign * w.qd[k] < 0);
-          R.limit_row[2 * m + side] = -1;
-          if (!any_lane<T>(on)) continue;
-          const V depth = -gap - T(s.linear_slop);
-          V warm{};
-          if (s.use_warmstarting)
-            for (int l = 0; l < W; ++l)
-              warm[l] = T(s.warmstarting_factor) * static_cast<T>(impulse[2 * (qd_off[l] + k) + side]);
-          const int r =
-              add_row(RowKind::Unilateral, on, gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt, warm);
-          R.limit_row[2 * m + side] = r;
-          V* J = R.J_row(r);
-          V* z = R.z_row(r);
-          std::fill(J, J + nv, V{});
-          J[k] = on ? V{} + sign : V{};
-          R.nonzero_begin[r] = k;
-          R.nonzero_end[r] = k + 1;
-          batch_solve_unit(topo, H, k, z);
-          for (int j = 0; j < nv; ++j) z[j] *= sign;
-        }
-      }
-
-      // contact rows: slot t of lane l is that world's t-th contact, a normal row and two friction rows
-      if (slots > 0) gather(qd_off, in.joint_qd.data(), nv, R.qd_in.data());
-      const V* S = G.block_S(b);
-      const V* o = &G.origin[3 * b];
-      const Contacts& C = *bc.contacts;
-      for (int t = 0; t < slots; ++t) {
-        // each lane's t-th contact, read from the buffer lane by lane
-        IntLanes<T> on{};
-        V n[3] = {}, p[3] = {}, depth{}, mu{}, restitution{}, previous[3] = {};
-        int link[W][2];    // its links (b, a), -1 for static bodies
-        int uniform = -1;  // the lane whose links every other lane with a contact shares, if any
-        for (int l = 0; l < W; ++l) {
-          const int c = t < listed[l] ? bc.list[bc.start[G.arts[b * W + l]] + t] : -1;
-          R.contact[t * W + l] = c;
-          if (c < 0) continue;
-          on[l] = -1;
-          for (int m = 0; m < 3; ++m) {
-            n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
-            p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
-          }
-          depth[l] = static_cast<T>(C.contact_depth[c]);
-          mu[l] = static_cast<T>(bc.mu[c]);
-          restitution[l] = static_cast<T>(bc.restitution[c]);
-          if (const Scalar* P = s.use_warmstarting ? C.previous(c) : nullptr)
-            for (int m = 0; m < 3; ++m) previous[m][l] = static_cast<T>(P[m]);
-          link[l][0] = bc.link_b[c];
-          link[l][1] = bc.link_a[c];
-          if (uniform == -1) uniform = l;
-          if (uniform >= 0 && (link[l][0] != link[uniform][0] || link[l][1] != link[uniform][1])) uniform = -2;
-        }
-        // coef_k: +1 for the dofs on body b's path, -1 on body a's (the relative velocity is b's point's
-        // minus a's), set for all lanes at once where they share their links
-        for (int j = 0; j < nv; ++j) R.coef[j] = V{};
-        auto add_paths = [&](int l, auto&& add) {
-          for (int side = 0; side < 2; ++side) {
-            if (link[l][side] < 0) continue;
-            for (int e = topo.link_dof_start[link[l][side]]; e < topo.link_dof_start[link[l][side] + 1]; ++e)
-              add(topo.link_dofs[e], side == 0 ? T(1) : T(-1));
-          }
-        };
-        if (uniform >= 0) {
-          const V one = on ? V{} + 1 : V{};
-          add_paths(uniform, [&](int j, T sign) { R.coef[j] += sign * one; });
-        } else {
-          for (int l = 0; l < W; ++l)
-            if (on[l]) add_paths(l, [&](int j, T sign) { R.coef[j][l] += sign; });
-        }
-        // the normal and two tangents (contact_tangents' frame) in lanes, kept for the impulses written back
-        V* d = &R.frame[9 * t];
-        lane_tangents<T>(n, d);
-        // warm starts: the previous impulse along the new frame (no pull along the normal)
-        V warm[3];
-        for (int e = 0; e < 3; ++e)
-          warm[e] = T(s.warmstarting_factor) *
-                    (previous[0] * d[3 * e] + previous[1] * d[3 * e + 1] + previous[2] * d[3 * e + 2]);
-        warm[0] = warm[0] > 0 ? warm[0] : V{};
-        // normal: push the penetration beyond the slop out at erp / dt, let a gap close in one step,
-        // bounce at -restitution times the approach speed above the threshold (a contact that closes
-        // within this step)
-        V target =
-            depth > T(s.linear_slop) ? T(s.erp) * (depth - T(s.linear_slop)) / dt : (depth < 0 ? depth : V{}) / dt;
-        const int first = rows;
-        int begin = nv, end = 0;  // the dofs on some lane's paths
-        for (int j = 0; j < nv; ++j)
-          if (any_lane<T>(R.coef[j] != 0)) {
-            begin = std::min(begin, j);
-            end = j + 1;
-          }
-        // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
-        V* u = R.point.data();
-        for (int j = 0; j < nv; ++j) {
-          const V* s6 = S + 6 * j;
-          u[3 * j] = s6[3] + s6[1] * p[2] - s6[2] * p[1];
-          u[3 * j + 1] = s6[4] + s6[2] * p[0] - s6[0] * p[2];
-          u[3 * j + 2] = s6[5] + s6[0] * p[1] - s6[1] * p[0];
-        }
-        for (int e = 0; e < 3; ++e) {
-          const int r = add_row(e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V{}, warm[e]);
-          V* J = R.J_row(r);
-          // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
-          const V* de = d + 3 * e;
-          for (int j = 0; j < nv; ++j)
-            J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
-          std::copy(J, J + nv, R.z_row(r));
-          R.normal[r] = first;
-          R.nonzero_begin[r] = begin;
-          R.nonzero_end[r] = end;
-        }
-        batch_solve_many(topo, H, end, R.z_row(first), 3, nv);
-        V v_approach{};
-        for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
-        const V bounce = -restitution * v_approach;
-        const IntLanes<T> closing = (v_approach < -T(s.restitution_threshold)) & (depth - v_approach * dt >= 0);
-        R.target[first] = closing & (bounce > target) ? bounce : target;
-        R.mu[first + 1] = mu;
-      }
-
-      BatchRows<T> batch_rows;
-      batch_rows.count = rows;
-      batch_rows.dofs = nv;
-      batch_rows.kind = R.kind.data();
-      batch_rows.normal = R.normal.data();
-      batch_rows.J = R.J.data();
-      batch_rows.nonzero_begin = R.nonzero_begin.data();
-      batch_rows.nonzero_end = R.nonzero_end.data();
-      batch_rows.MinvJT = R.z.data();
-      batch_rows.target = R.target.data();
-      batch_rows.mu = R.mu.data();
-      batch_rows.active = R.active.data();
-      batch_rows.inv_mass = R.inv_mass.data();
-      batch_rows.lambda = R.lambda.data();
-      batch_pgs_solve(batch_rows, s.pgs, w.qd.data());
-
-      // velocities and the impulses kept for warm starting: limits per dof and side, contacts as world
-      // vectors on body b
-      for (int l = 0; l < lanes; ++l) {
-        if (!mine[l]) continue;
-        Scalar* out = qd_io + qd_off[l];
-        for (int j = 0; j < nv; ++j) out[j] = w.qd[j][l];
-        for (int m = 0; m < 2 * nl; ++m) {
-          const int r = R.limit_row[m];
-          const T x = r >= 0 && R.active[r][l] ? R.lambda[r][l] : T(0);
-          impulse[2 * (qd_off[l] + G.limited[m / 2]) + m % 2] = std::isfinite(x) ? x : 0;
-        }
-      }
-      for (int t = 0; t < slots; ++t) {
-        const V* d = &R.frame[9 * t];
-        const V* lambda = &R.lambda[rows - 3 * (slots - t)];
-        V P[3];
-        for (int m = 0; m < 3; ++m) P[m] = lambda[0] * d[m] + lambda[1] * d[3 + m] + lambda[2] * d[6 + m];
-        IntLanes<T> finite = ~IntLanes<T>{};
-        for (int m = 0; m < 3; ++m) finite &= lane_abs<T>(P[m]) <= std::numeric_limits<T>::max();
-        for (int l = 0; l < W; ++l) {
-          const int c = R.contact[t * W + l];
-          if (c < 0) continue;
-          for (int m = 0; m < 3; ++m) bc.contacts->contact_impulse[3 * c + m] = finite[l] ? P[m][l] : 0;
-        }
-      }
-    });
+    for_each_block(
+        threads, [&](Group& G, int b, BatchWork<T>& w) { rows_block(G, b, w, in, skip, bc, s, dt_, qd_io, impulse); });
   }
 
   void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) override {
+    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) { integrate_block(G, b, w, in, qd, dt, q_out); });
+  }
+
+  void step(const State& in, const Control& control, const Scalar* tau, Scalar dt, const DynamicsOptions& options,
+            const BlockContacts* contacts, const RowSettings& rows, Scalar* qd, Scalar* impulse, Scalar* q_out,
+            int* factor_failure, int threads) override {
+    begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      const int nq = G.topo.coord_count;
-      gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
-      gather(&G.qd_off[b * W], qd, G.topo.dof_count, w.qd.data());
-      batch_integrate(G.topo, w.q.data(), w.qd.data(), static_cast<T>(dt), w.q_next.data());
-      for (int l = 0; l < lanes_in(G, b); ++l) {
-        Scalar* x = q_out + G.q_off[b * W + l];
-        for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
-      }
+      dynamics_block(G, b, w, in, control, tau, dt, options, qd, nullptr, factor_failure);
+      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, qd, impulse);
+      integrate_block(G, b, w, in, qd, dt, q_out);
     });
+    end_dynamics();
   }
 
   void store_bodies(State& out, int threads) override {
@@ -590,6 +328,317 @@ class Batches final : public ArticulationBatches {
   static int lanes_in(const Group& G, int b) { return std::min(W, G.world_count - b * W); }
 
   // out[k][l] = field[off[l] + k]
+  void begin_dynamics(const DynamicsOptions& options, int threads) {
+    for (Group& G : groups_) G.refactor = options.refactor || !G.factored;
+    ++step_;  // factors copied out by solve_mass before are stale
+    // one copy per thread of the rows' parallel loop (grows only when the thread count does)
+    if (static_cast<int>(lane_factor_.size()) < threads)
+      lane_factor_.resize(threads, LaneFactor{-1, 0, lane_factor_[0].L});
+  }
+  void end_dynamics() {
+    for (Group& G : groups_)
+      if (G.enabled) G.factored = true;
+  }
+
+  // one block of dynamics(): FK, bias, H and its factor, the unconstrained velocity into qd_out
+  void dynamics_block(Group& G, int b, BatchWork<T>& w, const State& in, const Control& control, const Scalar* tau,
+                      Scalar dt_, const DynamicsOptions& options, Scalar* qd_out, Scalar* qdd_out,
+                      int* factor_failure) {
+    const T dt = static_cast<T>(dt_);
+    const BatchTopology<T>& topo = G.topo;
+    const int nv = topo.dof_count;
+    const int* q_off = &G.q_off[b * W];
+    const int* qd_off = &G.qd_off[b * W];
+    gather(q_off, in.joint_q.data(), topo.coord_count, w.q.data());
+    gather(qd_off, in.joint_qd.data(), nv, w.qd.data());
+    V* o = &G.origin[3 * b];
+    V* S = G.block_S(b);
+    const BatchParams<T> P = G.block_params(b);
+    batch_kinematics(topo, w.q.data(), w, o);
+    batch_subspace(topo, w, o, S);
+    batch_velocity(topo, S, w.qd.data(), w);
+    batch_link_inertia(topo, P, o, w);
+    const V* f_ext = options.wrenches && gather_wrenches(G, b, in.body_f.data(), o, w) ? w.f_ext.data() : nullptr;
+    V g[3];
+    for (int k = 0; k < 3; ++k) g[k] = V{} + static_cast<T>(gravity_[k]);
+    batch_bias(topo, S, g, f_ext, w, w.tau.data());
+
+    // x = tau - bias - damping qd + kd (v_t - qd) - K_s (q_end - q_ref) + ke (q_t - q_end), q_end = q + dt qd
+    V* x = w.x.data();
+    gather(qd_off, tau, nv, x);
+    V* kd = w.drive.data();
+    V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv;
+    if (options.drives) {
+      gather(qd_off, control.joint_target_kd.data(), nv, kd);
+      gather(qd_off, control.joint_target_vel.data(), nv, vt);
+      gather(qd_off, control.joint_target_ke.data(), nv, ke);
+      gather(qd_off, control.joint_target_pos.data(), nv, qt);
+    } else {
+      std::fill(w.drive.begin(), w.drive.end(), V{});
+    }
+    for (int k = 0; k < nv; ++k) {
+      const V qd = w.qd[k];
+      x[k] += -w.tau[k] - P.damping[k] * qd + kd[k] * (vt[k] - qd);
+      w.diag[k] = dt * (P.damping[k] + kd[k]);
+      const int c = topo.coord_of_dof[k];
+      if (c < 0) continue;
+      const V q_end = w.q[c] + dt * qd;
+      x[k] += -P.stiffness[k] * (q_end - P.q_ref[k]) + ke[k] * (qt[k] - q_end);
+      w.diag[k] += dt * dt * (P.stiffness[k] + ke[k]);
+    }
+
+    V* H = G.block_H(b);
+    IntLanes<T> bad = IntLanes<T>{} - 1;
+    if (G.refactor) {
+      if (options.tile_gemm)
+        batch_mass_matrix_gemm(topo, P, S, w, H);
+      else
+        batch_mass_matrix(topo, P, S, w, H);
+      for (int k = 0; k < nv; ++k) H[topo.row_start[k] + k] += w.diag[k];
+      bad = batch_factor(topo, H, options.fuse ? x : nullptr);
+      if (options.fuse)
+        batch_solve_lower(topo, H, x);
+      else
+        batch_solve(topo, H, x);
+    } else {
+      batch_solve(topo, H, x);
+    }
+    for (int l = 0; l < lanes_in(G, b); ++l) {
+      if (bad[l] >= 0) factor_failure[G.arts[b * W + l]] = qd_off[l] + static_cast<int>(bad[l]);
+      if (qdd_out)
+        for (int k = 0; k < nv; ++k) qdd_out[qd_off[l] + k] = x[k][l];
+    }
+    if (!qd_out) return;
+    for (int k = 0; k < nv; ++k) x[k] = w.qd[k] + dt * x[k];
+    for (int l = 0; l < lanes_in(G, b); ++l) {
+      Scalar* out = qd_out + qd_off[l];
+      for (int k = 0; k < nv; ++k) out[k] = x[k][l];
+      for (const int k : G.rotational) out[k] *= options.keep;
+    }
+  }
+
+  // one block of solve_rows()
+  void rows_block(Group& G, int b, BatchWork<T>& w, const State& in, const std::uint8_t* skip, const BlockContacts& bc,
+                  const RowSettings& s, Scalar dt_, Scalar* qd_io, Scalar* impulse) {
+    const BatchTopology<T>& topo = G.topo;
+    const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count, lanes = lanes_in(G, b);
+    const T dt = static_cast<T>(dt_);
+    const int* qd_off = &G.qd_off[b * W];
+    const int* q_off = &G.q_off[b * W];
+    IntLanes<T> mine{};             // lanes solved here: worlds of this block no contact joins to another articulation
+    int listed[W] = {}, slots = 0;  // each lane's contacts, their most in a lane
+    bool any_mine = false;
+    for (int l = 0; l < lanes; ++l) {
+      const int a = G.arts[b * W + l];
+      if (skip[a]) continue;
+      mine[l] = -1;
+      any_mine = true;
+      listed[l] = bc.start[a + 1] - bc.start[a];
+      slots = std::max(slots, listed[l]);
+    }
+    if (!any_mine || (nl == 0 && slots == 0)) return;
+    RowWork& R = row_work_[omp_get_thread_num()];
+    R.resize(2 * nl + 3 * slots, nv, slots);
+    gather(qd_off, qd_io, nv, w.qd.data());
+    const V* H = G.block_H(b);
+    int rows = 0;
+    auto add_row = [&](RowKind kind, const IntLanes<T>& on, const V& target, const V& warm) {
+      const int r = rows++;
+      R.kind[r] = kind;
+      R.normal[r] = -1;
+      R.active[r] = on;
+      R.target[r] = target;
+      R.lambda[r] = on ? warm : V{};
+      R.mu[r] = V{};
+      R.nonzero_begin[r] = nv;
+      R.nonzero_end[r] = 0;
+      return r;
+    };
+
+    // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
+    const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
+    for (int m = 0; m < nl; ++m) {
+      const int k = G.limited[m], c = topo.coord_of_dof[k];
+      V q;
+      for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
+      for (int side = 0; side < 2; ++side) {
+        // gap >= 0 inside the range; the row keeps sign * qd >= target
+        const T sign = side == 0 ? 1 : -1;
+        const V gap = sign * (q - limit[2 * m + side]);
+        const IntLanes<T> finite = lane_abs<T>(limit[2 * m + side]) <= std::numeric_limits<T>::max();
+        const IntLanes<T> on = mine & finite & (gap + dt * sign * w.qd[k] < 0);
+        R.limit_row[2 * m + side] = -1;
+        if (!any_lane<T>(on)) continue;
+        const V depth = -gap - T(s.linear_slop);
+        V warm{};
+        if (s.use_warmstarting)
+          for (int l = 0; l < W; ++l)
+            warm[l] = T(s.warmstarting_factor) * static_cast<T>(impulse[2 * (qd_off[l] + k) + side]);
+        const int r =
+            add_row(RowKind::Unilateral, on, gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt, warm);
+        R.limit_row[2 * m + side] = r;
+        V* J = R.J_row(r);
+        V* z = R.z_row(r);
+        std::fill(J, J + nv, V{});
+        J[k] = on ? V{} + sign : V{};
+        R.nonzero_begin[r] = k;
+        R.nonzero_end[r] = k + 1;
+        batch_solve_unit(topo, H, k, z);
+        for (int j = 0; j < nv; ++j) z[j] *= sign;
+      }
+    }
+
+    // contact rows: slot t of lane l is that world's t-th contact, a normal row and two friction rows
+    if (slots > 0) gather(qd_off, in.joint_qd.data(), nv, R.qd_in.data());
+    const V* S = G.block_S(b);
+    const V* o = &G.origin[3 * b];
+    const Contacts& C = *bc.contacts;
+    for (int t = 0; t < slots; ++t) {
+      // each lane's t-th contact, read from the buffer lane by lane
+      IntLanes<T> on{};
+      V n[3] = {}, p[3] = {}, depth{}, mu{}, restitution{}, previous[3] = {};
+      int link[W][2];    // its links (b, a), -1 for static bodies
+      int uniform = -1;  // the lane whose links every other lane with a contact shares, if any
+      for (int l = 0; l < W; ++l) {
+        const int c = t < listed[l] ? bc.list[bc.start[G.arts[b * W + l]] + t] : -1;
+        R.contact[t * W + l] = c;
+        if (c < 0) continue;
+        on[l] = -1;
+        for (int m = 0; m < 3; ++m) {
+          n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
+          p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
+        }
+        depth[l] = static_cast<T>(C.contact_depth[c]);
+        mu[l] = static_cast<T>(bc.mu[c]);
+        restitution[l] = static_cast<T>(bc.restitution[c]);
+        if (const Scalar* P = s.use_warmstarting ? C.previous(c) : nullptr)
+          for (int m = 0; m < 3; ++m) previous[m][l] = static_cast<T>(P[m]);
+        link[l][0] = bc.link_b[c];
+        link[l][1] = bc.link_a[c];
+        if (uniform == -1) uniform = l;
+        if (uniform >= 0 && (link[l][0] != link[uniform][0] || link[l][1] != link[uniform][1])) uniform = -2;
+      }
+      // coef_k: +1 for the dofs on body b's path, -1 on body a's (the relative velocity is b's point's
+      // minus a's), set for all lanes at once where they share their links
+      for (int j = 0; j < nv; ++j) R.coef[j] = V{};
+      auto add_paths = [&](int l, auto&& add) {
+        for (int side = 0; side < 2; ++side) {
+          if (link[l][side] < 0) continue;
+          for (int e = topo.link_dof_start[link[l][side]]; e < topo.link_dof_start[link[l][side] + 1]; ++e)
+            add(topo.link_dofs[e], side == 0 ? T(1) : T(-1));
+        }
+      };
+      if (uniform >= 0) {
+        const V one = on ? V{} + 1 : V{};
+        add_paths(uniform, [&](int j, T sign) { R.coef[j] += sign * one; });
+      } else {
+        for (int l = 0; l < W; ++l)
+          if (on[l]) add_paths(l, [&](int j, T sign) { R.coef[j][l] += sign; });
+      }
+      // the normal and two tangents (contact_tangents' frame) in lanes, kept for the impulses written back
+      V* d = &R.frame[9 * t];
+      lane_tangents<T>(n, d);
+      // warm starts: the previous impulse along the new frame (no pull along the normal)
+      V warm[3];
+      for (int e = 0; e < 3; ++e)
+        warm[e] = T(s.warmstarting_factor) *
+                  (previous[0] * d[3 * e] + previous[1] * d[3 * e + 1] + previous[2] * d[3 * e + 2]);
+      warm[0] = warm[0] > 0 ? warm[0] : V{};
+      // normal: push the penetration beyond the slop out at erp / dt, let a gap close in one step,
+      // bounce at -restitution times the approach speed above the threshold (a contact that closes
+      // within this step)
+      V target = depth > T(s.linear_slop) ? T(s.erp) * (depth - T(s.linear_slop)) / dt : (depth < 0 ? depth : V{}) / dt;
+      const int first = rows;
+      int begin = nv, end = 0;  // the dofs on some lane's paths
+      for (int j = 0; j < nv; ++j)
+        if (any_lane<T>(R.coef[j] != 0)) {
+          begin = std::min(begin, j);
+          end = j + 1;
+        }
+      // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
+      V* u = R.point.data();
+      for (int j = 0; j < nv; ++j) {
+        const V* s6 = S + 6 * j;
+        u[3 * j] = s6[3] + s6[1] * p[2] - s6[2] * p[1];
+        u[3 * j + 1] = s6[4] + s6[2] * p[0] - s6[0] * p[2];
+        u[3 * j + 2] = s6[5] + s6[0] * p[1] - s6[1] * p[0];
+      }
+      for (int e = 0; e < 3; ++e) {
+        const int r = add_row(e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V{}, warm[e]);
+        V* J = R.J_row(r);
+        // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
+        const V* de = d + 3 * e;
+        for (int j = 0; j < nv; ++j)
+          J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
+        std::copy(J, J + nv, R.z_row(r));
+        R.normal[r] = first;
+        R.nonzero_begin[r] = begin;
+        R.nonzero_end[r] = end;
+      }
+      batch_solve_many(topo, H, end, R.z_row(first), 3, nv);
+      V v_approach{};
+      for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
+      const V bounce = -restitution * v_approach;
+      const IntLanes<T> closing = (v_approach < -T(s.restitution_threshold)) & (depth - v_approach * dt >= 0);
+      R.target[first] = closing & (bounce > target) ? bounce : target;
+      R.mu[first + 1] = mu;
+    }
+
+    BatchRows<T> batch_rows;
+    batch_rows.count = rows;
+    batch_rows.dofs = nv;
+    batch_rows.kind = R.kind.data();
+    batch_rows.normal = R.normal.data();
+    batch_rows.J = R.J.data();
+    batch_rows.nonzero_begin = R.nonzero_begin.data();
+    batch_rows.nonzero_end = R.nonzero_end.data();
+    batch_rows.MinvJT = R.z.data();
+    batch_rows.target = R.target.data();
+    batch_rows.mu = R.mu.data();
+    batch_rows.active = R.active.data();
+    batch_rows.inv_mass = R.inv_mass.data();
+    batch_rows.lambda = R.lambda.data();
+    batch_pgs_solve(batch_rows, s.pgs, w.qd.data());
+
+    // velocities and the impulses kept for warm starting: limits per dof and side, contacts as world
+    // vectors on body b
+    for (int l = 0; l < lanes; ++l) {
+      if (!mine[l]) continue;
+      Scalar* out = qd_io + qd_off[l];
+      for (int j = 0; j < nv; ++j) out[j] = w.qd[j][l];
+      for (int m = 0; m < 2 * nl; ++m) {
+        const int r = R.limit_row[m];
+        const T x = r >= 0 && R.active[r][l] ? R.lambda[r][l] : T(0);
+        impulse[2 * (qd_off[l] + G.limited[m / 2]) + m % 2] = std::isfinite(x) ? x : 0;
+      }
+    }
+    for (int t = 0; t < slots; ++t) {
+      const V* d = &R.frame[9 * t];
+      const V* lambda = &R.lambda[rows - 3 * (slots - t)];
+      V P[3];
+      for (int m = 0; m < 3; ++m) P[m] = lambda[0] * d[m] + lambda[1] * d[3 + m] + lambda[2] * d[6 + m];
+      IntLanes<T> finite = ~IntLanes<T>{};
+      for (int m = 0; m < 3; ++m) finite &= lane_abs<T>(P[m]) <= std::numeric_limits<T>::max();
+      for (int l = 0; l < W; ++l) {
+        const int c = R.contact[t * W + l];
+        if (c < 0) continue;
+        for (int m = 0; m < 3; ++m) bc.contacts->contact_impulse[3 * c + m] = finite[l] ? P[m][l] : 0;
+      }
+    }
+  }
+
+  // one block of integrate()
+  void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, const Scalar* qd, Scalar dt, Scalar* q_out) {
+    const int nq = G.topo.coord_count;
+    gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
+    gather(&G.qd_off[b * W], qd, G.topo.dof_count, w.qd.data());
+    batch_integrate(G.topo, w.q.data(), w.qd.data(), static_cast<T>(dt), w.q_next.data());
+    for (int l = 0; l < lanes_in(G, b); ++l) {
+      Scalar* x = q_out + G.q_off[b * W + l];
+      for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
+    }
+  }
+
   static void gather(const int* off, const Scalar* field, int count, V* out) {
     for (int l = 0; l < W; ++l) {
       const Scalar* x = field + off[l];
@@ -724,6 +773,8 @@ class Batches final : public ArticulationBatches {
   std::vector<Group> groups_;
   std::vector<std::pair<int, int>> blocks_;      // (group, block) in order
   std::vector<Slot> slot_;                       // per articulation
+  int active_count_ = 0;                         // articulations in groups that are on
+  std::vector<std::uint8_t> no_skip_;            // per articulation: 0, step()'s skip for solve_rows
   std::vector<std::vector<BatchWork<T>>> work_;  // per thread, per group
   std::vector<RowWork> row_work_;                // per thread
 };

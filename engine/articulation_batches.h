@@ -40,6 +40,8 @@ class ArticulationBatches {
   virtual void enable(int max_dofs) = 0;
   // true when articulation a is in a batch that is on
   virtual bool active(int a) const = 0;
+  // how many articulations are in batches that are on
+  virtual int active_count() const = 0;
 
   // how dynamics treats a step
   struct DynamicsOptions {
@@ -48,6 +50,7 @@ class ArticulationBatches {
     bool tile_gemm = false;  // H as the tiled product sum J_i^T I_i J_i instead of CRBA
     bool wrenches = false;   // in.body_f has a nonzero entry
     bool drives = false;     // the control has a nonzero PD gain
+    Scalar keep = 1;         // angular damping: rotational dofs' unconstrained velocities are scaled by it
   };
   // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =
   // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. qdd_out (when
@@ -85,6 +88,12 @@ class ArticulationBatches {
   virtual bool solves_rows(int a, const std::uint8_t* skip) const = 0;
   // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations)
   virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) = 0;
+  // dynamics, solve_rows (when `contacts` is given; no articulation skipped) and integrate of every active
+  // articulation, a block at a time so that its data stay in cache between the three: the same
+  // arithmetic as calling them in turn, for a step that has no rows on the solver's scalar path
+  virtual void step(const State& in, const Control& control, const Scalar* tau, Scalar dt,
+                    const DynamicsOptions& options, const BlockContacts* contacts, const RowSettings& rows, Scalar* qd,
+                    Scalar* impulse, Scalar* q_out, int* factor_failure, int threads) = 0;
   // body_q / body_qd of active articulations from out.joint_q / out.joint_qd
   virtual void store_bodies(State& out, int threads) = 0;
   // x = M^-1 x with the last factor of articulation a

@@ -134,7 +134,8 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     batchable[a] = art_[a].dof_count() > 0;
     for (const int b : welded_into_[a]) welded[a].push_back({b, body_link_[b], welded_.offset[b]});
   }
-  if (std::count(batchable.begin(), batchable.end(), 1) > 0)
+  batchable_count_ = static_cast<int>(std::count(batchable.begin(), batchable.end(), 1));
+  if (batchable_count_ > 0)
     batches_ = ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
@@ -188,44 +189,66 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     total += std::chrono::duration<double>(now - mark).count();
     mark = now;
   };
-  unconstrained_velocity(in, control, dt);
-  lap(stage_seconds_.dynamics);
+  const bool refactor = steps_since_factor_ % settings.update_mass_matrix_interval == 0 || dt != factored_dt_;
+  steps_since_factor_ = refactor ? 1 : steps_since_factor_ + 1;
+  if (refactor) factored_dt_ = dt;
+  batch_step_ = batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0;
+  if (batches_)
+    batches_->enable(batch_step_ ? settings.aba_min_dofs : 0);  // off: factors go stale while the scalar kernels step
+  all_on_batch_ = batch_step_ && batches_->active_count() == batchable_count_;
   row_count_ = 0;
   pool_size_ = 0;
   scalar_rows_.clear();
   scalar_contacts_.clear();
-  if (batch_step_ && (!limited_joints_.empty() || contacts.contact_count > 0)) {
-    // articulations no contact joins to another moving one have their limit and contact rows solved
-    // in their blocks
-    list_block_contacts(contacts);
-    ArticulationBatches::BlockContacts block;
-    block.contacts = &contacts;
-    block.start = block_contact_start_.data();
-    block.list = block_contacts_.data();
-    block.link_a = contact_link_a_.data();
-    block.link_b = contact_link_b_.data();
-    block.mu = contact_mu_.data();
-    block.restitution = contact_restitution_.data();
-    ArticulationBatches::RowSettings rows;
-    rows.pgs = pgs_settings();
-    rows.erp = settings.erp;
-    rows.linear_slop = settings.linear_slop;
-    rows.warmstarting_factor = settings.warmstarting_factor;
-    rows.restitution_threshold = settings.restitution_threshold;
-    rows.use_warmstarting = settings.use_warmstarting;
-    batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
-    for (int a = 0; a < static_cast<int>(art_.size()); ++a)
-      if (!batches_->solves_rows(a, touched_.data())) scalar_rows_.push_back(a);
+  // articulations no contact joins to another moving one have their limit and contact rows solved in
+  // their blocks
+  const bool block_rows = batch_step_ && (!limited_joints_.empty() || contacts.contact_count > 0);
+  if (block_rows) list_block_contacts(contacts);
+  ArticulationBatches::BlockContacts block;
+  block.contacts = &contacts;
+  block.start = block_contact_start_.data();
+  block.list = block_contacts_.data();
+  block.link_a = contact_link_a_.data();
+  block.link_b = contact_link_b_.data();
+  block.mu = contact_mu_.data();
+  block.restitution = contact_restitution_.data();
+  ArticulationBatches::RowSettings rows;
+  rows.pgs = pgs_settings();
+  rows.erp = settings.erp;
+  rows.linear_slop = settings.linear_slop;
+  rows.warmstarting_factor = settings.warmstarting_factor;
+  rows.restitution_threshold = settings.restitution_threshold;
+  rows.use_warmstarting = settings.use_warmstarting;
+  // every articulation in a block and every row solved there: the blocks step a block at a time, each
+  // block's data in cache from its dynamics to its integration (profiling times the stages one after
+  // another instead; the arithmetic is the same)
+  fused_step_ = all_on_batch_ && scalar_contacts_.empty() && !settings.profile_stages;
+  if (fused_step_) {
+    qd_in_ = in.joint_qd.data();
+    std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
+    batches_->step(in, control, control_forces(control), dt, dynamics_options(refactor, dt),
+                   block_rows ? &block : nullptr, rows, qd_.data(), limit_impulse_.data(), q_next_.data(),
+                   factor_failure_.data(), thread_count());
+    std::fill(factored_batch_.begin(), factored_batch_.end(), 1);
+    check_factors();
   } else {
-    for (int a = 0; a < static_cast<int>(art_.size()); ++a) scalar_rows_.push_back(a);
-    for (int c = 0; c < contacts.contact_count; ++c) scalar_contacts_.push_back(c);
+    unconstrained_velocity(in, control, dt, refactor);
+    lap(stage_seconds_.dynamics);
+    if (block_rows) {
+      batches_->solve_rows(in, touched_.data(), block, rows, dt, qd_.data(), limit_impulse_.data(), thread_count());
+      for (int a = 0; a < static_cast<int>(art_.size()); ++a)
+        if (!batches_->solves_rows(a, touched_.data())) scalar_rows_.push_back(a);
+    } else {
+      for (int a = 0; a < static_cast<int>(art_.size()); ++a) scalar_rows_.push_back(a);
+      for (int c = 0; c < contacts.contact_count; ++c) scalar_contacts_.push_back(c);
+    }
+    build_limit_rows(in, dt);
+    lap(stage_seconds_.limit_rows);
+    build_contact_rows(contacts, dt);
+    lap(stage_seconds_.contact_rows);
+    solve_constraints(contacts);
+    lap(stage_seconds_.solve);
   }
-  build_limit_rows(in, dt);
-  lap(stage_seconds_.limit_rows);
-  build_contact_rows(contacts, dt);
-  lap(stage_seconds_.contact_rows);
-  solve_constraints(contacts);
-  lap(stage_seconds_.solve);
   integrate(in, out, dt);
   lap(stage_seconds_.integrate);
   stage_seconds_.steps += settings.profile_stages;
@@ -245,28 +268,38 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   check_finite_control(control, &drives_, thread_count());
 }
 
-void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt) {
-  const bool refactor = steps_since_factor_ % settings.update_mass_matrix_interval == 0 || dt != factored_dt_;
-  steps_since_factor_ = refactor ? 1 : steps_since_factor_ + 1;
-  if (refactor) factored_dt_ = dt;
-  qd_in_ = in.joint_qd.data();
-  control_force(model_, control, rhs_.data());
-  std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
+ArticulationBatches::DynamicsOptions SolverFeatherstone::dynamics_options(bool refactor, Scalar dt) const {
+  ArticulationBatches::DynamicsOptions options;
+  options.refactor = refactor;
+  options.fuse = settings.fuse_cholesky;
+  options.tile_gemm = settings.use_tile_gemm;
+  options.wrenches = wrenches_;
+  options.drives = drives_;
+  options.keep = angular_keep(dt);
+  return options;
+}
 
-  batch_step_ = batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0;
-  if (batch_step_) {
-    batches_->enable(settings.aba_min_dofs);
-    ArticulationBatches::DynamicsOptions options;
-    options.refactor = refactor;
-    options.fuse = settings.fuse_cholesky;
-    options.tile_gemm = settings.use_tile_gemm;
-    options.wrenches = wrenches_;
-    options.drives = drives_;
-    batches_->dynamics(in, control, rhs_.data(), dt, options, qd_.data(), nullptr, factor_failure_.data(),
-                       thread_count());
-  } else if (batches_) {
-    batches_->enable(0);  // every batch off: their factors go stale while the scalar kernels step
-  }
+const Scalar* SolverFeatherstone::control_forces(const Control& control) {
+  // the blocks read joint_f itself when nothing adds to it and no scalar articulation writes over it
+  if (model_.actuator_count == 0 && all_on_batch_) return control.joint_f.data();
+  control_force(model_, control, rhs_.data());
+  return rhs_.data();
+}
+
+void SolverFeatherstone::check_factors() const {
+  for (size_t a = 0; a < art_.size(); ++a)
+    if (factor_failure_[a] >= 0)
+      fail("articulation ", a, ": mass matrix is not positive definite at dof ", factor_failure_[a],
+           " (a massless link without children?)");
+}
+
+void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt, bool refactor) {
+  qd_in_ = in.joint_qd.data();
+  const Scalar* tau = control_forces(control);
+  std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
+  if (batch_step_)
+    batches_->dynamics(in, control, tau, dt, dynamics_options(refactor, dt), qd_.data(), nullptr,
+                       factor_failure_.data(), thread_count());
 
   for_each_articulation([&](int a) {
     if (on_batch(a)) {
@@ -356,13 +389,12 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
     factor_failure_[a] = bad < 0 ? -1 : qd0 + bad;
     qd_.segment(qd0, nv) = Eigen::Map<const VecX>(qd_in_ + qd0, nv) + dt * rhs_.segment(qd0, nv);
   });
-  for (size_t a = 0; a < art_.size(); ++a)
-    if (factor_failure_[a] >= 0)
-      fail("articulation ", a, ": mass matrix is not positive definite at dof ", factor_failure_[a],
-           " (a massless link without children?)");
-
-  const Scalar keep = std::max<Scalar>(0, 1 - settings.angular_damping * dt);
-  for (const int dof : rotational_dof_) qd_[dof] *= keep;
+  check_factors();
+  // the blocks scale their own dofs
+  const Scalar keep = angular_keep(dt);
+  if (!all_on_batch_)
+    for (const int dof : rotational_dof_)
+      if (!on_batch(dof_articulation_[dof])) qd_[dof] *= keep;
 }
 
 int SolverFeatherstone::begin_row(int art_a, int art_b, RowKind kind, Scalar target) {
@@ -632,7 +664,7 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   // divergence guard: an articulation whose state went non-finite or beyond divergence_speed is
   // flagged, and raised, kept as it was (Flag) or reset to the model's initial state (Reset)
-  if (batch_step_) batches_->integrate(in, qd_.data(), dt, q_next_.data(), thread_count());
+  if (batch_step_ && !fused_step_) batches_->integrate(in, qd_.data(), dt, q_next_.data(), thread_count());
   for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();

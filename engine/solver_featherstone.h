@@ -49,8 +49,10 @@ struct SolverFeatherstoneSettings {
   // or whipping chains); 1 linearised backward Euler (damps). Above 0 every articulation takes the
   // dense path (CRBA, d bias/d qd by 2n RNEAs, an LU of M + theta dt C each step): O(n^3)
   Scalar coriolis_implicitness = 0;
-  int num_threads = 0;          // OpenMP threads over articulations; 0: all available
-  bool profile_stages = false;  // accumulate each stage's wall time into stage_seconds()
+  int num_threads = 0;  // OpenMP threads over articulations; 0: all available
+  // accumulate each stage's wall time into stage_seconds(); the batched blocks then run each stage
+  // over all blocks in turn rather than a block's whole step at a time (the same arithmetic)
+  bool profile_stages = false;
   // bodies held to a parent body by a Fixed joint are merged into the parent's link, so they cost
   // nothing in the dynamics (read when the solver is made)
   bool weld_fixed_joints = true;
@@ -111,7 +113,15 @@ class SolverFeatherstone {
  private:
   // throws Error naming the first bad argument; notes whether in.body_f has a nonzero wrench
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
-  void unconstrained_velocity(const State& in, const Control& control, Scalar dt);
+  // qd_ = the velocity before constraints, H factored (when `refactor`) or its factor reused
+  void unconstrained_velocity(const State& in, const Control& control, Scalar dt, bool refactor);
+  ArticulationBatches::DynamicsOptions dynamics_options(bool refactor, Scalar dt) const;
+  // the control's joint forces with the actuators' added (rhs_, or joint_f itself when nothing adds)
+  const Scalar* control_forces(const Control& control);
+  // throws naming the first articulation whose factor failed this step
+  void check_factors() const;
+  // what angular damping leaves of a rotational dof's velocity over dt
+  Scalar angular_keep(Scalar dt) const { return std::max<Scalar>(0, 1 - settings.angular_damping * dt); }
   void build_contact_rows(const Contacts& contacts, Scalar dt);
   void build_limit_rows(const State& in, Scalar dt);
   void group_islands();
@@ -156,6 +166,9 @@ class SolverFeatherstone {
   std::vector<ArticulationScratch> scratch_;
   std::unique_ptr<ArticulationBatches> batches_;
   bool batch_step_ = false;
+  bool all_on_batch_ = false;          // this step: every articulation with dofs in a block that is on
+  bool fused_step_ = false;            // this step: the blocks step a block at a time (ArticulationBatches::step)
+  int batchable_count_ = 0;            // articulations with dofs
   bool wrenches_ = false;              // the step's input has a nonzero body_f
   bool drives_ = false;                // the step's control has a nonzero PD gain
   std::vector<std::uint8_t> touched_;  // per articulation: 1 where a contact joins it to another moving one

@@ -301,6 +301,55 @@ TEST(ArticulationBatches, OneThreadAndAllThreadsAreBitIdentical) {
   }
 }
 
+// a step with every articulation in a block and every row solved there runs each block's dynamics,
+// rows and integration in turn; with settings.profile_stages the solver times the stages over all
+// blocks one after another instead. Both are the same arithmetic: bit-identical states and impulses,
+// with contacts, limits, PD drives, an applied wrench and angular damping all in play
+TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    constexpr int kWorlds = 100;
+    Model model = replicated(quadruped(true), kWorlds, precision);
+    State initial = model.state();
+    const int nb = model.body_count / kWorlds, nq = model.joint_coord_count / kWorlds;
+    for (int w = 0; w < kWorlds; ++w) randomize_world(model, initial, w, w * nb, nb, w * nq, nq);
+    Control control = model.control();
+    for (int k = 6; k < model.joint_dof_count; k += 5) {
+      control.joint_target_ke[k] = 20;
+      control.joint_target_kd[k] = 0.5;
+      control.joint_target_pos[k] = 0.1;
+    }
+    State blocks = model.state(), stages = model.state();
+    blocks.assign(initial);
+    stages.assign(initial);
+    blocks.body_f[6 * 3 + 2] = stages.body_f[6 * 3 + 2] = 5;
+    SolverFeatherstoneSettings settings;
+    settings.angular_damping = 0.5;
+    SolverFeatherstone one_at_a_time(model, settings);
+    settings.profile_stages = true;
+    SolverFeatherstone in_turn(model, settings);
+    CollisionPipeline pipeline(model);
+    Contacts contacts_blocks = pipeline.contacts(), contacts_stages = pipeline.contacts();
+    int contacts_seen = 0;
+    for (int k = 0; k < 40; ++k) {
+      pipeline.collide(blocks, contacts_blocks);
+      pipeline.collide(stages, contacts_stages);
+      one_at_a_time.step(blocks, blocks, control, contacts_blocks, kDt);
+      in_turn.step(stages, stages, control, contacts_stages, kDt);
+      contacts_seen += contacts_blocks.contact_count;
+    }
+    EXPECT_GT(contacts_seen, 0);
+    EXPECT_EQ(in_turn.stage_seconds().steps, 40);
+    auto same = [](const std::vector<Scalar>& a, const std::vector<Scalar>& b) {
+      return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Scalar)) == 0;
+    };
+    EXPECT_TRUE(same(blocks.joint_q, stages.joint_q));
+    EXPECT_TRUE(same(blocks.joint_qd, stages.joint_qd));
+    EXPECT_TRUE(same(blocks.body_q, stages.body_q));
+    EXPECT_TRUE(same(blocks.body_qd, stages.body_qd));
+    EXPECT_TRUE(same(contacts_blocks.contact_impulse, contacts_stages.contact_impulse));
+  }
+}
+
 // solvers stepped on the threads of a user's own parallel loop (more threads than the machine's cores
 // here): each uses its scratch of thread 0 and steps as it does alone, bit for bit
 TEST(ArticulationBatches, SolversSteppedInsideAUsersParallelLoopStepAsAlone) {
