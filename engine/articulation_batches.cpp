@@ -10,6 +10,7 @@
 #include "engine/parallel.h"
 #include "kernels/batch.h"
 #include "kernels/batch_pgs.h"
+#include "kernels/stream.h"
 
 namespace novaphy {
 
@@ -49,9 +50,10 @@ class Batches final : public ArticulationBatches {
   struct Group {
     BatchTopology<T> topo;
     std::vector<Weld> welds;
-    std::vector<int> arts;           // per slot
-    std::vector<int> q_off, qd_off;  // per slot: the articulation's first coordinate and dof
-    std::vector<int> body;           // per slot: its link bodies, then its welded bodies
+    std::vector<int> arts;                 // per slot
+    std::vector<int> q_off, qd_off;        // per slot: the articulation's first coordinate and dof
+    std::vector<int> body;                 // per slot: its link bodies, then its welded bodies
+    std::vector<std::uint8_t> contiguous;  // per block: its worlds' bodies numbered one after another
     int world_count = 0;
     int blocks = 0;
     int param_size = 0;
@@ -123,6 +125,12 @@ class Batches final : public ArticulationBatches {
         for (int i = 0; i < art[a].link_count(); ++i) G.body.push_back(art[a].body(i));
         for (const WeldedBody& b : welded[a]) G.body.push_back(b.body);
       }
+      const int nb = G.bodies();
+      for (int b = 0; b < G.blocks; ++b) {
+        bool contiguous = true;
+        for (int k = 0; k < lanes_in(G, b) * nb; ++k) contiguous &= G.body[b * W * nb + k] == G.body[b * W * nb] + k;
+        G.contiguous.push_back(contiguous);
+      }
       const int nv = G.topo.dof_count;
       const ArticulationView& first = art[G.arts[0]];
       for (int i = 0; i < first.link_count(); ++i) {
@@ -162,6 +170,9 @@ class Batches final : public ArticulationBatches {
     for (const Group& G : groups_) packed = std::max<std::size_t>(packed, G.topo.packed_size());
     lane_factor_.assign(work_.size(), LaneFactor{-1, 0, std::vector<Scalar>(packed)});
     row_work_.resize(work_.size());
+    int most_bodies = 0;
+    for (const Group& G : groups_) most_bodies = std::max(most_bodies, G.bodies());
+    body_stage_.assign(work_.size(), std::vector<Scalar>(static_cast<size_t>(13) * most_bodies * W));
     for (size_t t = 0; t < work_.size(); ++t) {
       work_[t].resize(groups_.size());
       for (size_t g = 0; g < groups_.size(); ++g) {
@@ -221,51 +232,69 @@ class Batches final : public ArticulationBatches {
   }
 
   void store_bodies(State& out, int threads) override {
-    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      const BatchTopology<T>& topo = G.topo;
-      gather(&G.q_off[b * W], out.joint_q.data(), topo.coord_count, w.q.data());
-      gather(&G.qd_off[b * W], out.joint_qd.data(), topo.dof_count, w.qd.data());
-      V* o = &G.origin[3 * b];
-      V* S = G.block_S(b);
-      batch_kinematics(topo, w.q.data(), w, o);
-      batch_subspace(topo, w, o, S);
-      batch_velocity(topo, S, w.qd.data(), w);
-      const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
-      const int* body = &G.body[static_cast<size_t>(b) * W * nb];
-      // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
-      // every body's 13 numbers in lanes first, then each world's written out in order
-      V* x_all = w.bodies.data();
-      auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
-        V* x = x_all + 13 * k;
-        V c[3];
-        mat_vec(p, Q, com, o, c);
-        for (int m = 0; m < 3; ++m) x[m] = p[m];
-        for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
-        x[7] = v[3] + v[1] * c[2] - v[2] * c[1];
-        x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
-        x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
-        for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
-      };
-      const V* body_com = G.body_com(b);
-      for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
-      for (size_t k = 0; k < G.welds.size(); ++k) {
-        const Weld& weld = G.welds[k];
-        V p[3], Q[4], d[3];
-        const V* R = &w.R[9 * weld.link];
-        for (int m = 0; m < 3; ++m) d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
-        for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
-        quat_product(&w.Q[4 * weld.link], weld.q, Q);
-        put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
-      }
-      for (int l = 0; l < lanes; ++l)
-        for (int k = 0; k < nb; ++k) {
-          const V* x = x_all + 13 * k;
-          Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
-          Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
-          for (int m = 0; m < 7; ++m) q[m] = x[m][l];
-          for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
-        }
-    });
+    for_each_block(
+        threads,
+        [&](Group& G, int b, BatchWork<T>& w) {
+          const BatchTopology<T>& topo = G.topo;
+          gather(&G.q_off[b * W], out.joint_q.data(), topo.coord_count, w.q.data());
+          gather(&G.qd_off[b * W], out.joint_qd.data(), topo.dof_count, w.qd.data());
+          V* o = &G.origin[3 * b];
+          V* S = G.block_S(b);
+          batch_kinematics(topo, w.q.data(), w, o);
+          batch_subspace(topo, w, o, S);
+          batch_velocity(topo, S, w.qd.data(), w);
+          const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
+          const int* body = &G.body[static_cast<size_t>(b) * W * nb];
+          // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
+          // every body's 13 numbers in lanes first, then each world's written out in order
+          V* x_all = w.bodies.data();
+          auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
+            V* x = x_all + 13 * k;
+            V c[3];
+            mat_vec(p, Q, com, o, c);
+            for (int m = 0; m < 3; ++m) x[m] = p[m];
+            for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
+            x[7] = v[3] + v[1] * c[2] - v[2] * c[1];
+            x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
+            x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
+            for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
+          };
+          const V* body_com = G.body_com(b);
+          for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
+          for (size_t k = 0; k < G.welds.size(); ++k) {
+            const Weld& weld = G.welds[k];
+            V p[3], Q[4], d[3];
+            const V* R = &w.R[9 * weld.link];
+            for (int m = 0; m < 3; ++m)
+              d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
+            for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
+            quat_product(&w.Q[4 * weld.link], weld.q, Q);
+            put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
+          }
+          if (G.contiguous[b]) {
+            // the block's worlds' bodies follow each other: both arrays' spans staged, then streamed out
+            Scalar* q = body_stage_[omp_get_thread_num()].data();
+            Scalar* qd = q + 7 * nb * lanes;
+            for (int l = 0; l < lanes; ++l)
+              for (int k = 0; k < nb; ++k) {
+                const V* x = x_all + 13 * k;
+                for (int m = 0; m < 7; ++m) q[7 * (l * nb + k) + m] = x[m][l];
+                for (int m = 0; m < 6; ++m) qd[6 * (l * nb + k) + m] = x[7 + m][l];
+              }
+            stream_copy(q, out.body_q.data() + 7 * body[0], 7 * nb * lanes);
+            stream_copy(qd, out.body_qd.data() + 6 * body[0], 6 * nb * lanes);
+            return;
+          }
+          for (int l = 0; l < lanes; ++l)
+            for (int k = 0; k < nb; ++k) {
+              const V* x = x_all + 13 * k;
+              Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
+              Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
+              for (int m = 0; m < 7; ++m) q[m] = x[m][l];
+              for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
+            }
+        },
+        stream_fence);
   }
 
   void solve_mass(int a, Scalar* x) const override {
@@ -306,7 +335,9 @@ class Batches final : public ArticulationBatches {
     for (const Group& G : groups_)
       n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size()) * sizeof(V) +
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int);
+    for (const Group& G : groups_) n += G.contiguous.size();
     for (const LaneFactor& copy : lane_factor_) n += copy.L.size() * sizeof(Scalar);
+    for (const std::vector<Scalar>& stage : body_stage_) n += stage.size() * sizeof(Scalar);
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
@@ -327,7 +358,6 @@ class Batches final : public ArticulationBatches {
   // worlds in block b that are not padding
   static int lanes_in(const Group& G, int b) { return std::min(W, G.world_count - b * W); }
 
-  // out[k][l] = field[off[l] + k]
   void begin_dynamics(const DynamicsOptions& options, int threads) {
     for (Group& G : groups_) G.refactor = options.refactor || !G.factored;
     ++step_;  // factors copied out by solve_mass before are stale
@@ -639,6 +669,7 @@ class Batches final : public ArticulationBatches {
     }
   }
 
+  // out[k][l] = field[off[l] + k]
   static void gather(const int* off, const Scalar* field, int count, V* out) {
     for (int l = 0; l < W; ++l) {
       const Scalar* x = field + off[l];
@@ -713,14 +744,22 @@ class Batches final : public ArticulationBatches {
 
   template <typename F>
   void for_each_block(int threads, F&& f) {
+    for_each_block(threads, f, [] {});
+  }
+  // ... then done() once on each thread
+  template <typename F, typename Done>
+  void for_each_block(int threads, F&& f, Done&& done) {
     const int count = static_cast<int>(blocks_.size());
     // no more threads than blocks: a team with idle members still pays for waking them at every call
     const int n =
         std::min({threads > 0 ? threads : static_cast<int>(work_.size()), static_cast<int>(work_.size()), count});
-    parallel_for(n, count, [&](int k) {
-      Group& G = groups_[blocks_[k].first];
-      if (G.enabled) f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
-    });
+    parallel_for(
+        n, count,
+        [&](int k) {
+          Group& G = groups_[blocks_[k].first];
+          if (G.enabled) f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
+        },
+        done);
   }
 
   // a thread's rows of one block (solve_rows); grows to the most rows a block has had
@@ -773,6 +812,7 @@ class Batches final : public ArticulationBatches {
   std::vector<Group> groups_;
   std::vector<std::pair<int, int>> blocks_;      // (group, block) in order
   std::vector<Slot> slot_;                       // per articulation
+  std::vector<std::vector<Scalar>> body_stage_;  // per thread: a block's body_q and body_qd spans, staged
   int active_count_ = 0;                         // articulations in groups that are on
   std::vector<std::uint8_t> no_skip_;            // per articulation: 0, step()'s skip for solve_rows
   std::vector<std::vector<BatchWork<T>>> work_;  // per thread, per group

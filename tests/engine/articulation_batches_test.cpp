@@ -301,6 +301,32 @@ TEST(ArticulationBatches, OneThreadAndAllThreadsAreBitIdentical) {
   }
 }
 
+// worlds of two robots added in turn: a block's worlds' bodies are not numbered one after another, so
+// its body_q and body_qd are written a body at a time instead of streamed as one span; each world still
+// equals itself stepped alone (whose block streams), bit for bit
+TEST(ArticulationBatches, BlocksOfInterleavedWorldsWriteTheirBodiesAsContiguousOnesDo) {
+  constexpr int kWorlds = 20;
+  const ModelBuilder legs = quadruped(false), chain = scene("chain15.xml");
+  ModelBuilder batch(legs.gravity());
+  for (int w = 0; w < kWorlds; ++w) batch.add_builder(w % 2 == 0 ? legs : chain, Transform{}, w);
+  const Model model = batch.finalize();
+  State state = model.state();
+  step(model, state, 20, {}, false);
+  int body = 0;
+  for (int w = 0; w < kWorlds; ++w) {
+    ModelBuilder one(legs.gravity());
+    one.add_builder(w % 2 == 0 ? legs : chain);
+    const Model alone = one.finalize();
+    State s = alone.state();
+    step(alone, s, 20, {}, false);
+    ASSERT_EQ(std::memcmp(&state.body_q[7 * body], s.body_q.data(), s.body_q.size() * sizeof(Scalar)), 0)
+        << "world " << w;
+    ASSERT_EQ(std::memcmp(&state.body_qd[6 * body], s.body_qd.data(), s.body_qd.size() * sizeof(Scalar)), 0)
+        << "world " << w;
+    body += alone.body_count;
+  }
+}
+
 // a step with every articulation in a block and every row solved there runs each block's dynamics,
 // rows and integration in turn; with settings.profile_stages the solver times the stages over all
 // blocks one after another instead. Both are the same arithmetic: bit-identical states and impulses,
