@@ -215,29 +215,36 @@ class Batches final : public ArticulationBatches {
         threads, [&](Group& G, int b, BatchWork<T>& w) { rows_block(G, b, w, in, skip, bc, s, dt_, qd_io, impulse); });
   }
 
-  void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) override {
-    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) { integrate_block(G, b, w, in, qd, dt, q_out); });
+  void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
+                 int threads) override {
+    for_each_block(threads,
+                   [&](Group& G, int b, BatchWork<T>& w) { integrate_block(G, b, w, in, qd, dt, q_out, divergence); });
   }
 
   void step(const State& in, const Control& control, const Scalar* tau, Scalar dt, const DynamicsOptions& options,
             const BlockContacts* contacts, const RowSettings& rows, Scalar* qd, Scalar* impulse, Scalar* q_out,
-            int* factor_failure, int threads) override {
+            const Divergence& divergence, int* factor_failure, int threads) override {
     begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       dynamics_block(G, b, w, in, control, tau, dt, options, qd, nullptr, factor_failure);
       if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, qd, impulse);
-      integrate_block(G, b, w, in, qd, dt, q_out);
+      integrate_block(G, b, w, in, qd, dt, q_out, divergence);
     });
     end_dynamics();
   }
 
-  void store_bodies(State& out, int threads) override {
+  void store_bodies(const Scalar* q_in, const Scalar* qd_in, State& out, int threads) override {
     for_each_block(
         threads,
         [&](Group& G, int b, BatchWork<T>& w) {
           const BatchTopology<T>& topo = G.topo;
-          gather(&G.q_off[b * W], out.joint_q.data(), topo.coord_count, w.q.data());
-          gather(&G.qd_off[b * W], out.joint_qd.data(), topo.dof_count, w.qd.data());
+          for (int l = 0; l < lanes_in(G, b); ++l) {
+            const int q0 = G.q_off[b * W + l], qd0 = G.qd_off[b * W + l];
+            std::copy_n(q_in + q0, topo.coord_count, out.joint_q.begin() + q0);
+            std::copy_n(qd_in + qd0, topo.dof_count, out.joint_qd.begin() + qd0);
+          }
+          gather(&G.q_off[b * W], q_in, topo.coord_count, w.q.data());
+          gather(&G.qd_off[b * W], qd_in, topo.dof_count, w.qd.data());
           V* o = &G.origin[3 * b];
           V* S = G.block_S(b);
           batch_kinematics(topo, w.q.data(), w, o);
@@ -658,14 +665,26 @@ class Batches final : public ArticulationBatches {
   }
 
   // one block of integrate()
-  void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, const Scalar* qd, Scalar dt, Scalar* q_out) {
-    const int nq = G.topo.coord_count;
+  void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, const Scalar* qd, Scalar dt, Scalar* q_out,
+                       const Divergence& divergence) {
+    const int nq = G.topo.coord_count, nv = G.topo.dof_count;
     gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
-    gather(&G.qd_off[b * W], qd, G.topo.dof_count, w.qd.data());
+    gather(&G.qd_off[b * W], qd, nv, w.qd.data());
     batch_integrate(G.topo, w.q.data(), w.qd.data(), static_cast<T>(dt), w.q_next.data());
+    // the guard on the lanes: every entry finite (|x| <= max is false for inf and NaN), then the
+    // fastest dof against the speed in double, where the solver's guard compares
+    IntLanes<T> finite = ~IntLanes<T>{};
+    V fastest{};
+    for (int k = 0; k < nq; ++k) finite &= lane_abs<T>(w.q_next[k]) <= std::numeric_limits<T>::max();
+    for (int k = 0; k < nv; ++k) {
+      const V speed = lane_abs<T>(w.qd[k]);
+      finite &= speed <= std::numeric_limits<T>::max();
+      fastest = speed > fastest ? speed : fastest;
+    }
     for (int l = 0; l < lanes_in(G, b); ++l) {
       Scalar* x = q_out + G.q_off[b * W + l];
       for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
+      divergence.diverged[G.arts[b * W + l]] = !finite[l] || static_cast<Scalar>(fastest[l]) > divergence.speed;
     }
   }
 

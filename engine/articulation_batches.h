@@ -86,16 +86,23 @@ class ArticulationBatches {
                           const RowSettings& settings, Scalar dt, Scalar* qd, Scalar* impulse, int threads) = 0;
   // true where articulation a's rows are solved by solve_rows (given the same skip)
   virtual bool solves_rows(int a, const std::uint8_t* skip) const = 0;
-  // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations)
-  virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, int threads) = 0;
+  // the divergence guard's test: an articulation diverged where its q_out or qd is not finite or some
+  // |qd| exceeds speed; diverged[a] is set to it
+  struct Divergence {
+    Scalar speed = 0;
+    std::uint8_t* diverged = nullptr;  // [articulation]
+  };
+  // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations), and the guard
+  virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
+                         int threads) = 0;
   // dynamics, solve_rows (when `contacts` is given; no articulation skipped) and integrate of every active
   // articulation, a block at a time so that its data stay in cache between the three: the same
   // arithmetic as calling them in turn, for a step that has no rows on the solver's scalar path
   virtual void step(const State& in, const Control& control, const Scalar* tau, Scalar dt,
                     const DynamicsOptions& options, const BlockContacts* contacts, const RowSettings& rows, Scalar* qd,
-                    Scalar* impulse, Scalar* q_out, int* factor_failure, int threads) = 0;
-  // body_q / body_qd of active articulations from out.joint_q / out.joint_qd
-  virtual void store_bodies(State& out, int threads) = 0;
+                    Scalar* impulse, Scalar* q_out, const Divergence& divergence, int* factor_failure, int threads) = 0;
+  // out.joint_q = q, out.joint_qd = qd, and body_q / body_qd from them, for active articulations
+  virtual void store_bodies(const Scalar* q, const Scalar* qd, State& out, int threads) = 0;
   // x = M^-1 x with the last factor of articulation a
   virtual void solve_mass(int a, Scalar* x) const = 0;
   // J += sign * (row of d . velocity of the point p riding on `link`), over articulation a's dofs

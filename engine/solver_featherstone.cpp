@@ -227,7 +227,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     qd_in_ = in.joint_qd.data();
     std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
     batches_->step(in, control, control_forces(control), dt, dynamics_options(refactor, dt),
-                   block_rows ? &block : nullptr, rows, qd_.data(), limit_impulse_.data(), q_next_.data(),
+                   block_rows ? &block : nullptr, rows, qd_.data(), limit_impulse_.data(), q_next_.data(), divergence(),
                    factor_failure_.data(), thread_count());
     std::fill(factored_batch_.begin(), factored_batch_.end(), 1);
     check_factors();
@@ -266,6 +266,13 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   check_finite_state(in, &wrenches_, thread_count());
   check_finite_control(control, &drives_, thread_count());
+}
+
+ArticulationBatches::Divergence SolverFeatherstone::divergence() {
+  ArticulationBatches::Divergence d;
+  d.speed = settings.divergence_speed;
+  d.diverged = diverged_.data();
+  return d;
 }
 
 ArticulationBatches::DynamicsOptions SolverFeatherstone::dynamics_options(bool refactor, Scalar dt) const {
@@ -664,15 +671,19 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
 void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   // divergence guard: an articulation whose state went non-finite or beyond divergence_speed is
   // flagged, and raised, kept as it was (Flag) or reset to the model's initial state (Reset)
-  if (batch_step_ && !fused_step_) batches_->integrate(in, qd_.data(), dt, q_next_.data(), thread_count());
+  // (the blocks integrate and test their own articulations)
+  if (batch_step_ && !fused_step_)
+    batches_->integrate(in, qd_.data(), dt, q_next_.data(), divergence(), thread_count());
   for_each_articulation([&](int a) {
     const ArticulationView& art = art_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();
-    if (!on_batch(a)) integrate_joints(art, in.joint_q.data() + q0, qd_.data() + qd0, dt, q_next_.data() + q0);
-    const auto q = q_next_.segment(q0, nq);
-    const auto qd = qd_.segment(qd0, nv);
-    diverged_[a] =
-        !q.allFinite() || !qd.allFinite() || (nv > 0 && qd.cwiseAbs().maxCoeff() > settings.divergence_speed);
+    if (!on_batch(a)) {
+      integrate_joints(art, in.joint_q.data() + q0, qd_.data() + qd0, dt, q_next_.data() + q0);
+      const auto q = q_next_.segment(q0, nq);
+      const auto qd = qd_.segment(qd0, nv);
+      diverged_[a] =
+          !q.allFinite() || !qd.allFinite() || (nv > 0 && qd.cwiseAbs().maxCoeff() > settings.divergence_speed);
+    }
     if (!diverged_[a] || settings.on_divergence == DivergencePolicy::Raise) return;
     const bool keep = settings.on_divergence == DivergencePolicy::Flag;  // the input state is finite
     for (int k = 0; k < nq; ++k) q_next_[q0 + k] = keep ? in.joint_q[q0 + k] : model_.joint_q0[q0 + k];
@@ -683,20 +694,14 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
       if (diverged_[a])
         fail("step diverged in articulation ", a, " (a non-finite state or a speed beyond ", settings.divergence_speed,
              "; dt ", dt, " too large for the model's stiffness or forces?)");
-  if (std::min<std::size_t>(thread_count(), art_.size()) > 1) {
-    for_each_articulation([&](int a) {
-      const ArticulationView& art = art_[a];
-      std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
-      std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
-    });
-  } else {
-    std::copy(q_next_.data(), q_next_.data() + q_next_.size(), out.joint_q.begin());
-    std::copy(qd_.data(), qd_.data() + qd_.size(), out.joint_qd.begin());
-  }
   if (&out != &in) out.body_f = in.body_f;
-  if (batch_step_) batches_->store_bodies(out, thread_count());
+  // (the blocks copy their own articulations' coordinates out with their bodies)
+  if (batch_step_) batches_->store_bodies(q_next_.data(), qd_.data(), out, thread_count());
   for_each_articulation([&](int a) {
     if (on_batch(a)) return;
+    const ArticulationView& art = art_[a];
+    std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
+    std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
     ArticulationScratch& s = scratch(a);
     forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), s);
     forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), s);

@@ -116,6 +116,8 @@ class SolverFeatherstone {
   // qd_ = the velocity before constraints, H factored (when `refactor`) or its factor reused
   void unconstrained_velocity(const State& in, const Control& control, Scalar dt, bool refactor);
   ArticulationBatches::DynamicsOptions dynamics_options(bool refactor, Scalar dt) const;
+  // the blocks' divergence guard: settings.divergence_speed, into diverged_
+  ArticulationBatches::Divergence divergence();
   // the control's joint forces with the actuators' added (rhs_, or joint_f itself when nothing adds)
   const Scalar* control_forces(const Control& control);
   // throws naming the first articulation whose factor failed this step
