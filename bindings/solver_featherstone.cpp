@@ -19,7 +19,7 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("cfm", &Settings::cfm, "Constraint force mixing: softens every constraint row.")
       .def_readwrite("pgs_tolerance", &Settings::pgs_tolerance,
                      "Stop the PGS sweeps once one sweep changed no row's velocity by more than this (m/s, "
-                     "rad/s), per world; 0: all num_iterations sweeps.")
+                     "rad/s), per world; 0: once one sweep changed no impulse at all (a fixed point).")
       .def_readwrite("warmstarting_factor", &Settings::warmstarting_factor, "Share of last step's impulses reused.")
       .def_readwrite("restitution_threshold", &Settings::restitution_threshold, "Approach speed below which no bounce.")
       .def_readwrite("use_warmstarting", &Settings::use_warmstarting)

@@ -23,9 +23,10 @@ namespace novaphy {
 enum class DivergencePolicy : int { Raise = 0, Flag = 1, Reset = 2 };
 
 struct SolverFeatherstoneSettings {
-  int num_iterations = 20;  // PGS sweeps (at most, with a pgs_tolerance)
+  int num_iterations = 20;  // PGS sweeps, at most
   // the sweeps stop once one sweep changed no row's own velocity by more than this (m/s, rad/s),
-  // per world (a world's result does not depend on its block-mates); 0: every sweep runs
+  // per world (a world's result does not depend on its block-mates); 0: once one sweep changed no
+  // impulse at all (a fixed point, which the sweeps left would repeat bit for bit)
   Scalar pgs_tolerance = 0;
   Scalar linear_slop = 0.001;          // penetration (m) left alone by the position correction
   Scalar erp = 0.2;                    // fraction of the penetration beyond the slop removed per step

@@ -64,19 +64,23 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   };
   auto step = [&](int r) { return -(velocity(r) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
   // a lane sweeps while some row's impulse in it moved by more than tolerance / (J M^-1 J^T) in the
-  // sweep before: a lane that stopped keeps its bits, as if alone in its block
+  // sweep before (with tolerance 0: moved at all; a sweep that moves none is a fixed point, which
+  // every further sweep would repeat bit for bit). A lane that stopped keeps its bits, as if alone in
+  // its block; so does a lane whose impulse did not change (no z * 0 added to its velocities), and a
+  // row that changed no lane's impulse is not applied
   const T tolerance = static_cast<T>(settings.tolerance);
   auto moved = [&](int r, const V<T>& change) { return lane_abs<T>(change) > tolerance * rows.inv_mass[r]; };
   M<T> live = ~M<T>{};
   int it = 0;
   for (; it < settings.iterations && any_lane<T>(live); ++it) {
-    M<T> moving = tolerance == 0 ? live : M<T>{};
+    M<T> moving{};
     for (int r = 0; r < rows.count; ++r) {
       // a lane gone non-finite keeps its impulse, so NaN does not spread through the rows
       if (rows.kind[r] == RowKind::Unilateral) {
         const V<T> sum = lambda[r] + step(r);
         const V<T> next = sum > 0 ? sum : V<T>{};
-        const M<T> on = live & rows.active[r] & finite<T>(next);
+        const M<T> on = live & rows.active[r] & finite<T>(next) & (next != lambda[r]);
+        if (!any_lane<T>(on)) continue;
         apply<T>(z(r), next - lambda[r], on, n, qd);
         moving |= on & moved(r, next - lambda[r]);
         lambda[r] = on ? next : lambda[r];
@@ -92,11 +96,12 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
       const V<T> scale = norm > limit ? limit / norm : V<T>{} + 1;
       const V<T> new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
       const M<T> on = live & rows.active[r] & finite<T>(new1) & finite<T>(new2);
-      apply<T>(z(r), new1 - lambda[r], on, n, qd);
-      apply<T>(z(r2), new2 - lambda[r2], on, n, qd);
-      moving |= on & (moved(r, new1 - lambda[r]) | moved(r2, new2 - lambda[r2]));
-      lambda[r] = on ? new1 : lambda[r];
-      lambda[r2] = on ? new2 : lambda[r2];
+      const M<T> on1 = on & (new1 != lambda[r]), on2 = on & (new2 != lambda[r2]);
+      if (any_lane<T>(on1)) apply<T>(z(r), new1 - lambda[r], on1, n, qd);
+      if (any_lane<T>(on2)) apply<T>(z(r2), new2 - lambda[r2], on2, n, qd);
+      moving |= (on1 & moved(r, new1 - lambda[r])) | (on2 & moved(r2, new2 - lambda[r2]));
+      lambda[r] = on1 ? new1 : lambda[r];
+      lambda[r2] = on2 ? new2 : lambda[r2];
       ++r;  // the second tangent
     }
     live = moving;

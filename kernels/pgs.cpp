@@ -40,19 +40,21 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
   auto step = [&](const PgsRow& row) {
     return -(row_velocity(row, J, qd) - row.target + settings.cfm * row.lambda) * row.inv_mass;
   };
-  // a row whose impulse moved by more than tolerance / (J M^-1 J^T) keeps the sweeps going
+  // a row whose impulse moved by more than tolerance / (J M^-1 J^T) keeps the sweeps going (with
+  // tolerance 0: moved at all; a sweep that moves none is a fixed point, which every further sweep
+  // would repeat bit for bit); an impulse that did not change is not applied (no m * 0 added)
   auto moved = [&](const PgsRow& row, Scalar change) { return std::abs(change) > settings.tolerance * row.inv_mass; };
   int it = 0;
   bool moving = true;
   for (; it < settings.iterations && moving; ++it) {
-    moving = settings.tolerance == 0;
+    moving = false;
     for (int k = 0; k < count; ++k) {
       const int r = order[k];
       PgsRow& row = rows[r];
       // a row touching a diverged articulation yields no impulse, so NaN does not spread through contacts
       if (row.kind == RowKind::Unilateral) {
         const Scalar lambda = std::max<Scalar>(0, row.lambda + step(row));
-        if (!std::isfinite(lambda)) continue;
+        if (!std::isfinite(lambda) || lambda == row.lambda) continue;
         apply_impulse(row, MinvJT, lambda - row.lambda, qd);
         moving |= moved(row, lambda - row.lambda);
         row.lambda = lambda;
@@ -70,8 +72,8 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
       const Scalar new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
       ++k;  // the second tangent
       if (!std::isfinite(new1) || !std::isfinite(new2)) continue;
-      apply_impulse(row, MinvJT, new1 - row.lambda, qd);
-      apply_impulse(second, MinvJT, new2 - second.lambda, qd);
+      if (new1 != row.lambda) apply_impulse(row, MinvJT, new1 - row.lambda, qd);
+      if (new2 != second.lambda) apply_impulse(second, MinvJT, new2 - second.lambda, qd);
       moving |= moved(row, new1 - row.lambda) || moved(second, new2 - second.lambda);
       row.lambda = new1;
       second.lambda = new2;

@@ -29,7 +29,8 @@ struct PgsSettings {
   Scalar cfm = 0;
   Scalar friction_smoothing = 1;  // 0: box friction per tangent, 1: circular cone, between: blend
   // the sweeps stop early once one sweep moved no row's impulse by more than tolerance / (J M^-1 J^T),
-  // i.e. no row's own velocity by more than tolerance (m/s, rad/s); 0: every sweep runs
+  // i.e. no row's own velocity by more than tolerance (m/s, rad/s); 0: once one sweep moved no impulse
+  // at all (a fixed point: the sweeps left would repeat it bit for bit)
   Scalar tolerance = 0;
 };
 

@@ -195,6 +195,56 @@ void expect_absent_rows_change_no_bit(double tolerance) {
   for (int r = 0; r < kRows; ++r) EXPECT_EQ(std::memcmp(&with.lambda[r][1], &without.lambda[r][1], sizeof(T)), 0);
 }
 
+// with tolerance 0 the sweeps stop after the first that changes no impulse in a lane (a fixed point,
+// which PGS reaches where rows separate: their impulses clamp to zero and stay there; rows that push
+// mostly keep changing in the last bit). That sweep changed nothing, so stopping before it by the
+// iteration cap gives the same bits. Here every row separates (targets far below any velocity) from
+// warm starts: the first sweep clamps every impulse to zero, the second changes nothing
+template <typename T>
+void expect_a_fixed_point_ends_the_sweeps() {
+  std::mt19937 rng(3);
+  Problem<T> start(rng, some_absent);
+  for (Lanes<T>& target : start.target) target = Lanes<T>{} - 100;
+  PgsSettings settings;
+  settings.cfm = 1e-6;
+  Problem<T> a = start, b = start;
+  std::vector<Lanes<T>> qd_a = start.qd, qd_b = start.qd;
+  EXPECT_EQ(batch_pgs_solve(a.rows(kRows), settings, qd_a.data()), 2);
+  settings.iterations = 1;
+  batch_pgs_solve(b.rows(kRows), settings, qd_b.data());
+  EXPECT_EQ(std::memcmp(qd_a.data(), qd_b.data(), kDofs * sizeof(Lanes<T>)), 0);
+  EXPECT_EQ(std::memcmp(a.lambda.data(), b.lambda.data(), kRows * sizeof(Lanes<T>)), 0);
+  EXPECT_NE(std::memcmp(qd_a.data(), start.qd.data(), kDofs * sizeof(Lanes<T>)), 0);  // the first sweep did act
+}
+TEST(BatchPgs, AFixedPointEndsTheSweepsFloat64) { expect_a_fixed_point_ends_the_sweeps<double>(); }
+TEST(BatchPgs, AFixedPointEndsTheSweepsFloat32) { expect_a_fixed_point_ends_the_sweeps<float>(); }
+
+// the scalar twin likewise: two coupled limit-like rows over three dofs, separating from warm starts
+TEST(Pgs, AFixedPointEndsTheSweeps) {
+  const std::vector<Scalar> J = {1, 0.5, 0, 0, 1, -0.3}, z = {0.8, 0.2, -0.1, 0.1, 0.7, -0.4};
+  std::vector<PgsRow> start(2);
+  for (int r = 0; r < 2; ++r) {
+    start[r].dof_count[0] = 3;
+    start[r].pool[0] = 3 * r;
+    start[r].target = -100;
+    start[r].lambda = 0.5;
+    Scalar W = 0;
+    for (int k = 0; k < 3; ++k) W += J[3 * r + k] * z[3 * r + k];
+    start[r].inv_mass = 1 / W;
+  }
+  const int order[] = {0, 1};
+  PgsSettings settings;
+  std::vector<PgsRow> a = start, b = start;
+  const std::vector<Scalar> qd = {0.1, -0.2, 0.3};
+  std::vector<Scalar> qd_a = qd, qd_b = qd;
+  EXPECT_EQ(pgs_solve(a, order, 2, J, z, settings, qd_a.data()), 2);
+  settings.iterations = 1;
+  pgs_solve(b, order, 2, J, z, settings, qd_b.data());
+  EXPECT_EQ(std::memcmp(qd_a.data(), qd_b.data(), 3 * sizeof(Scalar)), 0);
+  for (int r = 0; r < 2; ++r) EXPECT_EQ(a[r].lambda, 0);
+  EXPECT_NE(qd_a, qd);
+}
+
 // the lanes' contact frames against contact_tangents in double: random unit normals and the axes,
 // signed zeros included; each frame orthonormal with t1 x t2 = n
 template <typename T>
