@@ -44,6 +44,9 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("use_batch_kernels", &Settings::use_batch_kernels,
                      "Step articulations that share joints, frames and axes (replicated worlds) a SIMD block of "
                      "worlds at a time, in the model's precision; off: the scalar kernels for all.")
+      .def_readwrite("stream_body_output_above", &Settings::stream_body_output_above,
+                     "Write body_q and body_qd around the caches (non-temporal stores) when the step's data, the "
+                     "state's arrays and the solver's, exceed this many bytes (0: always).")
       .def_readwrite("profile_stages", &Settings::profile_stages,
                      "Accumulate each stage's wall time into solver.stage_seconds; the batched blocks then run each "
                      "stage over all blocks in turn rather than a block's whole step at a time (same arithmetic).")

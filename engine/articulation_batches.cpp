@@ -233,7 +233,7 @@ class Batches final : public ArticulationBatches {
     end_dynamics();
   }
 
-  void store_bodies(const Scalar* q_in, const Scalar* qd_in, State& out, int threads) override {
+  void store_bodies(const Scalar* q_in, const Scalar* qd_in, State& out, bool stream, int threads) override {
     for_each_block(
         threads,
         [&](Group& G, int b, BatchWork<T>& w) {
@@ -278,7 +278,7 @@ class Batches final : public ArticulationBatches {
             quat_product(&w.Q[4 * weld.link], weld.q, Q);
             put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
           }
-          if (G.contiguous[b]) {
+          if (stream && G.contiguous[b]) {
             // the block's worlds' bodies follow each other: both arrays' spans staged, then streamed out
             Scalar* q = body_stage_[omp_get_thread_num()].data();
             Scalar* qd = q + 7 * nb * lanes;

@@ -101,8 +101,9 @@ class ArticulationBatches {
   virtual void step(const State& in, const Control& control, const Scalar* tau, Scalar dt,
                     const DynamicsOptions& options, const BlockContacts* contacts, const RowSettings& rows, Scalar* qd,
                     Scalar* impulse, Scalar* q_out, const Divergence& divergence, int* factor_failure, int threads) = 0;
-  // out.joint_q = q, out.joint_qd = qd, and body_q / body_qd from them, for active articulations
-  virtual void store_bodies(const Scalar* q, const Scalar* qd, State& out, int threads) = 0;
+  // out.joint_q = q, out.joint_qd = qd, and body_q / body_qd from them, for active articulations; with
+  // `stream`, the bodies of a block whose worlds' bodies follow each other are written around the caches
+  virtual void store_bodies(const Scalar* q, const Scalar* qd, State& out, bool stream, int threads) = 0;
   // x = M^-1 x with the last factor of articulation a
   virtual void solve_mass(int a, Scalar* x) const = 0;
   // J += sign * (row of d . velocity of the point p riding on `link`), over articulation a's dofs

@@ -37,6 +37,8 @@ void SolverFeatherstoneSettings::check() const {
   constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
   if (num_iterations < 0) fail("settings.num_iterations must be >= 0, got ", num_iterations);
   if (num_threads < 0) fail("settings.num_threads must be >= 0, got ", num_threads);
+  if (stream_body_output_above < 0)
+    fail("settings.stream_body_output_above must be >= 0 bytes, got ", stream_body_output_above);
   if (aba_min_dofs < 0) fail("settings.aba_min_dofs must be >= 0, got ", aba_min_dofs);
   check_range("coriolis_implicitness", coriolis_implicitness, 0, 1);
   if (update_mass_matrix_interval < 1)
@@ -139,6 +141,9 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     batches_ = ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
   limit_impulse_.assign(2 * model.joint_dof_count, 0);
+  step_bytes_ = static_cast<std::int64_t>(memory_bytes()) +
+                static_cast<std::int64_t>(sizeof(Scalar)) * (model.joint_coord_count + model.joint_dof_count +
+                                                             (7 + 6 + 6) * static_cast<std::int64_t>(model.body_count));
 }
 
 JointSupportMatrix SolverFeatherstone::joint_support() const {
@@ -696,7 +701,10 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
              "; dt ", dt, " too large for the model's stiffness or forces?)");
   if (&out != &in) out.body_f = in.body_f;
   // (the blocks copy their own articulations' coordinates out with their bodies)
-  if (batch_step_) batches_->store_bodies(q_next_.data(), qd_.data(), out, thread_count());
+  if (batch_step_) {
+    const bool stream = step_bytes_ > settings.stream_body_output_above;
+    batches_->store_bodies(q_next_.data(), qd_.data(), out, stream, thread_count());
+  }
   for_each_articulation([&](int a) {
     if (on_batch(a)) return;
     const ArticulationView& art = art_[a];

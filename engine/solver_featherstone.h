@@ -65,6 +65,12 @@ struct SolverFeatherstoneSettings {
   // from the model's joint_q0 at rest; Raise: step throws and writes nothing
   DivergencePolicy on_divergence = DivergencePolicy::Flag;
   Scalar divergence_speed = 1e6;  // |qd| beyond this (m/s, rad/s) counts as diverged
+  // the batched blocks write body_q and body_qd around the caches (non-temporal stores, which do not
+  // read in the lines they overwrite) when the step's data, the state's arrays and the solver's, exceed
+  // this many bytes; below it the output stays in cache for whatever reads it next (0: always). The
+  // default is where streaming started to pay on the development machine (1 MB of L2 a core, 32 MB of
+  // L3 shared): 2048 quadrupeds (9 MB) stepped faster streamed, 1024 (5 MB) slower
+  std::int64_t stream_body_output_above = std::int64_t{8} << 20;
 
   // throws Error naming the first setting out of range
   void check() const;
@@ -172,6 +178,7 @@ class SolverFeatherstone {
   bool all_on_batch_ = false;          // this step: every articulation with dofs in a block that is on
   bool fused_step_ = false;            // this step: the blocks step a block at a time (ArticulationBatches::step)
   int batchable_count_ = 0;            // articulations with dofs
+  std::int64_t step_bytes_ = 0;        // what a step touches: the solver's memory when made and the state's arrays
   bool wrenches_ = false;              // the step's input has a nonzero body_f
   bool drives_ = false;                // the step's control has a nonzero PD gain
   std::vector<std::uint8_t> touched_;  // per articulation: 1 where a contact joins it to another moving one

@@ -310,6 +310,10 @@ TEST(SolverFeatherstoneErrors, BadStepArguments) {
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
                        "settings.aba_min_dofs must be >= 0, got -1");
   scene.solver.settings = {};
+  scene.solver.settings.stream_body_output_above = -1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.stream_body_output_above must be >= 0 bytes, got -1");
+  scene.solver.settings = {};
   scene.solver.settings.coriolis_implicitness = 1.5;
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
                        "settings.coriolis_implicitness must be in [0, 1], got 1.5");
