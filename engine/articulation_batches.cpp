@@ -172,7 +172,13 @@ class Batches final : public ArticulationBatches {
     row_work_.resize(work_.size());
     int most_bodies = 0;
     for (const Group& G : groups_) most_bodies = std::max(most_bodies, G.bodies());
-    body_stage_.assign(work_.size(), std::vector<Scalar>(static_cast<size_t>(13) * most_bodies * W));
+    int most_dofs = 0;
+    for (const Group& G : groups_) most_dofs = std::max(most_dofs, G.topo.dof_count);
+    output_.resize(work_.size());
+    for (Output& out : output_) {
+      out.stage.resize(static_cast<size_t>(13) * most_bodies * W);
+      out.S.resize(static_cast<size_t>(6) * most_dofs);
+    }
     for (size_t t = 0; t < work_.size(); ++t) {
       work_[t].resize(groups_.size());
       for (size_t g = 0; g < groups_.size(); ++g) {
@@ -245,8 +251,12 @@ class Batches final : public ArticulationBatches {
           }
           gather(&G.q_off[b * W], q_in, topo.coord_count, w.q.data());
           gather(&G.qd_off[b * W], qd_in, topo.dof_count, w.qd.data());
-          V* o = &G.origin[3 * b];
-          V* S = G.block_S(b);
+          // the kinematics of the new coordinates in the thread's scratch: the block's own S and o stay
+          // those of the step (the next one computes its own)
+          Output& scratch = output_[omp_get_thread_num()];
+          std::vector<Scalar>& out_stage = scratch.stage;
+          V* o = scratch.origin;
+          V* S = scratch.S.data();
           batch_kinematics(topo, w.q.data(), w, o);
           batch_subspace(topo, w, o, S);
           batch_velocity(topo, S, w.qd.data(), w);
@@ -280,7 +290,7 @@ class Batches final : public ArticulationBatches {
           }
           if (stream && G.contiguous[b]) {
             // the block's worlds' bodies follow each other: both arrays' spans staged, then streamed out
-            Scalar* q = body_stage_[omp_get_thread_num()].data();
+            Scalar* q = out_stage.data();
             Scalar* qd = q + 7 * nb * lanes;
             for (int l = 0; l < lanes; ++l)
               for (int k = 0; k < nb; ++k) {
@@ -344,7 +354,7 @@ class Batches final : public ArticulationBatches {
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int);
     for (const Group& G : groups_) n += G.contiguous.size();
     for (const LaneFactor& copy : lane_factor_) n += copy.L.size() * sizeof(Scalar);
-    for (const std::vector<Scalar>& stage : body_stage_) n += stage.size() * sizeof(Scalar);
+    for (const Output& out : output_) n += out.stage.size() * sizeof(Scalar) + out.S.size() * sizeof(V);
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
@@ -829,9 +839,15 @@ class Batches final : public ArticulationBatches {
   std::uint64_t step_ = 0;  // dynamics calls so far
   mutable std::vector<LaneFactor> lane_factor_;
   std::vector<Group> groups_;
-  std::vector<std::pair<int, int>> blocks_;      // (group, block) in order
-  std::vector<Slot> slot_;                       // per articulation
-  std::vector<std::vector<Scalar>> body_stage_;  // per thread: a block's body_q and body_qd spans, staged
+  std::vector<std::pair<int, int>> blocks_;  // (group, block) in order
+  std::vector<Slot> slot_;                   // per articulation
+  // per thread, store_bodies' scratch: a block's body_q and body_qd spans staged, its S and o
+  struct Output {
+    std::vector<Scalar> stage;
+    std::vector<V> S;
+    V origin[3];
+  };
+  std::vector<Output> output_;
   int active_count_ = 0;                         // articulations in groups that are on
   std::vector<std::uint8_t> no_skip_;            // per articulation: 0, step()'s skip for solve_rows
   std::vector<std::vector<BatchWork<T>>> work_;  // per thread, per group
