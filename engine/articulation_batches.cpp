@@ -178,6 +178,7 @@ class Batches final : public ArticulationBatches {
     for (Output& out : output_) {
       out.stage.resize(static_cast<size_t>(13) * most_bodies * W);
       out.S.resize(static_cast<size_t>(6) * most_dofs);
+      out.H.resize(packed);
     }
     for (size_t t = 0; t < work_.size(); ++t) {
       work_[t].resize(groups_.size());
@@ -208,7 +209,7 @@ class Batches final : public ArticulationBatches {
                 Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) override {
     begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      dynamics_block(G, b, w, in, control, tau, dt_, options, qd_out, qdd_out, factor_failure);
+      dynamics_block(G, b, w, in, control, tau, dt_, options, G.block_H(b), qd_out, qdd_out, factor_failure);
     });
     end_dynamics();
   }
@@ -217,8 +218,9 @@ class Batches final : public ArticulationBatches {
 
   void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& bc, const RowSettings& s, Scalar dt_,
                   Scalar* qd_io, Scalar* impulse, int threads) override {
-    for_each_block(
-        threads, [&](Group& G, int b, BatchWork<T>& w) { rows_block(G, b, w, in, skip, bc, s, dt_, qd_io, impulse); });
+    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
+      rows_block(G, b, w, in, skip, bc, s, dt_, G.block_H(b), qd_io, impulse);
+    });
   }
 
   void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
@@ -232,11 +234,14 @@ class Batches final : public ArticulationBatches {
             const Divergence& divergence, int* factor_failure, int threads) override {
     begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      dynamics_block(G, b, w, in, control, tau, dt, options, qd, nullptr, factor_failure);
-      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, qd, impulse);
+      // a factor no later step reuses is made in the thread's scratch, not written out to the block
+      V* H = !options.keep_factor && G.refactor ? output_[omp_get_thread_num()].H.data() : G.block_H(b);
+      dynamics_block(G, b, w, in, control, tau, dt, options, H, qd, nullptr, factor_failure);
+      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, qd, impulse);
       integrate_block(G, b, w, in, qd, dt, q_out, divergence);
     });
-    end_dynamics();
+    for (Group& G : groups_)
+      if (G.enabled) G.factored = options.keep_factor || !G.refactor;
   }
 
   void store_bodies(const Scalar* q_in, const Scalar* qd_in, State& out, bool stream, int threads) override {
@@ -354,7 +359,8 @@ class Batches final : public ArticulationBatches {
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int);
     for (const Group& G : groups_) n += G.contiguous.size();
     for (const LaneFactor& copy : lane_factor_) n += copy.L.size() * sizeof(Scalar);
-    for (const Output& out : output_) n += out.stage.size() * sizeof(Scalar) + out.S.size() * sizeof(V);
+    for (const Output& out : output_)
+      n += out.stage.size() * sizeof(Scalar) + (out.S.size() + out.H.size()) * sizeof(V);
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
@@ -389,7 +395,7 @@ class Batches final : public ArticulationBatches {
 
   // one block of dynamics(): FK, bias, H and its factor, the unconstrained velocity into qd_out
   void dynamics_block(Group& G, int b, BatchWork<T>& w, const State& in, const Control& control, const Scalar* tau,
-                      Scalar dt_, const DynamicsOptions& options, Scalar* qd_out, Scalar* qdd_out,
+                      Scalar dt_, const DynamicsOptions& options, V* H, Scalar* qd_out, Scalar* qdd_out,
                       int* factor_failure) {
     const T dt = static_cast<T>(dt_);
     const BatchTopology<T>& topo = G.topo;
@@ -434,7 +440,6 @@ class Batches final : public ArticulationBatches {
       w.diag[k] += dt * dt * (P.stiffness[k] + ke[k]);
     }
 
-    V* H = G.block_H(b);
     IntLanes<T> bad = IntLanes<T>{} - 1;
     if (G.refactor) {
       if (options.tile_gemm)
@@ -466,7 +471,7 @@ class Batches final : public ArticulationBatches {
 
   // one block of solve_rows()
   void rows_block(Group& G, int b, BatchWork<T>& w, const State& in, const std::uint8_t* skip, const BlockContacts& bc,
-                  const RowSettings& s, Scalar dt_, Scalar* qd_io, Scalar* impulse) {
+                  const RowSettings& s, Scalar dt_, const V* H, Scalar* qd_io, Scalar* impulse) {
     const BatchTopology<T>& topo = G.topo;
     const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count, lanes = lanes_in(G, b);
     const T dt = static_cast<T>(dt_);
@@ -487,7 +492,6 @@ class Batches final : public ArticulationBatches {
     RowWork& R = row_work_[omp_get_thread_num()];
     R.resize(2 * nl + 3 * slots, nv, slots);
     gather(qd_off, qd_io, nv, w.qd.data());
-    const V* H = G.block_H(b);
     int rows = 0;
     auto add_row = [&](RowKind kind, const IntLanes<T>& on, const V& target, const V& warm) {
       const int r = rows++;
@@ -841,10 +845,11 @@ class Batches final : public ArticulationBatches {
   std::vector<Group> groups_;
   std::vector<std::pair<int, int>> blocks_;  // (group, block) in order
   std::vector<Slot> slot_;                   // per articulation
-  // per thread, store_bodies' scratch: a block's body_q and body_qd spans staged, its S and o
+  // per thread: store_bodies' scratch (a block's body_q and body_qd spans staged, its S and o) and the
+  // factor step() makes where no later step reuses it
   struct Output {
     std::vector<Scalar> stage;
-    std::vector<V> S;
+    std::vector<V> S, H;
     V origin[3];
   };
   std::vector<Output> output_;

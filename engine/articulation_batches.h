@@ -51,6 +51,10 @@ class ArticulationBatches {
     bool wrenches = false;   // in.body_f has a nonzero entry
     bool drives = false;     // the control has a nonzero PD gain
     Scalar keep = 1;         // angular damping: rotational dofs' unconstrained velocities are scaled by it
+    // H and its factor kept in the blocks for later steps (update_mass_matrix_interval > 1); without,
+    // step() factors in thread scratch and the next step refactors (dynamics() always keeps them: the
+    // solver's scalar rows read them)
+    bool keep_factor = true;
   };
   // unconstrained velocity qd_out = qd + dt M^-1 (tau - bias - springs - dampers - drives) with M =
   // H + dt D + dt^2 K, for every active articulation; tau [dof] = control forces. qdd_out (when

@@ -194,9 +194,13 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
     total += std::chrono::duration<double>(now - mark).count();
     mark = now;
   };
-  const bool refactor = steps_since_factor_ % settings.update_mass_matrix_interval == 0 || dt != factored_dt_;
+  // (a step with update_mass_matrix_interval 1 keeps no factor for the next: the blocks may make it
+  // in scratch)
+  const bool refactor =
+      steps_since_factor_ % settings.update_mass_matrix_interval == 0 || dt != factored_dt_ || !factor_kept_;
   steps_since_factor_ = refactor ? 1 : steps_since_factor_ + 1;
   if (refactor) factored_dt_ = dt;
+  factor_kept_ = settings.update_mass_matrix_interval > 1;
   batch_step_ = batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0;
   if (batches_)
     batches_->enable(batch_step_ ? settings.aba_min_dofs : 0);  // off: factors go stale while the scalar kernels step
@@ -288,6 +292,7 @@ ArticulationBatches::DynamicsOptions SolverFeatherstone::dynamics_options(bool r
   options.wrenches = wrenches_;
   options.drives = drives_;
   options.keep = angular_keep(dt);
+  options.keep_factor = settings.update_mass_matrix_interval > 1;
   return options;
 }
 

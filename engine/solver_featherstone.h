@@ -200,6 +200,7 @@ class SolverFeatherstone {
   VecX rhs_;
   VecX zero_;
   int steps_since_factor_ = 0;
+  bool factor_kept_ = false;  // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
   Scalar factored_dt_ = 0;
   // constraint rows and their pools
   std::vector<PgsRow> rows_;
