@@ -209,7 +209,8 @@ class Batches final : public ArticulationBatches {
                 Scalar* qd_out, Scalar* qdd_out, int* factor_failure, int threads) override {
     begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      dynamics_block(G, b, w, in, control, tau, dt_, options, G.block_H(b), qd_out, qdd_out, factor_failure);
+      dynamics_block(G, b, w, in, control, tau, dt_, options, G.block_H(b), G.block_S(b), &G.origin[3 * b], qd_out,
+                     qdd_out, factor_failure);
     });
     end_dynamics();
   }
@@ -219,7 +220,7 @@ class Batches final : public ArticulationBatches {
   void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& bc, const RowSettings& s, Scalar dt_,
                   Scalar* qd_io, Scalar* impulse, int threads) override {
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      rows_block(G, b, w, in, skip, bc, s, dt_, G.block_H(b), qd_io, impulse);
+      rows_block(G, b, w, in, skip, bc, s, dt_, G.block_H(b), G.block_S(b), &G.origin[3 * b], qd_io, impulse);
     });
   }
 
@@ -234,10 +235,13 @@ class Batches final : public ArticulationBatches {
             const Divergence& divergence, int* factor_failure, int threads) override {
     begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      // a factor no later step reuses is made in the thread's scratch, not written out to the block
-      V* H = !options.keep_factor && G.refactor ? output_[omp_get_thread_num()].H.data() : G.block_H(b);
-      dynamics_block(G, b, w, in, control, tau, dt, options, H, qd, nullptr, factor_failure);
-      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, qd, impulse);
+      // in the thread's scratch, not written out to the block: S and o (no scalar row reads them after),
+      // and a factor no later step reuses
+      Output& scratch = output_[omp_get_thread_num()];
+      V* H = !options.keep_factor && G.refactor ? scratch.H.data() : G.block_H(b);
+      V *S = scratch.S.data(), *o = scratch.origin;
+      dynamics_block(G, b, w, in, control, tau, dt, options, H, S, o, qd, nullptr, factor_failure);
+      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse);
       integrate_block(G, b, w, in, qd, dt, q_out, divergence);
     });
     for (Group& G : groups_)
@@ -394,8 +398,9 @@ class Batches final : public ArticulationBatches {
   }
 
   // one block of dynamics(): FK, bias, H and its factor, the unconstrained velocity into qd_out
+  // (H, S and o: the block's own, or scratch where nothing after the block's step reads them)
   void dynamics_block(Group& G, int b, BatchWork<T>& w, const State& in, const Control& control, const Scalar* tau,
-                      Scalar dt_, const DynamicsOptions& options, V* H, Scalar* qd_out, Scalar* qdd_out,
+                      Scalar dt_, const DynamicsOptions& options, V* H, V* S, V* o, Scalar* qd_out, Scalar* qdd_out,
                       int* factor_failure) {
     const T dt = static_cast<T>(dt_);
     const BatchTopology<T>& topo = G.topo;
@@ -404,8 +409,6 @@ class Batches final : public ArticulationBatches {
     const int* qd_off = &G.qd_off[b * W];
     gather(q_off, in.joint_q.data(), topo.coord_count, w.q.data());
     gather(qd_off, in.joint_qd.data(), nv, w.qd.data());
-    V* o = &G.origin[3 * b];
-    V* S = G.block_S(b);
     const BatchParams<T> P = G.block_params(b);
     batch_kinematics(topo, w.q.data(), w, o);
     batch_subspace(topo, w, o, S);
@@ -471,7 +474,8 @@ class Batches final : public ArticulationBatches {
 
   // one block of solve_rows()
   void rows_block(Group& G, int b, BatchWork<T>& w, const State& in, const std::uint8_t* skip, const BlockContacts& bc,
-                  const RowSettings& s, Scalar dt_, const V* H, Scalar* qd_io, Scalar* impulse) {
+                  const RowSettings& s, Scalar dt_, const V* H, const V* S, const V* o, Scalar* qd_io,
+                  Scalar* impulse) {
     const BatchTopology<T>& topo = G.topo;
     const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count, lanes = lanes_in(G, b);
     const T dt = static_cast<T>(dt_);
@@ -541,8 +545,6 @@ class Batches final : public ArticulationBatches {
 
     // contact rows: slot t of lane l is that world's t-th contact, a normal row and two friction rows
     if (slots > 0) gather(qd_off, in.joint_qd.data(), nv, R.qd_in.data());
-    const V* S = G.block_S(b);
-    const V* o = &G.origin[3 * b];
     const Contacts& C = *bc.contacts;
     for (int t = 0; t < slots; ++t) {
       // each lane's t-th contact, read from the buffer lane by lane
@@ -845,8 +847,8 @@ class Batches final : public ArticulationBatches {
   std::vector<Group> groups_;
   std::vector<std::pair<int, int>> blocks_;  // (group, block) in order
   std::vector<Slot> slot_;                   // per articulation
-  // per thread: store_bodies' scratch (a block's body_q and body_qd spans staged, its S and o) and the
-  // factor step() makes where no later step reuses it
+  // per thread: store_bodies' scratch (a block's body_q and body_qd spans staged, its S and o), also
+  // step()'s S and o, and the factor step() makes where no later step reuses it
   struct Output {
     std::vector<Scalar> stage;
     std::vector<V> S, H;
