@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 
@@ -57,6 +58,7 @@ class Batches final : public ArticulationBatches {
     int world_count = 0;
     int blocks = 0;
     int param_size = 0;
+    bool shared_params = false;  // every world's parameters the same: one block's worth kept, read by all
     // per block: the parameters (BatchParams' arrays in order, then, with welded bodies, every
     // body's own centre of mass), H and its factor, the motion subspace and o of the last kinematics
     std::vector<V> params, H, S, origin;
@@ -70,13 +72,14 @@ class Batches final : public ArticulationBatches {
     explicit Group(const ArticulationView& art) : topo(art) {}
     int links() const { return static_cast<int>(topo.link.size()); }
     int bodies() const { return links() + static_cast<int>(welds.size()); }
-    BatchParams<T> block_params(int b) const {
-      return batch_params(topo, params.data() + static_cast<size_t>(b) * param_size);
+    // block b's parameters: its own, or the group's one copy where every world has the same
+    const V* block_params_data(int b) const {
+      return params.data() + (shared_params ? 0 : static_cast<size_t>(b) * param_size);
     }
-    V* block_params_data(int b) { return params.data() + static_cast<size_t>(b) * param_size; }
+    BatchParams<T> block_params(int b) const { return batch_params(topo, block_params_data(b)); }
     // [body][3] each body's own centre of mass (a link's differs from its merged one with welds)
     const V* body_com(int b) const {
-      const V* x = params.data() + static_cast<size_t>(b) * param_size;
+      const V* x = block_params_data(b);
       return welds.empty() ? x + links() : x + batch_param_count(topo);
     }
     V* block_H(int b) { return H.data() + static_cast<size_t>(b) * topo.packed_size(); }
@@ -145,6 +148,16 @@ class Batches final : public ArticulationBatches {
       G.S.resize(static_cast<size_t>(G.blocks) * 6 * nv);
       G.origin.resize(static_cast<size_t>(G.blocks) * 3);
       for (int b = 0; b < G.blocks; ++b) gather_params(G, b, com);
+      // worlds that do not differ (no domain randomisation) share one copy, which stays in cache
+      bool same = true;
+      for (int b = 1; b < G.blocks && same; ++b)
+        same =
+            std::memcmp(&G.params[0], &G.params[static_cast<size_t>(b) * G.param_size], sizeof(V) * G.param_size) == 0;
+      if (same) {
+        G.params.resize(G.param_size);
+        G.params.shrink_to_fit();
+        G.shared_params = true;
+      }
       for (int k = 0; k < nv; ++k) {
         if (G.topo.coord_of_dof[k] < 0) continue;
         bool finite = false;
@@ -730,7 +743,7 @@ class Batches final : public ArticulationBatches {
 
   void gather_params(Group& G, int b, const std::vector<Scalar>& com) {
     const int nb = G.bodies();
-    V* x = G.block_params_data(b);
+    V* x = G.params.data() + static_cast<size_t>(b) * G.param_size;
     V* own_com = x + batch_param_count(G.topo);  // with welded bodies: every body's own centre of mass
     for (int l = 0; l < W; ++l) {
       batch_set_params(G.topo, art_[G.arts[b * W + l]], l, x);

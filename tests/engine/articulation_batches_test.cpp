@@ -328,6 +328,32 @@ TEST(ArticulationBatches, BlocksOfInterleavedWorldsWriteTheirBodiesAsContiguousO
   }
 }
 
+// worlds with the same parameters share one copy of them (it stays in cache); one world changed makes
+// every block keep its own. The worlds that did not change step to the same bits either way
+TEST(ArticulationBatches, IdenticalWorldsShareOneCopyOfTheirParameters) {
+  constexpr int kWorlds = 64, kChanged = 40;
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    const Model same = replicated(quadruped(true), kWorlds, precision);
+    Model changed = replicated(quadruped(true), kWorlds, precision);
+    const int nb = changed.body_count / kWorlds;
+    changed.body_mass[kChanged * nb] *= 1.5;
+    State a = same.state(), b = changed.state();
+    step(same, a, 30);
+    step(changed, b, 30);
+    const SolverFeatherstone shared(same), own(changed);
+    const int blocks = own.batches()->block_count();
+    // each block's copy: at least mass, com and inertia of every link in every lane
+    const std::size_t block_bytes =
+        static_cast<std::size_t>(10) * nb * own.batches()->lanes() * (precision == Precision::Float32 ? 4 : 8);
+    EXPECT_GE(own.memory_bytes() - shared.memory_bytes(), (blocks - 1) * block_bytes);
+    const int nq = changed.joint_coord_count / kWorlds;
+    for (int w = 0; w < kWorlds; ++w) {
+      const bool equal = std::memcmp(&a.joint_q[w * nq], &b.joint_q[w * nq], nq * sizeof(Scalar)) == 0;
+      EXPECT_EQ(equal, w != kChanged) << "world " << w;
+    }
+  }
+}
+
 // body output streamed around the caches (stream_body_output_above = 0) or stored through them: the
 // same bits, with contacts
 TEST(ArticulationBatches, StreamedBodyOutputEqualsStoredOutput) {
