@@ -65,6 +65,7 @@ class Batches final : public ArticulationBatches {
     std::vector<int> rotational;  // dofs angular damping scales: Revolute ones and Ball's and Free's angular ones
     std::vector<int> limited;     // Revolute / Prismatic dofs with a finite limit in some world
     std::vector<V> limits;        // per block: [limited][2] lower and upper limit
+    std::vector<int> limit_slot;  // per slot: [limited] the solver's slot of its limit impulses, -1 for none
     bool enabled = true;
     bool factored = false;  // H of every block factored by an earlier step
     bool refactor = true;   // this step computes and factors H
@@ -94,7 +95,8 @@ class Batches final : public ArticulationBatches {
 
  public:
   Batches(const Model& model, const std::vector<ArticulationView>& art, const std::vector<std::uint8_t>& batched,
-          const std::vector<std::vector<WeldedBody>>& welded, const std::vector<Scalar>& com)
+          const std::vector<std::vector<WeldedBody>>& welded, const std::vector<Scalar>& com,
+          const std::vector<int>& limit_slot)
       : art_(art), gravity_(model.gravity), slot_(art.size()) {
     std::map<std::vector<double>, int> index;
     for (size_t a = 0; a < art.size(); ++a) {
@@ -167,6 +169,8 @@ class Batches final : public ArticulationBatches {
         if (finite) G.limited.push_back(k);
       }
       const int nl = static_cast<int>(G.limited.size());
+      for (const int a : G.arts)
+        for (const int k : G.limited) G.limit_slot.push_back(limit_slot[art[a].qd_begin() + k]);
       G.limits.resize(static_cast<size_t>(G.blocks) * 2 * nl);
       for (int b = 0; b < G.blocks; ++b)
         for (int m = 0; m < nl; ++m)
@@ -494,6 +498,7 @@ class Batches final : public ArticulationBatches {
     const T dt = static_cast<T>(dt_);
     const int* qd_off = &G.qd_off[b * W];
     const int* q_off = &G.q_off[b * W];
+    const int* limit_slot = G.limit_slot.data() + static_cast<size_t>(b) * W * nl;
     IntLanes<T> mine{};             // lanes solved here: worlds of this block no contact joins to another articulation
     int listed[W] = {}, slots = 0;  // each lane's contacts, their most in a lane
     bool any_mine = false;
@@ -540,8 +545,10 @@ class Batches final : public ArticulationBatches {
         const V depth = -gap - T(s.linear_slop);
         V warm{};
         if (s.use_warmstarting)
-          for (int l = 0; l < W; ++l)
-            warm[l] = T(s.warmstarting_factor) * static_cast<T>(impulse[2 * (qd_off[l] + k) + side]);
+          for (int l = 0; l < W; ++l) {
+            const int slot = limit_slot[l * nl + m];
+            warm[l] = slot < 0 ? T(0) : T(s.warmstarting_factor) * static_cast<T>(impulse[2 * slot + side]);
+          }
         const int r =
             add_row(RowKind::Unilateral, on, gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt, warm);
         R.limit_row[2 * m + side] = r;
@@ -673,9 +680,10 @@ class Batches final : public ArticulationBatches {
       Scalar* out = qd_io + qd_off[l];
       for (int j = 0; j < nv; ++j) out[j] = w.qd[j][l];
       for (int m = 0; m < 2 * nl; ++m) {
-        const int r = R.limit_row[m];
+        const int slot = limit_slot[l * nl + m / 2], r = R.limit_row[m];
+        if (slot < 0) continue;
         const T x = r >= 0 && R.active[r][l] ? R.lambda[r][l] : T(0);
-        impulse[2 * (qd_off[l] + G.limited[m / 2]) + m % 2] = std::isfinite(x) ? x : 0;
+        impulse[2 * slot + m % 2] = std::isfinite(x) ? x : 0;
       }
     }
     for (int t = 0; t < slots; ++t) {
@@ -876,13 +884,13 @@ class Batches final : public ArticulationBatches {
 
 }  // namespace
 
-std::unique_ptr<ArticulationBatches> ArticulationBatches::make(const Model& model,
-                                                               const std::vector<ArticulationView>& art,
-                                                               const std::vector<std::uint8_t>& batched,
-                                                               const std::vector<std::vector<WeldedBody>>& welded,
-                                                               const std::vector<Scalar>& com, Precision precision) {
-  if (precision == Precision::Float32) return std::make_unique<Batches<float>>(model, art, batched, welded, com);
-  return std::make_unique<Batches<double>>(model, art, batched, welded, com);
+std::unique_ptr<ArticulationBatches> ArticulationBatches::make(
+    const Model& model, const std::vector<ArticulationView>& art, const std::vector<std::uint8_t>& batched,
+    const std::vector<std::vector<WeldedBody>>& welded, const std::vector<Scalar>& com,
+    const std::vector<int>& limit_slot, Precision precision) {
+  if (precision == Precision::Float32)
+    return std::make_unique<Batches<float>>(model, art, batched, welded, com, limit_slot);
+  return std::make_unique<Batches<double>>(model, art, batched, welded, com, limit_slot);
 }
 
 }  // namespace novaphy

@@ -29,11 +29,13 @@ class ArticulationBatches {
 
   // batches over the articulations a with batched[a] != 0, in precision `precision`; `model`
   // holds the arrays the views `art` point into (the welded model), `welded[a]` articulation a's
-  // welded bodies and `com` every body's own centre of mass
+  // welded bodies, `com` every body's own centre of mass and `limit_slot[dof]` where the solver keeps
+  // that dof's limit impulses (-1: a dof without a finite limit)
   static std::unique_ptr<ArticulationBatches> make(const Model& model, const std::vector<ArticulationView>& art,
                                                    const std::vector<std::uint8_t>& batched,
                                                    const std::vector<std::vector<WeldedBody>>& welded,
-                                                   const std::vector<Scalar>& com, Precision precision);
+                                                   const std::vector<Scalar>& com, const std::vector<int>& limit_slot,
+                                                   Precision precision);
 
   // batches of fewer than `max_dofs` dofs on, the others off (those take the solver's ABA path; a
   // batch switched off refactors when it is next on)
@@ -84,7 +86,7 @@ class ArticulationBatches {
   // moving articulation), solved here a block at a time: joint-limit rows, then each world's listed
   // contacts (a normal row and two friction rows each), with the same targets, warm start and PGS
   // sweeps as the solver's scalar path (kernels/batch_pgs.h); a lane's absent rows are masked.
-  // qd [dof] and impulse [dof][2] (the warm-start impulses of the lower and upper limit) are read and
+  // qd [dof] and impulse [limit slot][2] (the warm-start impulses of the lower and upper limit) are read and
   // written for those articulations; in.joint_qd (the step's initial velocity) is read for restitution
   virtual void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& contacts,
                           const RowSettings& settings, Scalar dt, Scalar* qd, Scalar* impulse, int threads) = 0;

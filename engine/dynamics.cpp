@@ -85,7 +85,7 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
   }
   const std::unique_ptr<ArticulationBatches> batches =
       ArticulationBatches::make(model, art, batched, std::vector<std::vector<WeldedBody>>(model.articulation_count),
-                                model.body_com, model.precision);
+                                model.body_com, std::vector<int>(model.joint_dof_count, -1), model.precision);
   VecX qdd = VecX::Zero(model.joint_dof_count);
   std::vector<int> failure(model.articulation_count, -1);
   ArticulationBatches::DynamicsOptions options;

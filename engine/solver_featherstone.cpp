@@ -130,6 +130,10 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   diverged_.assign(model.articulation_count, 0);
   touched_.assign(model.articulation_count, 0);
   block_contact_start_.assign(model.articulation_count + 1, 0);
+  // limit impulses kept per limited joint, in limited_joints_' order
+  std::vector<int> limit_slot(model.joint_dof_count, -1);
+  for (size_t m = 0; m < limited_joints_.size(); ++m)
+    limit_slot[model.joint_qd_start[limited_joints_[m]]] = static_cast<int>(m);
   std::vector<std::uint8_t> batchable(model.articulation_count, 0);
   std::vector<std::vector<WeldedBody>> welded(model.articulation_count);
   for (int a = 0; a < model.articulation_count; ++a) {
@@ -138,9 +142,10 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   }
   batchable_count_ = static_cast<int>(std::count(batchable.begin(), batchable.end(), 1));
   if (batchable_count_ > 0)
-    batches_ = ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, model.precision);
+    batches_ =
+        ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, limit_slot, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
-  limit_impulse_.assign(2 * model.joint_dof_count, 0);
+  limit_impulse_.assign(2 * limited_joints_.size(), 0);
   step_bytes_ = static_cast<std::int64_t>(memory_bytes()) +
                 static_cast<std::int64_t>(sizeof(Scalar)) * (model.joint_coord_count + model.joint_dof_count +
                                                              (7 + 6 + 6) * static_cast<std::int64_t>(model.body_count));
@@ -541,14 +546,14 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
   // the limited joints of the articulations whose rows the scalar path builds
   auto for_each_limited = [&](auto&& f) {
     for (const int a : scalar_rows_)
-      for (int k = limited_start_[a]; k < limited_start_[a + 1]; ++k) f(a, limited_joints_[k]);
+      for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) f(a, m);
   };
-  for_each_limited([&](int, int j) {
-    const int g = model_.joint_qd_start[j];
+  for_each_limited([&](int, int m) {
+    const int g = model_.joint_qd_start[limited_joints_[m]];
     limit_row_[2 * g] = limit_row_[2 * g + 1] = -1;
   });
-  for_each_limited([&](int a, int j) {
-    const int g = model_.joint_qd_start[j];
+  for_each_limited([&](int a, int m) {
+    const int j = limited_joints_[m], g = model_.joint_qd_start[j];
     const Scalar q = in.joint_q[model_.joint_q_start[j]];
     for (int side = 0; side < 2; ++side) {
       // gap >= 0 inside the range; the row keeps sign * qd >= target
@@ -560,7 +565,7 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
       const Scalar target = gap >= 0 ? -gap / dt : settings.erp * std::max<Scalar>(-gap - settings.linear_slop, 0) / dt;
       const int r = begin_row(a, -1, RowKind::Unilateral, target);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
-      if (settings.use_warmstarting) rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[2 * g + side];
+      if (settings.use_warmstarting) rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[2 * m + side];
       limit_row_[2 * g + side] = r;
     }
   });
@@ -671,9 +676,10 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
   for (const int a : scalar_rows_)  // the blocks kept the others' impulses
     for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
       const int g = model_.joint_qd_start[limited_joints_[m]];
-      for (int k = 2 * g; k < 2 * g + 2; ++k) {
-        const Scalar lambda = limit_row_[k] < 0 ? 0 : rows_[limit_row_[k]].lambda;
-        limit_impulse_[k] = std::isfinite(lambda) ? lambda : 0;
+      for (int side = 0; side < 2; ++side) {
+        const int r = limit_row_[2 * g + side];
+        const Scalar lambda = r < 0 ? 0 : rows_[r].lambda;
+        limit_impulse_[2 * m + side] = std::isfinite(lambda) ? lambda : 0;
       }
     }
 }

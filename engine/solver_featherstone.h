@@ -221,8 +221,9 @@ class SolverFeatherstone {
   std::vector<int> contact_row_;                        // first row of each of scalar_contacts_
   // Revolute and Prismatic joints with a finite limit, by articulation: a's are from limited_start_[a]
   std::vector<int> limited_joints_, limited_start_;
-  std::vector<int> limit_row_;         // [dof][2] row of each active limit, -1
-  std::vector<Scalar> limit_impulse_;  // [dof][2] impulses of the previous step's limit rows
+  std::vector<int> limit_row_;  // [dof][2] row of each active limit, -1
+  // [limited joint][2] impulses of the previous step's limit rows, in limited_joints_' order
+  std::vector<Scalar> limit_impulse_;
   SolverStageSeconds stage_seconds_;
 };
 
