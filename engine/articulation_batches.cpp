@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <type_traits>
 
 #include "engine/parallel.h"
 #include "kernels/batch.h"
@@ -237,14 +238,15 @@ class Batches final : public ArticulationBatches {
   void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& bc, const RowSettings& s, Scalar dt_,
                   Scalar* qd_io, Scalar* impulse, int threads) override {
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      rows_block(G, b, w, in, skip, bc, s, dt_, G.block_H(b), G.block_S(b), &G.origin[3 * b], qd_io, impulse);
+      rows_block(G, b, w, in, skip, bc, s, dt_, G.block_H(b), G.block_S(b), &G.origin[3 * b], qd_io, impulse, false);
     });
   }
 
   void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
                  int threads) override {
-    for_each_block(threads,
-                   [&](Group& G, int b, BatchWork<T>& w) { integrate_block(G, b, w, in, qd, dt, q_out, divergence); });
+    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
+      integrate_block(G, b, w, in, qd, dt, q_out, divergence, false);
+    });
   }
 
   void step(const State& in, const Control& control, const Scalar* tau, Scalar dt, const DynamicsOptions& options,
@@ -258,8 +260,8 @@ class Batches final : public ArticulationBatches {
       V* H = !options.keep_factor && G.refactor ? scratch.H.data() : G.block_H(b);
       V *S = scratch.S.data(), *o = scratch.origin;
       dynamics_block(G, b, w, in, control, tau, dt, options, H, S, o, qd, nullptr, factor_failure);
-      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse);
-      integrate_block(G, b, w, in, qd, dt, q_out, divergence);
+      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse, true);
+      integrate_block(G, b, w, in, qd, dt, q_out, divergence, true);
     });
     for (Group& G : groups_)
       if (G.enabled) G.factored = options.keep_factor || !G.refactor;
@@ -487,12 +489,28 @@ class Batches final : public ArticulationBatches {
       for (int k = 0; k < nv; ++k) out[k] = x[k][l];
       for (const int k : G.rotational) out[k] *= options.keep;
     }
+    // the new velocities also in w.qd, as the next stage would gather them from qd_out: a rotational
+    // dof's scaled in double
+    for (int k = 0; k < nv; ++k) w.qd[k] = x[k];
+    for (const int k : G.rotational) w.qd[k] = scale_in_double(x[k], options.keep);
+  }
+
+  // x * s computed in double and rounded to T: what a lane of T stored to a double and scaled becomes
+  static V scale_in_double(const V& x, Scalar s) {
+    if constexpr (std::is_same_v<T, double>) {
+      return x * s;
+    } else {
+      typedef double Wide __attribute__((vector_size(W * sizeof(double))));
+      return __builtin_convertvector(__builtin_convertvector(x, Wide) * s, V);
+    }
   }
 
   // one block of solve_rows()
+  // (with `after_dynamics`, w.q and w.qd hold what dynamics_block of this block left: the coordinates
+  // and the velocities it wrote to qd_io, which are not gathered again)
   void rows_block(Group& G, int b, BatchWork<T>& w, const State& in, const std::uint8_t* skip, const BlockContacts& bc,
-                  const RowSettings& s, Scalar dt_, const V* H, const V* S, const V* o, Scalar* qd_io,
-                  Scalar* impulse) {
+                  const RowSettings& s, Scalar dt_, const V* H, const V* S, const V* o, Scalar* qd_io, Scalar* impulse,
+                  bool after_dynamics) {
     const BatchTopology<T>& topo = G.topo;
     const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count, lanes = lanes_in(G, b);
     const T dt = static_cast<T>(dt_);
@@ -513,7 +531,7 @@ class Batches final : public ArticulationBatches {
     if (!any_mine || (nl == 0 && slots == 0)) return;
     RowWork& R = row_work_[omp_get_thread_num()];
     R.resize(2 * nl + 3 * slots, nv, slots);
-    gather(qd_off, qd_io, nv, w.qd.data());
+    if (!after_dynamics) gather(qd_off, qd_io, nv, w.qd.data());
     int rows = 0;
     auto add_row = [&](RowKind kind, const IntLanes<T>& on, const V& target, const V& warm) {
       const int r = rows++;
@@ -532,8 +550,9 @@ class Batches final : public ArticulationBatches {
     const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
     for (int m = 0; m < nl; ++m) {
       const int k = G.limited[m], c = topo.coord_of_dof[k];
-      V q;
-      for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
+      V q = w.q[c];
+      if (!after_dynamics)
+        for (int l = 0; l < W; ++l) q[l] = static_cast<T>(in.joint_q[q_off[l] + c]);
       for (int side = 0; side < 2; ++side) {
         // gap >= 0 inside the range; the row keeps sign * qd >= target
         const T sign = side == 0 ? 1 : -1;
@@ -702,11 +721,15 @@ class Batches final : public ArticulationBatches {
   }
 
   // one block of integrate()
+  // (with `after_rows`, w.q and w.qd hold the coordinates and the velocities the stages before left in
+  // qd: not gathered again)
   void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, const Scalar* qd, Scalar dt, Scalar* q_out,
-                       const Divergence& divergence) {
+                       const Divergence& divergence, bool after_rows) {
     const int nq = G.topo.coord_count, nv = G.topo.dof_count;
-    gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
-    gather(&G.qd_off[b * W], qd, nv, w.qd.data());
+    if (!after_rows) {
+      gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
+      gather(&G.qd_off[b * W], qd, nv, w.qd.data());
+    }
     batch_integrate(G.topo, w.q.data(), w.qd.data(), static_cast<T>(dt), w.q_next.data());
     // the guard on the lanes: every entry finite (|x| <= max is false for inf and NaN), then the
     // fastest dof against the speed in double, where the solver's guard compares
