@@ -1,5 +1,7 @@
 #include "engine/dynamics.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -18,35 +20,80 @@ namespace novaphy {
 
 namespace {
 
-// throws Error naming x's first non-finite entry; returns whether x has a nonzero entry. One pass over
-// the bits (an exponent of all ones is inf or NaN; any bit but the sign's, a nonzero), vectorised and
-// on `threads` threads for a long x, the search only on failure
-bool check_finite(const std::vector<Scalar>& x, const char* name, int threads = 1) {
+// arrays checked together: each one's name and, after the check, whether it has a nonzero entry
+struct Checked {
+  const std::vector<Scalar>* x = nullptr;
+  const char* name = nullptr;
+  bool nonzero = false;
+};
+constexpr int kMostChecked = 16;
+
+// throws Error naming the first non-finite entry of the first array (in order) that has one; sets each
+// array's nonzero. One pass over the bits (an exponent of all ones is inf or NaN; any bit but the
+// sign's, a nonzero), vectorised; on `threads` threads when the arrays are long, all of them in one
+// parallel region (each thread its share of every array); the search only on failure
+void check_finite(Checked* arrays, int count, int threads) {
   static_assert(sizeof(Scalar) == sizeof(std::uint64_t));
-  std::uint64_t not_finite = 0, nonzero = 0;
-  auto scan = [&x](long begin, long end, std::uint64_t& not_finite_out, std::uint64_t& nonzero_out) {
+  std::uint64_t not_finite[kMostChecked] = {}, nonzero[kMostChecked] = {};
+  auto scan = [&](int t, int teams) {
     constexpr std::uint64_t kExponent = 0x7ff0000000000000;
-    std::uint64_t bad = 0, any = 0;
-    for (long k = begin; k < end; ++k) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &x[k], sizeof(bits));
-      bad |= (bits & kExponent) == kExponent;
-      any |= bits << 1;
+    for (int a = 0; a < count; ++a) {
+      const std::vector<Scalar>& x = *arrays[a].x;
+      const long n = static_cast<long>(x.size()), end = n * (t + 1) / teams;
+      std::uint64_t bad = 0, any = 0;
+      for (long k = n * t / teams; k < end; ++k) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &x[k], sizeof(bits));
+        bad |= (bits & kExponent) == kExponent;
+        any |= bits << 1;
+      }
+      if (teams == 1) {
+        not_finite[a] = bad;
+        nonzero[a] = any;
+        continue;
+      }
+#pragma omp atomic
+      not_finite[a] |= bad;
+#pragma omp atomic
+      nonzero[a] |= any;
     }
-    not_finite_out |= bad;
-    nonzero_out |= any;
   };
-  const long n = static_cast<long>(x.size());
-  if (threads > 1 && n >= 65536) {  // (a parallel region costs a short array more than its scan)
-#pragma omp parallel for reduction(| : not_finite, nonzero) num_threads(threads)
-    for (int t = 0; t < threads; ++t) scan(n * t / threads, n * (t + 1) / threads, not_finite, nonzero);
+  long total = 0;
+  for (int a = 0; a < count; ++a) total += static_cast<long>(arrays[a].x->size());
+  if (threads > 1 && total >= 65536) {  // (a parallel region costs short arrays more than their scan)
+#pragma omp parallel num_threads(threads)
+    scan(omp_get_thread_num(), omp_get_num_threads());
   } else {
-    scan(0, n, not_finite, nonzero);
+    scan(0, 1);
   }
-  if (not_finite == 0) return nonzero != 0;
-  for (size_t k = 0; k < x.size(); ++k)
-    if (!std::isfinite(x[k])) fail(name, "[", k, "] is not finite: ", x[k]);
-  return true;
+  for (int a = 0; a < count; ++a) {
+    arrays[a].nonzero = nonzero[a] != 0;
+    if (not_finite[a] == 0) continue;
+    const std::vector<Scalar>& x = *arrays[a].x;
+    for (size_t k = 0; k < x.size(); ++k)
+      if (!std::isfinite(x[k])) fail(arrays[a].name, "[", k, "] is not finite: ", x[k]);
+  }
+}
+
+// the state's arrays, then the control's, into `arrays` from `count`; returns the new count
+int state_arrays(const State& state, Checked* arrays, int count) {
+  arrays[count++] = {&state.joint_q, "joint_q"};
+  arrays[count++] = {&state.joint_qd, "joint_qd"};
+  arrays[count++] = {&state.body_f, "body_f"};
+  return count;
+}
+int control_arrays(const Control& control, Checked* arrays, int count) {
+#define NOVAPHY_CHECKED_CONTROL(T, name, n, width) arrays[count++] = {&control.name, #name};
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECKED_CONTROL)
+#undef NOVAPHY_CHECKED_CONTROL
+  return count;
+}
+// whether a PD gain (joint_target_ke or joint_target_kd) is nonzero, among checked arrays
+bool any_drive(const Control& control, const Checked* arrays, int count) {
+  bool drive = false;
+  for (int a = 0; a < count; ++a)
+    drive |= (arrays[a].x == &control.joint_target_ke || arrays[a].x == &control.joint_target_kd) && arrays[a].nonzero;
+  return drive;
 }
 
 // FK and link velocities of articulation a at the state's coordinates
@@ -99,23 +146,25 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
 }  // namespace
 
 void check_finite_state(const State& state, bool* any_wrench, int threads) {
-  check_finite(state.joint_q, "joint_q", threads);
-  check_finite(state.joint_qd, "joint_qd", threads);
-  const bool any = check_finite(state.body_f, "body_f", threads);
-  if (any_wrench) *any_wrench = any;
+  Checked arrays[kMostChecked];
+  const int count = state_arrays(state, arrays, 0);
+  check_finite(arrays, count, threads);
+  if (any_wrench) *any_wrench = arrays[2].nonzero;
 }
 
-void check_finite_control(const Control& control, bool* any_drive, int threads) {
-  // each field read once: a drive is on where a PD gain is nonzero
-  bool drive = false;
-#define NOVAPHY_CHECK_FINITE_CONTROL(T, name, count, width)                                                       \
-  {                                                                                                               \
-    const bool nonzero = check_finite(control.name, #name, threads);                                              \
-    if (&control.name == &control.joint_target_ke || &control.name == &control.joint_target_kd) drive |= nonzero; \
-  }
-  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FINITE_CONTROL)
-#undef NOVAPHY_CHECK_FINITE_CONTROL
-  if (any_drive) *any_drive = drive;
+void check_finite_control(const Control& control, bool* any_drive_out, int threads) {
+  Checked arrays[kMostChecked];
+  const int count = control_arrays(control, arrays, 0);
+  check_finite(arrays, count, threads);
+  if (any_drive_out) *any_drive_out = any_drive(control, arrays, count);
+}
+
+void check_finite_step(const State& state, const Control& control, bool* any_wrench, bool* any_drive_out, int threads) {
+  Checked arrays[kMostChecked];
+  const int count = control_arrays(control, arrays, state_arrays(state, arrays, 0));
+  check_finite(arrays, count, threads);
+  *any_wrench = arrays[2].nonzero;
+  *any_drive_out = any_drive(control, arrays, count);
 }
 
 void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state) {
@@ -134,8 +183,8 @@ void store_body_state(const ArticulationView& art, const ArticulationScratch& s,
 
 void eval_fk(const Model& model, State& state) {
   model.check(state);
-  check_finite(state.joint_q, "joint_q");
-  check_finite(state.joint_qd, "joint_qd");
+  Checked arrays[] = {{&state.joint_q, "joint_q"}, {&state.joint_qd, "joint_qd"}};
+  check_finite(arrays, 2, 1);
   ArticulationScratch s;
   for (int a = 0; a < model.articulation_count; ++a) store_body_state(kinematics(model, state, a, s), s, state);
 }

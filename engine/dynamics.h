@@ -47,5 +47,7 @@ void check_finite_state(const State& state, bool* any_wrench = nullptr, int thre
 // throws Error naming the first non-finite entry of any control array
 // any_drive (when given) is set to whether a PD gain (joint_target_ke or joint_target_kd) is nonzero
 void check_finite_control(const Control& control, bool* any_drive = nullptr, int threads = 1);
+// both, in that order, in one pass (one parallel region on `threads` threads)
+void check_finite_step(const State& state, const Control& control, bool* any_wrench, bool* any_drive, int threads = 1);
 
 }  // namespace novaphy

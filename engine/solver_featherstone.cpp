@@ -278,8 +278,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   if (!same_layout(contacts, model_))
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
-  check_finite_state(in, &wrenches_, thread_count());
-  check_finite_control(control, &drives_, thread_count());
+  check_finite_step(in, control, &wrenches_, &drives_, thread_count());
 }
 
 ArticulationBatches::Divergence SolverFeatherstone::divergence() {
