@@ -141,6 +141,8 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     for (const int b : welded_into_[a]) welded[a].push_back({b, body_link_[b], welded_.offset[b]});
   }
   batchable_count_ = static_cast<int>(std::count(batchable.begin(), batchable.end(), 1));
+  for (int a = 0; a < model.articulation_count; ++a)
+    if (!batchable[a]) unbatched_.push_back(a);
   if (batchable_count_ > 0)
     batches_ =
         ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, limit_slot, model.precision);
@@ -689,7 +691,16 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   // (the blocks integrate and test their own articulations)
   if (batch_step_ && !fused_step_)
     batches_->integrate(in, qd_.data(), dt, q_next_.data(), divergence(), thread_count());
-  for_each_articulation([&](int a) {
+  // with every articulation of dofs in a block, the loops below visit only those without dofs and those
+  // flagged (no parallel region for a pass that would do nothing)
+  auto for_each_to_visit = [&](auto&& f) {
+    if (!all_on_batch_) return for_each_articulation(f);
+    for (const int a : unbatched_) f(a);
+    if (settings.on_divergence != DivergencePolicy::Raise)
+      for (int a = 0; a < static_cast<int>(art_.size()); ++a)
+        if (diverged_[a] && on_batch(a)) f(a);
+  };
+  for_each_to_visit([&](int a) {
     const ArticulationView& art = art_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();
     if (!on_batch(a)) {
@@ -715,7 +726,11 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
     const bool stream = step_bytes_ > settings.stream_body_output_above;
     batches_->store_bodies(q_next_.data(), qd_.data(), out, stream, thread_count());
   }
-  for_each_articulation([&](int a) {
+  auto for_each_unbatched = [&](auto&& f) {
+    if (!all_on_batch_) return for_each_articulation(f);
+    for (const int a : unbatched_) f(a);
+  };
+  for_each_unbatched([&](int a) {
     if (on_batch(a)) return;
     const ArticulationView& art = art_[a];
     std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
