@@ -230,7 +230,7 @@ class Batches final : public ArticulationBatches {
       dynamics_block(G, b, w, in, control, tau, dt_, options, G.block_H(b), G.block_S(b), &G.origin[3 * b], qd_out,
                      qdd_out, factor_failure);
     });
-    end_dynamics();
+    end_dynamics(true);
   }
 
   bool solves_rows(int a, const std::uint8_t* skip) const override { return active(a) && !skip[a]; }
@@ -263,8 +263,7 @@ class Batches final : public ArticulationBatches {
       if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse, true);
       integrate_block(G, b, w, in, qd, dt, q_out, divergence, true);
     });
-    for (Group& G : groups_)
-      if (G.enabled) G.factored = options.keep_factor || !G.refactor;
+    end_dynamics(options.keep_factor);
   }
 
   void store_bodies(const Scalar* q_in, const Scalar* qd_in, State& out, bool stream, int threads) override {
@@ -411,9 +410,11 @@ class Batches final : public ArticulationBatches {
     if (static_cast<int>(lane_factor_.size()) < threads)
       lane_factor_.resize(threads, LaneFactor{-1, 0, lane_factor_[0].L});
   }
-  void end_dynamics() {
+  // every block of a group that is on holds its factor for a later step, unless this step made it in
+  // scratch (`kept` false) and so left the blocks' own stale
+  void end_dynamics(bool kept) {
     for (Group& G : groups_)
-      if (G.enabled) G.factored = true;
+      if (G.enabled) G.factored = kept || !G.refactor;
   }
 
   // one block of dynamics(): FK, bias, H and its factor, the unconstrained velocity into qd_out

@@ -75,7 +75,9 @@ void check_finite(Checked* arrays, int count, int threads) {
   }
 }
 
-// the state's arrays, then the control's, into `arrays` from `count`; returns the new count
+// the state's arrays (body_f at kBodyF), then the control's, into `arrays` from `count`; each returns the
+// new count
+constexpr int kBodyF = 2;
 int state_arrays(const State& state, Checked* arrays, int count) {
   arrays[count++] = {&state.joint_q, "joint_q"};
   arrays[count++] = {&state.joint_qd, "joint_qd"};
@@ -149,7 +151,7 @@ void check_finite_state(const State& state, bool* any_wrench, int threads) {
   Checked arrays[kMostChecked];
   const int count = state_arrays(state, arrays, 0);
   check_finite(arrays, count, threads);
-  if (any_wrench) *any_wrench = arrays[2].nonzero;
+  if (any_wrench) *any_wrench = arrays[kBodyF].nonzero;
 }
 
 void check_finite_control(const Control& control, bool* any_drive_out, int threads) {
@@ -163,7 +165,7 @@ void check_finite_step(const State& state, const Control& control, bool* any_wre
   Checked arrays[kMostChecked];
   const int count = control_arrays(control, arrays, state_arrays(state, arrays, 0));
   check_finite(arrays, count, threads);
-  *any_wrench = arrays[2].nonzero;
+  *any_wrench = arrays[kBodyF].nonzero;
   *any_drive_out = any_drive(control, arrays, count);
 }
 

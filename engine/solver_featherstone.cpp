@@ -140,10 +140,9 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     batchable[a] = art_[a].dof_count() > 0;
     for (const int b : welded_into_[a]) welded[a].push_back({b, body_link_[b], welded_.offset[b]});
   }
-  batchable_count_ = static_cast<int>(std::count(batchable.begin(), batchable.end(), 1));
   for (int a = 0; a < model.articulation_count; ++a)
     if (!batchable[a]) unbatched_.push_back(a);
-  if (batchable_count_ > 0)
+  if (unbatched_.size() < art_.size())
     batches_ =
         ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, limit_slot, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
@@ -211,7 +210,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   batch_step_ = batches_ && settings.use_batch_kernels && settings.coriolis_implicitness == 0;
   if (batches_)
     batches_->enable(batch_step_ ? settings.aba_min_dofs : 0);  // off: factors go stale while the scalar kernels step
-  all_on_batch_ = batch_step_ && batches_->active_count() == batchable_count_;
+  all_on_batch_ = batch_step_ && batches_->active_count() == static_cast<int>(art_.size() - unbatched_.size());
   row_count_ = 0;
   pool_size_ = 0;
   scalar_rows_.clear();
@@ -239,9 +238,9 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   // block's data in cache from its dynamics to its integration (profiling times the stages one after
   // another instead; the arithmetic is the same)
   fused_step_ = all_on_batch_ && scalar_contacts_.empty() && !settings.profile_stages;
+  qd_in_ = in.joint_qd.data();
+  std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
   if (fused_step_) {
-    qd_in_ = in.joint_qd.data();
-    std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
     batches_->step(in, control, control_forces(control), dt, dynamics_options(refactor, dt),
                    block_rows ? &block : nullptr, rows, qd_.data(), limit_impulse_.data(), q_next_.data(), divergence(),
                    factor_failure_.data(), thread_count());
@@ -317,9 +316,7 @@ void SolverFeatherstone::check_factors() const {
 }
 
 void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& control, Scalar dt, bool refactor) {
-  qd_in_ = in.joint_qd.data();
   const Scalar* tau = control_forces(control);
-  std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
   if (batch_step_)
     batches_->dynamics(in, control, tau, dt, dynamics_options(refactor, dt), qd_.data(), nullptr,
                        factor_failure_.data(), thread_count());
@@ -691,12 +688,15 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
   // (the blocks integrate and test their own articulations)
   if (batch_step_ && !fused_step_)
     batches_->integrate(in, qd_.data(), dt, q_next_.data(), divergence(), thread_count());
-  // with every articulation of dofs in a block, the loops below visit only those without dofs and those
-  // flagged (no parallel region for a pass that would do nothing)
-  auto for_each_to_visit = [&](auto&& f) {
+  // with every articulation of dofs in a block, the loops below visit only those without dofs (and, for
+  // the guard, the blocks' flagged ones): no parallel region for a pass that would do nothing
+  auto for_each_unbatched = [&](auto&& f) {
     if (!all_on_batch_) return for_each_articulation(f);
     for (const int a : unbatched_) f(a);
-    if (settings.on_divergence != DivergencePolicy::Raise)
+  };
+  auto for_each_to_visit = [&](auto&& f) {
+    for_each_unbatched(f);
+    if (all_on_batch_ && settings.on_divergence != DivergencePolicy::Raise)
       for (int a = 0; a < static_cast<int>(art_.size()); ++a)
         if (diverged_[a] && on_batch(a)) f(a);
   };
@@ -726,10 +726,6 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
     const bool stream = step_bytes_ > settings.stream_body_output_above;
     batches_->store_bodies(q_next_.data(), qd_.data(), out, stream, thread_count());
   }
-  auto for_each_unbatched = [&](auto&& f) {
-    if (!all_on_batch_) return for_each_articulation(f);
-    for (const int a : unbatched_) f(a);
-  };
   for_each_unbatched([&](int a) {
     if (on_batch(a)) return;
     const ArticulationView& art = art_[a];

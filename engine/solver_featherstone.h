@@ -177,7 +177,6 @@ class SolverFeatherstone {
   bool batch_step_ = false;
   bool all_on_batch_ = false;          // this step: every articulation with dofs in a block that is on
   bool fused_step_ = false;            // this step: the blocks step a block at a time (ArticulationBatches::step)
-  int batchable_count_ = 0;            // articulations with dofs
   std::vector<int> unbatched_;         // articulations without dofs (no block has them)
   std::int64_t step_bytes_ = 0;        // what a step touches: the solver's memory when made and the state's arrays
   bool wrenches_ = false;              // the step's input has a nonzero body_f
