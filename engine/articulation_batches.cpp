@@ -228,7 +228,7 @@ class Batches final : public ArticulationBatches {
     begin_dynamics(options, threads);
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       dynamics_block(G, b, w, in, control, tau, dt_, options, G.block_H(b), G.block_S(b), &G.origin[3 * b], qd_out,
-                     qdd_out, factor_failure);
+                     qdd_out, factor_failure, false);
     });
     end_dynamics(true);
   }
@@ -242,7 +242,7 @@ class Batches final : public ArticulationBatches {
     });
   }
 
-  void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
+  void integrate(const State& in, Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
                  int threads) override {
     for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
       integrate_block(G, b, w, in, qd, dt, q_out, divergence, false);
@@ -259,7 +259,7 @@ class Batches final : public ArticulationBatches {
       Output& scratch = output_[omp_get_thread_num()];
       V* H = !options.keep_factor && G.refactor ? scratch.H.data() : G.block_H(b);
       V *S = scratch.S.data(), *o = scratch.origin;
-      dynamics_block(G, b, w, in, control, tau, dt, options, H, S, o, qd, nullptr, factor_failure);
+      dynamics_block(G, b, w, in, control, tau, dt, options, H, S, o, nullptr, nullptr, factor_failure, true);
       if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse, true);
       integrate_block(G, b, w, in, qd, dt, q_out, divergence, true);
     });
@@ -273,8 +273,8 @@ class Batches final : public ArticulationBatches {
           const BatchTopology<T>& topo = G.topo;
           for (int l = 0; l < lanes_in(G, b); ++l) {
             const int q0 = G.q_off[b * W + l], qd0 = G.qd_off[b * W + l];
-            std::copy_n(q_in + q0, topo.coord_count, out.joint_q.begin() + q0);
-            std::copy_n(qd_in + qd0, topo.dof_count, out.joint_qd.begin() + qd0);
+            copy_few(q_in + q0, topo.coord_count, out.joint_q.data() + q0);
+            copy_few(qd_in + qd0, topo.dof_count, out.joint_qd.data() + qd0);
           }
           gather(&G.q_off[b * W], q_in, topo.coord_count, w.q.data());
           gather(&G.qd_off[b * W], qd_in, topo.dof_count, w.qd.data());
@@ -417,11 +417,12 @@ class Batches final : public ArticulationBatches {
       if (G.enabled) G.factored = kept || !G.refactor;
   }
 
-  // one block of dynamics(): FK, bias, H and its factor, the unconstrained velocity into qd_out
-  // (H, S and o: the block's own, or scratch where nothing after the block's step reads them)
+  // one block of dynamics(): FK, bias, H and its factor, the unconstrained velocity into w.qd and qd_out
+  // (H, S and o: the block's own, or scratch where nothing after the block's step reads them). With
+  // `fused` the block's rows and integration follow in this pass: qd_out is not written
   void dynamics_block(Group& G, int b, BatchWork<T>& w, const State& in, const Control& control, const Scalar* tau,
                       Scalar dt_, const DynamicsOptions& options, V* H, V* S, V* o, Scalar* qd_out, Scalar* qdd_out,
-                      int* factor_failure) {
+                      int* factor_failure, bool fused) {
     const T dt = static_cast<T>(dt_);
     const BatchTopology<T>& topo = G.topo;
     const int nv = topo.dof_count;
@@ -483,17 +484,16 @@ class Batches final : public ArticulationBatches {
       if (qdd_out)
         for (int k = 0; k < nv; ++k) qdd_out[qd_off[l] + k] = x[k][l];
     }
-    if (!qd_out) return;
-    for (int k = 0; k < nv; ++k) x[k] = w.qd[k] + dt * x[k];
+    if (!qd_out && !fused) return;
+    // the new velocities in w.qd, a rotational dof's scaled in double and rounded to T; written to
+    // qd_out for the stages after, unless the block steps on (integrate_block writes them once)
+    for (int k = 0; k < nv; ++k) w.qd[k] = w.qd[k] + dt * x[k];
+    for (const int k : G.rotational) w.qd[k] = scale_in_double(w.qd[k], options.keep);
+    if (fused) return;
     for (int l = 0; l < lanes_in(G, b); ++l) {
       Scalar* out = qd_out + qd_off[l];
-      for (int k = 0; k < nv; ++k) out[k] = x[k][l];
-      for (const int k : G.rotational) out[k] *= options.keep;
+      for (int k = 0; k < nv; ++k) out[k] = w.qd[k][l];
     }
-    // the new velocities also in w.qd, as the next stage would gather them from qd_out: a rotational
-    // dof's scaled in double
-    for (int k = 0; k < nv; ++k) w.qd[k] = x[k];
-    for (const int k : G.rotational) w.qd[k] = scale_in_double(x[k], options.keep);
   }
 
   // x * s computed in double and rounded to T: what a lane of T stored to a double and scaled becomes
@@ -507,8 +507,9 @@ class Batches final : public ArticulationBatches {
   }
 
   // one block of solve_rows()
-  // (with `after_dynamics`, w.q and w.qd hold what dynamics_block of this block left: the coordinates
-  // and the velocities it wrote to qd_io, which are not gathered again)
+  // (with `after_dynamics`, w.q and w.qd hold what dynamics_block of this block left, the coordinates and
+  // the unconstrained velocities, which are neither gathered from qd_io nor written to it: integrate_block
+  // follows and writes the velocities)
   void rows_block(Group& G, int b, BatchWork<T>& w, const State& in, const std::uint8_t* skip, const BlockContacts& bc,
                   const RowSettings& s, Scalar dt_, const V* H, const V* S, const V* o, Scalar* qd_io, Scalar* impulse,
                   bool after_dynamics) {
@@ -697,8 +698,8 @@ class Batches final : public ArticulationBatches {
     // vectors on body b
     for (int l = 0; l < lanes; ++l) {
       if (!mine[l]) continue;
-      Scalar* out = qd_io + qd_off[l];
-      for (int j = 0; j < nv; ++j) out[j] = w.qd[j][l];
+      if (!after_dynamics)
+        for (int j = 0; j < nv; ++j) qd_io[qd_off[l] + j] = w.qd[j][l];
       for (int m = 0; m < 2 * nl; ++m) {
         const int slot = limit_slot[l * nl + m / 2], r = R.limit_row[m];
         if (slot < 0) continue;
@@ -721,10 +722,10 @@ class Batches final : public ArticulationBatches {
     }
   }
 
-  // one block of integrate()
-  // (with `after_rows`, w.q and w.qd hold the coordinates and the velocities the stages before left in
-  // qd: not gathered again)
-  void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, const Scalar* qd, Scalar dt, Scalar* q_out,
+  // one block of integrate(); the velocities written to qd
+  // (with `after_rows`, w.q and w.qd hold the coordinates and the velocities the block's dynamics and rows
+  // left in this pass: not gathered)
+  void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, Scalar* qd, Scalar dt, Scalar* q_out,
                        const Divergence& divergence, bool after_rows) {
     const int nq = G.topo.coord_count, nv = G.topo.dof_count;
     if (!after_rows) {
@@ -745,8 +746,21 @@ class Batches final : public ArticulationBatches {
     for (int l = 0; l < lanes_in(G, b); ++l) {
       Scalar* x = q_out + G.q_off[b * W + l];
       for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
+      Scalar* v = qd + G.qd_off[b * W + l];
+      for (int k = 0; k < nv; ++k) v[k] = w.qd[k][l];
       divergence.diverged[G.arts[b * W + l]] = !finite[l] || static_cast<Scalar>(fastest[l]) > divergence.speed;
     }
+  }
+
+  // dst[0, n) = src[0, n), the few numbers of one world: in registers, eight at a time with the last
+  // eight overlapping (a call to memmove took longer than the copy)
+  static void copy_few(const Scalar* src, int n, Scalar* dst) {
+    if (n < 8) {
+      std::copy_n(src, n, dst);
+      return;
+    }
+    for (int k = 0; k + 8 < n; k += 8) std::memcpy(dst + k, src + k, 8 * sizeof(Scalar));
+    std::memcpy(dst + n - 8, src + n - 8, 8 * sizeof(Scalar));
   }
 
   // out[k][l] = field[off[l] + k]

@@ -98,8 +98,9 @@ class ArticulationBatches {
     Scalar speed = 0;
     std::uint8_t* diverged = nullptr;  // [articulation]
   };
-  // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations), and the guard
-  virtual void integrate(const State& in, const Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
+  // q_out = in.joint_q stepped by qd over dt (the coordinates of active articulations; their qd rewritten
+  // as the lanes held it, in the model's precision), and the guard
+  virtual void integrate(const State& in, Scalar* qd, Scalar dt, Scalar* q_out, const Divergence& divergence,
                          int threads) = 0;
   // dynamics, solve_rows (when `contacts` is given; no articulation skipped) and integrate of every active
   // articulation, a block at a time so that its data stay in cache between the three: the same
