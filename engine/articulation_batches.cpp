@@ -67,6 +67,7 @@ class Batches final : public ArticulationBatches {
     std::vector<int> limited;     // Revolute / Prismatic dofs with a finite limit in some world
     std::vector<V> limits;        // per block: [limited][2] lower and upper limit
     std::vector<int> limit_slot;  // per slot: [limited] the solver's slot of its limit impulses, -1 for none
+    std::vector<std::uint8_t> limit_span;  // per block: each world's slots follow each other (one span)
     bool enabled = true;
     bool factored = false;  // H of every block factored by an earlier step
     bool refactor = true;   // this step computes and factors H
@@ -172,6 +173,12 @@ class Batches final : public ArticulationBatches {
       const int nl = static_cast<int>(G.limited.size());
       for (const int a : G.arts)
         for (const int k : G.limited) G.limit_slot.push_back(limit_slot[art[a].qd_begin() + k]);
+      for (int b = 0; b < G.blocks; ++b) {
+        bool span = nl > 0;
+        for (int k = b * W * nl; k < (b + 1) * W * nl; ++k)
+          span &= G.limit_slot[k] >= 0 && G.limit_slot[k] == G.limit_slot[k - k % nl] + k % nl;
+        G.limit_span.push_back(span);
+      }
       G.limits.resize(static_cast<size_t>(G.blocks) * 2 * nl);
       for (int b = 0; b < G.blocks; ++b)
         for (int m = 0; m < nl; ++m)
@@ -694,17 +701,26 @@ class Batches final : public ArticulationBatches {
     batch_rows.lambda = R.lambda.data();
     batch_pgs_solve(batch_rows, s.pgs, w.qd.data());
 
-    // velocities and the impulses kept for warm starting: limits per dof and side, contacts as world
-    // vectors on body b
+    // velocities and the impulses kept for warm starting: limits per dof and side (each side's lanes at
+    // once: 0 where its row is off or not finite; then each world's), contacts as world vectors on body b
+    V* kept = R.kept_limit.data();
+    for (int m = 0; m < 2 * nl; ++m) {
+      const int r = R.limit_row[m];
+      const V x = r >= 0 ? (R.active[r] ? R.lambda[r] : V{}) : V{};
+      kept[m] = lane_abs<T>(x) <= std::numeric_limits<T>::max() ? x : V{};
+    }
     for (int l = 0; l < lanes; ++l) {
       if (!mine[l]) continue;
       if (!after_dynamics)
         for (int j = 0; j < nv; ++j) qd_io[qd_off[l] + j] = w.qd[j][l];
+      if (G.limit_span[b]) {
+        Scalar* out = impulse + 2 * limit_slot[l * nl];
+        for (int m = 0; m < 2 * nl; ++m) out[m] = kept[m][l];
+        continue;
+      }
       for (int m = 0; m < 2 * nl; ++m) {
-        const int slot = limit_slot[l * nl + m / 2], r = R.limit_row[m];
-        if (slot < 0) continue;
-        const T x = r >= 0 && R.active[r][l] ? R.lambda[r][l] : T(0);
-        impulse[2 * slot + m % 2] = std::isfinite(x) ? x : 0;
+        const int slot = limit_slot[l * nl + m / 2];
+        if (slot >= 0) impulse[2 * slot + m % 2] = kept[m][l];
       }
     }
     for (int t = 0; t < slots; ++t) {
@@ -865,6 +881,7 @@ class Batches final : public ArticulationBatches {
     std::vector<IntLanes<T>> active;
     std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
     std::vector<int> limit_row;                         // [limited][2] its row, or -1
+    std::vector<V> kept_limit;                          // [limited][2] the impulse kept for the next step
     std::vector<int> contact;                           // [slot][lane] the contact, or -1
     std::vector<V> frame;                               // [slot][3][3] the normal and tangents
     std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
@@ -882,6 +899,7 @@ class Batches final : public ArticulationBatches {
       for (auto* x : {&nonzero_begin, &nonzero_end})
         if (static_cast<int>(x->size()) < rows) x->resize(rows);
       if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
+      if (kept_limit.size() < static_cast<size_t>(rows)) kept_limit.resize(rows);
       if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
       if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
       for (auto* x : {&coef, &qd_in})

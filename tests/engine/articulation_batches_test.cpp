@@ -130,8 +130,10 @@ TEST(ArticulationBatches, TiledMassMatrixMatchesTheScalarProduct) {
 }
 
 TEST(ArticulationBatches, LimitRowsSolvedInBlocksMatchTheScalarRows) {
-  // the hanging quadruped pushed against its limits: every leg joint beyond its range at the start
-  const Model model = replicated(quadruped(false), 6, Precision::Float64);
+  // the hanging quadruped pushed against its limits: every leg joint beyond its range at the start.
+  // World 2's first leg joint has no limit, so its block's worlds keep their limit impulses apart
+  // (not one span a world); the last block's worlds in one span each
+  Model model = replicated(quadruped(false), 12, Precision::Float64);
   State batched = model.state();
   for (int j = 0; j < model.joint_count; ++j) {
     if (model.joint_type[j] != static_cast<int>(JointType::Revolute)) continue;
@@ -139,9 +141,14 @@ TEST(ArticulationBatches, LimitRowsSolvedInBlocksMatchTheScalarRows) {
     batched.joint_q[model.joint_q_start[j]] = model.joint_limit_upper[g] + 0.05;
     batched.joint_qd[g] = 1;
   }
+  const int unlimited = model.joint_qd_start[model.articulation(2).joint_begin + 1];
+  model.joint_limit_lower[unlimited] = -std::numeric_limits<Scalar>::infinity();
+  model.joint_limit_upper[unlimited] = std::numeric_limits<Scalar>::infinity();
   State scalar = model.state();
   scalar.assign(batched);
+  // two sweeps: the impulses each step starts from (the last step's kept) show in the result
   SolverFeatherstoneSettings settings;
+  settings.num_iterations = 2;
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   SolverFeatherstone on(model, settings);
