@@ -4,6 +4,9 @@
 # kernel benchmark (CRBA + fused Cholesky GFLOP/s against the measured FMA peak), then write the tables
 # and the plot.
 #   bash tools/bench.sh [extra Google Benchmark options, e.g. --benchmark_repetitions=3]
+# Repetitions run in random order across all the benchmarks of a program (Google Benchmark's random
+# interleaving), so that a slow spell of this shared machine spreads over NovaPhy's and MuJoCo's lines
+# alike instead of landing on whichever ran then; the tables quote medians.
 # Output: bench/results/bench_step.json, bench_batch.json, bench.md, bench.png
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,6 +14,8 @@ bash tools/setup.sh >/dev/null
 cmake -S . -B build -DNOVAPHY_BUILD_BENCH=ON >/dev/null
 cmake --build build -j"$(nproc)" --target novaphy_bench_step novaphy_bench_batch >/dev/null
 mkdir -p bench/results
-./build/bench/novaphy_bench_step --benchmark_out=bench/results/bench_step.json --benchmark_out_format=json "$@"
-./build/bench/novaphy_bench_batch --benchmark_out=bench/results/bench_batch.json --benchmark_out_format=json "$@"
+./build/bench/novaphy_bench_step --benchmark_enable_random_interleaving=true --benchmark_out=bench/results/bench_step.json \
+  --benchmark_out_format=json "$@"
+./build/bench/novaphy_bench_batch --benchmark_enable_random_interleaving=true --benchmark_out=bench/results/bench_batch.json \
+  --benchmark_out_format=json "$@"
 /usr/bin/python3 tools/bench_report.py bench/results/bench_step.json bench/results/bench_batch.json --out bench/results/bench
