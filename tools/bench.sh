@@ -10,6 +10,9 @@
 # Output: bench/results/bench_step.json, bench_batch.json, bench.md, bench.png
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# OpenMP threads pinned one to a core, for both engines' loops (unset, the scheduler moved them and the
+# two-thread lines of either engine came out up to a third low in some repetitions)
+export OMP_PROC_BIND="${OMP_PROC_BIND:-close}" OMP_PLACES="${OMP_PLACES:-cores}"
 bash tools/setup.sh >/dev/null
 cmake -S . -B build -DNOVAPHY_BUILD_BENCH=ON >/dev/null
 cmake --build build -j"$(nproc)" --target novaphy_bench_step novaphy_bench_batch >/dev/null
