@@ -48,14 +48,14 @@ def step_tables(path):
     rate = {}  # (engine, scene, precision, worlds, threads) -> robot-steps/s
     mjdata = {}  # scene -> MuJoCo's mjData bytes per world
     memory = {}  # (scene, precision) -> (bytes per world at 4096 worlds, state + H + factor bytes)
-    height = {}  # (engine, scene, precision) -> the floor scenes' mean base height at 4096 worlds, all threads
+    height = {}  # (engine, scene, precision, worlds, threads) -> the floor scenes' mean base height at the end
     for name, entries in grouped.items():
         engine = "novaphy" if name.startswith("BM_NovaPhyStep") else "mujoco"
         e = entries[0]
         key = (engine, int(e["scene"]), int(e["precision"]), int(e["worlds"]), int(e["threads"]))
         rate[key] = median(entries, "items_per_second")
-        if "base_height" in e and key[3] == 4096:
-            height[(engine, key[1], key[2])] = median(entries, "base_height")
+        if "base_height" in e:
+            height[key] = median(entries, "base_height")
         if engine == "mujoco":
             mjdata[key[1]] = float(e["mjdata_bytes_per_world"])
         if engine == "novaphy" and int(e["worlds"]) == 4096 and int(e["threads"]) == 1:
@@ -88,12 +88,15 @@ def step_tables(path):
             many = rate.get((engine, scene, precision, 4096, all_threads))
             if one and many:
                 lines.append(f"| {STEP_SCENES[scene]} | {label} | {one:,.0f} | {many:,.0f} | {many / one:.2f}x |")
-    if height:
-        lines += ["", "The floor scenes' robots at the end of the 4096-world runs, mean base height (m): "
-                  + "; ".join(f"{STEP_SCENES[scene]}: MuJoCo {height.get(('mujoco', MUJOCO_SCENE.get(scene, scene), 0), 0):.4f}, "
-                              f"NovaPhy float64 {height.get(('novaphy', scene, 0), 0):.4f}, "
-                              f"float32 {height.get(('novaphy', scene, 1), 0):.4f}"
-                              for scene in sorted({k[1] for k in height if k[0] == 'novaphy'}))]
+    standing = []
+    for scene in sorted({k[1] for k in height if k[0] == "novaphy"}):
+        z = [height.get(k, 0) for k in (("mujoco", MUJOCO_SCENE.get(scene, scene), 0, 4096, all_threads),
+                                        ("novaphy", scene, 0, 4096, all_threads),
+                                        ("novaphy", scene, 1, 4096, all_threads))]
+        standing.append(f"{STEP_SCENES[scene]}: MuJoCo {z[0]:.4f}, NovaPhy float64 {z[1]:.4f}, float32 {z[2]:.4f}")
+    if standing:
+        lines += ["", "The floor scenes' robots at the end of the 4096-world runs on all threads, mean base height "
+                  "(m): " + "; ".join(standing)]
     lines += ["", "Memory per world at 4096 worlds, bytes: the solver's (batched blocks, scalar scratch, step vectors)",
               "plus the State's arrays, against the State's arrays plus H and its factor:", "",
               "| scene | precision | solver | state | solver + state | state + H + factor | ratio | MuJoCo mjData |",
