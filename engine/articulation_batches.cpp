@@ -258,18 +258,23 @@ class Batches final : public ArticulationBatches {
 
   void step(const State& in, const Control& control, const Scalar* tau, Scalar dt, const DynamicsOptions& options,
             const BlockContacts* contacts, const RowSettings& rows, Scalar* qd, Scalar* impulse, Scalar* q_out,
-            const Divergence& divergence, int* factor_failure, int threads) override {
+            const Divergence& divergence, int* factor_failure, State* out, bool stream, int threads) override {
     begin_dynamics(options, threads);
-    for_each_block(threads, [&](Group& G, int b, BatchWork<T>& w) {
-      // in the thread's scratch, not written out to the block: S and o (no scalar row reads them after),
-      // and a factor no later step reuses
-      Output& scratch = output_[omp_get_thread_num()];
-      V* H = !options.keep_factor && G.refactor ? scratch.H.data() : G.block_H(b);
-      V *S = scratch.S.data(), *o = scratch.origin;
-      dynamics_block(G, b, w, in, control, tau, dt, options, H, S, o, nullptr, nullptr, factor_failure, true);
-      if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse, true);
-      integrate_block(G, b, w, in, qd, dt, q_out, divergence, true);
-    });
+    for_each_block(
+        threads,
+        [&](Group& G, int b, BatchWork<T>& w) {
+          // in the thread's scratch, not written out to the block: S and o (no scalar row reads them after),
+          // and a factor no later step reuses
+          Output& scratch = output_[omp_get_thread_num()];
+          V* H = !options.keep_factor && G.refactor ? scratch.H.data() : G.block_H(b);
+          V *S = scratch.S.data(), *o = scratch.origin;
+          dynamics_block(G, b, w, in, control, tau, dt, options, H, S, o, nullptr, nullptr, factor_failure, true);
+          if (contacts) rows_block(G, b, w, in, no_skip_.data(), *contacts, rows, dt, H, S, o, qd, impulse, true);
+          const IntLanes<T> written =
+              integrate_block(G, b, w, in, qd, dt, q_out, divergence, true, factor_failure, out);
+          if (out) store_block(G, b, w, w.q_next.data(), written, *out, stream);
+        },
+        stream_fence);
     end_dynamics(options.keep_factor);
   }
 
@@ -285,65 +290,7 @@ class Batches final : public ArticulationBatches {
           }
           gather(&G.q_off[b * W], q_in, topo.coord_count, w.q.data());
           gather(&G.qd_off[b * W], qd_in, topo.dof_count, w.qd.data());
-          // the kinematics of the new coordinates in the thread's scratch: the block's own S and o stay
-          // those of the step (the next one computes its own)
-          Output& scratch = output_[omp_get_thread_num()];
-          std::vector<Scalar>& out_stage = scratch.stage;
-          V* o = scratch.origin;
-          V* S = scratch.S.data();
-          batch_kinematics(topo, w.q.data(), w, o);
-          batch_subspace(topo, w, o, S);
-          batch_velocity(topo, S, w.qd.data(), w);
-          const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
-          const int* body = &G.body[static_cast<size_t>(b) * W * nb];
-          // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
-          // every body's 13 numbers in lanes first, then each world's written out in order
-          V* x_all = w.bodies.data();
-          auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
-            V* x = x_all + 13 * k;
-            V c[3];
-            mat_vec(p, Q, com, o, c);
-            for (int m = 0; m < 3; ++m) x[m] = p[m];
-            for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
-            x[7] = v[3] + v[1] * c[2] - v[2] * c[1];
-            x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
-            x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
-            for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
-          };
-          const V* body_com = G.body_com(b);
-          for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
-          for (size_t k = 0; k < G.welds.size(); ++k) {
-            const Weld& weld = G.welds[k];
-            V p[3], Q[4], d[3];
-            const V* R = &w.R[9 * weld.link];
-            for (int m = 0; m < 3; ++m)
-              d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
-            for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
-            quat_product(&w.Q[4 * weld.link], weld.q, Q);
-            put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
-          }
-          if (stream && G.contiguous[b]) {
-            // the block's worlds' bodies follow each other: both arrays' spans staged, then streamed out
-            Scalar* q = out_stage.data();
-            Scalar* qd = q + 7 * nb * lanes;
-            for (int l = 0; l < lanes; ++l)
-              for (int k = 0; k < nb; ++k) {
-                const V* x = x_all + 13 * k;
-                for (int m = 0; m < 7; ++m) q[7 * (l * nb + k) + m] = x[m][l];
-                for (int m = 0; m < 6; ++m) qd[6 * (l * nb + k) + m] = x[7 + m][l];
-              }
-            stream_copy(q, out.body_q.data() + 7 * body[0], 7 * nb * lanes);
-            stream_copy(qd, out.body_qd.data() + 6 * body[0], 6 * nb * lanes);
-            return;
-          }
-          for (int l = 0; l < lanes; ++l)
-            for (int k = 0; k < nb; ++k) {
-              const V* x = x_all + 13 * k;
-              Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
-              Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
-              for (int m = 0; m < 7; ++m) q[m] = x[m][l];
-              for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
-            }
+          store_block(G, b, w, w.q.data(), ~IntLanes<T>{}, out, stream);
         },
         stream_fence);
   }
@@ -738,11 +685,81 @@ class Batches final : public ArticulationBatches {
     }
   }
 
-  // one block of integrate(); the velocities written to qd
+  // body_q and body_qd of block b's worlds where `written` has their lane, from the coordinates q and the
+  // velocities w.qd (lanes): the kinematics in the thread's scratch (the block's own S and o stay those of
+  // the step). With `stream`, a block whose worlds' bodies follow each other, all written, is staged and
+  // streamed around the caches
+  void store_block(Group& G, int b, BatchWork<T>& w, const V* q, const IntLanes<T>& written, State& out, bool stream) {
+    const BatchTopology<T>& topo = G.topo;
+    Output& scratch = output_[omp_get_thread_num()];
+    std::vector<Scalar>& out_stage = scratch.stage;
+    V* o = scratch.origin;
+    V* S = scratch.S.data();
+    batch_kinematics(topo, q, w, o);
+    batch_subspace(topo, w, o, S);
+    batch_velocity(topo, S, w.qd.data(), w);
+    const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
+    const int* body = &G.body[static_cast<size_t>(b) * W * nb];
+    // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
+    // every body's 13 numbers in lanes first, then each world's written out in order
+    V* x_all = w.bodies.data();
+    auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
+      V* x = x_all + 13 * k;
+      V c[3];
+      mat_vec(p, Q, com, o, c);
+      for (int m = 0; m < 3; ++m) x[m] = p[m];
+      for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
+      x[7] = v[3] + v[1] * c[2] - v[2] * c[1];
+      x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
+      x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
+      for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
+    };
+    const V* body_com = G.body_com(b);
+    for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
+    for (size_t k = 0; k < G.welds.size(); ++k) {
+      const Weld& weld = G.welds[k];
+      V p[3], Q[4], d[3];
+      const V* R = &w.R[9 * weld.link];
+      for (int m = 0; m < 3; ++m) d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
+      for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
+      quat_product(&w.Q[4 * weld.link], weld.q, Q);
+      put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
+    }
+    bool all = true;
+    for (int l = 0; l < lanes; ++l) all &= written[l] != 0;
+    if (stream && all && G.contiguous[b]) {
+      // the block's worlds' bodies follow each other: both arrays' spans staged, then streamed out
+      Scalar* q = out_stage.data();
+      Scalar* qd = q + 7 * nb * lanes;
+      for (int l = 0; l < lanes; ++l)
+        for (int k = 0; k < nb; ++k) {
+          const V* x = x_all + 13 * k;
+          for (int m = 0; m < 7; ++m) q[7 * (l * nb + k) + m] = x[m][l];
+          for (int m = 0; m < 6; ++m) qd[6 * (l * nb + k) + m] = x[7 + m][l];
+        }
+      stream_copy(q, out.body_q.data() + 7 * body[0], 7 * nb * lanes);
+      stream_copy(qd, out.body_qd.data() + 6 * body[0], 6 * nb * lanes);
+      return;
+    }
+    for (int l = 0; l < lanes; ++l)
+      for (int k = 0; k < nb && written[l]; ++k) {
+        const V* x = x_all + 13 * k;
+        Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
+        Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
+        for (int m = 0; m < 7; ++m) q[m] = x[m][l];
+        for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
+      }
+  }
+
+  // one block of integrate(); the velocities written to qd. With `out` (a step that stores as it goes),
+  // the coordinates and velocities are written to out.joint_q and out.joint_qd instead, and only for the
+  // worlds that did not diverge and whose factor did not fail (the lanes returned); q_out and qd are not
+  // written
   // (with `after_rows`, w.q and w.qd hold the coordinates and the velocities the block's dynamics and rows
   // left in this pass: not gathered)
-  void integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, Scalar* qd, Scalar dt, Scalar* q_out,
-                       const Divergence& divergence, bool after_rows) {
+  IntLanes<T> integrate_block(Group& G, int b, BatchWork<T>& w, const State& in, Scalar* qd, Scalar dt, Scalar* q_out,
+                              const Divergence& divergence, bool after_rows, const int* factor_failure = nullptr,
+                              State* out = nullptr) {
     const int nq = G.topo.coord_count, nv = G.topo.dof_count;
     if (!after_rows) {
       gather(&G.q_off[b * W], in.joint_q.data(), nq, w.q.data());
@@ -759,13 +776,19 @@ class Batches final : public ArticulationBatches {
       finite &= speed <= std::numeric_limits<T>::max();
       fastest = speed > fastest ? speed : fastest;
     }
+    IntLanes<T> written{};
     for (int l = 0; l < lanes_in(G, b); ++l) {
-      Scalar* x = q_out + G.q_off[b * W + l];
+      const int a = G.arts[b * W + l];
+      const bool diverged = !finite[l] || static_cast<Scalar>(fastest[l]) > divergence.speed;
+      divergence.diverged[a] = diverged;
+      if (out && (diverged || factor_failure[a] >= 0)) continue;
+      written[l] = -1;
+      Scalar* x = (out ? out->joint_q.data() : q_out) + G.q_off[b * W + l];
       for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
-      Scalar* v = qd + G.qd_off[b * W + l];
+      Scalar* v = (out ? out->joint_qd.data() : qd) + G.qd_off[b * W + l];
       for (int k = 0; k < nv; ++k) v[k] = w.qd[k][l];
-      divergence.diverged[G.arts[b * W + l]] = !finite[l] || static_cast<Scalar>(fastest[l]) > divergence.speed;
     }
+    return written;
   }
 
   // dst[0, n) = src[0, n), the few numbers of one world: in registers, eight at a time with the last

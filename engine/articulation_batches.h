@@ -104,10 +104,14 @@ class ArticulationBatches {
                          int threads) = 0;
   // dynamics, solve_rows (when `contacts` is given; no articulation skipped) and integrate of every active
   // articulation, a block at a time so that its data stay in cache between the three: the same
-  // arithmetic as calling them in turn, for a step that has no rows on the solver's scalar path
+  // arithmetic as calling them in turn, for a step that has no rows on the solver's scalar path. With
+  // `out`, store_bodies follows in the same pass, from the block's lanes: out.joint_q, joint_qd, body_q and
+  // body_qd are written (q_out and qd are not) for every world that did not diverge and whose factor did
+  // not fail; the others' are left to the caller
   virtual void step(const State& in, const Control& control, const Scalar* tau, Scalar dt,
                     const DynamicsOptions& options, const BlockContacts* contacts, const RowSettings& rows, Scalar* qd,
-                    Scalar* impulse, Scalar* q_out, const Divergence& divergence, int* factor_failure, int threads) = 0;
+                    Scalar* impulse, Scalar* q_out, const Divergence& divergence, int* factor_failure, State* out,
+                    bool stream, int threads) = 0;
   // out.joint_q = q, out.joint_qd = qd, and body_q / body_qd from them, for active articulations; with
   // `stream`, the bodies of a block whose worlds' bodies follow each other are written around the caches
   virtual void store_bodies(const Scalar* q, const Scalar* qd, State& out, bool stream, int threads) = 0;

@@ -240,10 +240,13 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   fused_step_ = all_on_batch_ && scalar_contacts_.empty() && !settings.profile_stages;
   qd_in_ = in.joint_qd.data();
   std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
+  // the blocks of a fused step write their worlds' new states as they go, except under Raise, whose
+  // divergence error writes nothing: integrate stores them after the guard
+  stored_in_step_ = fused_step_ && settings.on_divergence != DivergencePolicy::Raise;
   if (fused_step_) {
     batches_->step(in, control, control_forces(control), dt, dynamics_options(refactor, dt),
                    block_rows ? &block : nullptr, rows, qd_.data(), limit_impulse_.data(), q_next_.data(), divergence(),
-                   factor_failure_.data(), thread_count());
+                   factor_failure_.data(), stored_in_step_ ? &out : nullptr, stream_body_output(), thread_count());
     std::fill(factored_batch_.begin(), factored_batch_.end(), 1);
     check_factors();
   } else {
@@ -281,6 +284,8 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   check_finite_step(in, control, &wrenches_, &drives_, thread_count());
 }
+
+bool SolverFeatherstone::stream_body_output() const { return step_bytes_ > settings.stream_body_output_above; }
 
 ArticulationBatches::Divergence SolverFeatherstone::divergence() {
   ArticulationBatches::Divergence d;
@@ -700,6 +705,16 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
       for (int a = 0; a < static_cast<int>(art_.size()); ++a)
         if (diverged_[a] && on_batch(a)) f(a);
   };
+  // out.joint_q, joint_qd, body_q and body_qd of articulation a from q_next_ and qd_, in double
+  auto store = [&](int a) {
+    const ArticulationView& art = art_[a];
+    std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
+    std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
+    ArticulationScratch& s = scratch(a);
+    forward_kinematics(art, out.joint_q.data() + art.q_begin(), s);
+    forward_velocity(art, out.joint_qd.data() + art.qd_begin(), s);
+    store_bodies(a, out);
+  };
   for_each_to_visit([&](int a) {
     const ArticulationView& art = art_[a];
     const int q0 = art.q_begin(), qd0 = art.qd_begin(), nq = art.coord_count(), nv = art.dof_count();
@@ -714,6 +729,8 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
     const bool keep = settings.on_divergence == DivergencePolicy::Flag;  // the input state is finite
     for (int k = 0; k < nq; ++k) q_next_[q0 + k] = keep ? in.joint_q[q0 + k] : model_.joint_q0[q0 + k];
     for (int k = 0; k < nv; ++k) qd_[qd0 + k] = keep ? in.joint_qd[qd0 + k] : 0;
+    // (the blocks left out the worlds they flagged; out may be in, whose state Flag keeps)
+    if (stored_in_step_ && on_batch(a)) store(a);
   });
   if (settings.on_divergence == DivergencePolicy::Raise)
     for (size_t a = 0; a < art_.size(); ++a)
@@ -722,19 +739,10 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
              "; dt ", dt, " too large for the model's stiffness or forces?)");
   if (&out != &in) out.body_f = in.body_f;
   // (the blocks copy their own articulations' coordinates out with their bodies)
-  if (batch_step_) {
-    const bool stream = step_bytes_ > settings.stream_body_output_above;
-    batches_->store_bodies(q_next_.data(), qd_.data(), out, stream, thread_count());
-  }
+  if (batch_step_ && !stored_in_step_)
+    batches_->store_bodies(q_next_.data(), qd_.data(), out, stream_body_output(), thread_count());
   for_each_unbatched([&](int a) {
-    if (on_batch(a)) return;
-    const ArticulationView& art = art_[a];
-    std::copy_n(q_next_.data() + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());
-    std::copy_n(qd_.data() + art.qd_begin(), art.dof_count(), out.joint_qd.begin() + art.qd_begin());
-    ArticulationScratch& s = scratch(a);
-    forward_kinematics(art_[a], out.joint_q.data() + art_[a].q_begin(), s);
-    forward_velocity(art_[a], out.joint_qd.data() + art_[a].qd_begin(), s);
-    store_bodies(a, out);
+    if (!on_batch(a)) store(a);
   });
 }
 

@@ -101,7 +101,10 @@ class SolverFeatherstone {
  public:
   explicit SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings = {});
 
-  // state_in may be state_out; on error nothing is written
+  // state_in may be state_out; on error nothing is written, with one exception: under on_divergence Flag
+  // or Reset the batched blocks write each world's new state as they step it, so a mass matrix that is not
+  // positive definite in some world (a massless leaf link, which no builder call makes) raises after the
+  // other worlds' states were written; that world's is left as it was
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
 
   JointSupportMatrix joint_support() const;
@@ -125,6 +128,8 @@ class SolverFeatherstone {
   ArticulationBatches::DynamicsOptions dynamics_options(bool refactor, Scalar dt) const;
   // the blocks' divergence guard: settings.divergence_speed, into diverged_
   ArticulationBatches::Divergence divergence();
+  // the blocks write body_q and body_qd around the caches (settings.stream_body_output_above)
+  bool stream_body_output() const;
   // the control's joint forces with the actuators' added (rhs_, or joint_f itself when nothing adds)
   const Scalar* control_forces(const Control& control);
   // throws naming the first articulation whose factor failed this step
@@ -177,6 +182,7 @@ class SolverFeatherstone {
   bool batch_step_ = false;
   bool all_on_batch_ = false;          // this step: every articulation with dofs in a block that is on
   bool fused_step_ = false;            // this step: the blocks step a block at a time (ArticulationBatches::step)
+  bool stored_in_step_ = false;        // ... and write their worlds' new states to out as they go
   std::vector<int> unbatched_;         // articulations without dofs (no block has them)
   std::int64_t step_bytes_ = 0;        // what a step touches: the solver's memory when made and the state's arrays
   bool wrenches_ = false;              // the step's input has a nonzero body_f

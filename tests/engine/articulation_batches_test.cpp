@@ -382,7 +382,8 @@ TEST(ArticulationBatches, StreamedBodyOutputEqualsStoredOutput) {
 // rows and integration in turn; with settings.profile_stages the solver times the stages over all
 // blocks one after another instead. Both are the same arithmetic: bit-identical states and impulses,
 // with contacts, limits, PD drives, an applied wrench, angular damping and a change of
-// update_mass_matrix_interval all in play
+// update_mass_matrix_interval all in play. One at a time, the blocks also write each world's new state
+// as they step it; under on_divergence Raise they leave that to a pass after the guard: the same states
 TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
   for (const Precision precision : {Precision::Float32, Precision::Float64}) {
     constexpr int kWorlds = 100;
@@ -396,27 +397,35 @@ TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
       control.joint_target_kd[k] = 0.5;
       control.joint_target_pos[k] = 0.1;
     }
-    State blocks = model.state(), stages = model.state();
+    State blocks = model.state(), stages = model.state(), after_guard = model.state();
     blocks.assign(initial);
     stages.assign(initial);
-    blocks.body_f[6 * 3 + 2] = stages.body_f[6 * 3 + 2] = 5;
+    after_guard.assign(initial);
+    blocks.body_f[6 * 3 + 2] = stages.body_f[6 * 3 + 2] = after_guard.body_f[6 * 3 + 2] = 5;
     SolverFeatherstoneSettings settings;
     settings.angular_damping = 0.5;
     SolverFeatherstone one_at_a_time(model, settings);
+    settings.on_divergence = DivergencePolicy::Raise;
+    SolverFeatherstone stored_after_guard(model, settings);
+    settings.on_divergence = DivergencePolicy::Flag;
     settings.profile_stages = true;
     SolverFeatherstone in_turn(model, settings);
     // the mass matrix refactored every step (one at a time: in scratch, kept for no later step), then
     // every third (kept in the blocks)
     auto interval = [&](int k) { return k < 20 ? 1 : 3; };
     CollisionPipeline pipeline(model);
-    Contacts contacts_blocks = pipeline.contacts(), contacts_stages = pipeline.contacts();
+    Contacts contacts_blocks = pipeline.contacts(), contacts_stages = pipeline.contacts(),
+             contacts_after_guard = pipeline.contacts();
     int contacts_seen = 0;
     for (int k = 0; k < 40; ++k) {
       pipeline.collide(blocks, contacts_blocks);
       pipeline.collide(stages, contacts_stages);
-      one_at_a_time.settings.update_mass_matrix_interval = in_turn.settings.update_mass_matrix_interval = interval(k);
+      pipeline.collide(after_guard, contacts_after_guard);
+      one_at_a_time.settings.update_mass_matrix_interval = in_turn.settings.update_mass_matrix_interval =
+          stored_after_guard.settings.update_mass_matrix_interval = interval(k);
       one_at_a_time.step(blocks, blocks, control, contacts_blocks, kDt);
       in_turn.step(stages, stages, control, contacts_stages, kDt);
+      stored_after_guard.step(after_guard, after_guard, control, contacts_after_guard, kDt);
       contacts_seen += contacts_blocks.contact_count;
     }
     EXPECT_GT(contacts_seen, 0);
@@ -429,6 +438,8 @@ TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
     EXPECT_TRUE(same(blocks.body_q, stages.body_q));
     EXPECT_TRUE(same(blocks.body_qd, stages.body_qd));
     EXPECT_TRUE(same(contacts_blocks.contact_impulse, contacts_stages.contact_impulse));
+    for (const auto field : {&State::joint_q, &State::joint_qd, &State::body_q, &State::body_qd})
+      EXPECT_TRUE(same(blocks.*field, after_guard.*field));
   }
 }
 

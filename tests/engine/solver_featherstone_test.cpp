@@ -486,6 +486,77 @@ TEST(DivergenceGuard, ResetRestartsFromTheInitialState) {
   EXPECT_NE(wild.state.joint_q[1], wild.model.joint_q0[1]);  // the others went on swinging
 }
 
+// four worlds of one pendulum, in one block: the blocks write each world's new state as they step it,
+// all but the worlds they flag
+ModelBuilder pendulum_worlds(Precision precision) {
+  ModelBuilder robot, worlds;
+  const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.parent_xform.p = Vec3(0, 2, 0);
+  options.child_xform.p = Vec3(-0.25, 0, 0);
+  robot.add_joint_revolute(-1, link, options);
+  worlds.set_precision(precision);
+  worlds.replicate(robot, 4);
+  return worlds;
+}
+
+TEST(DivergenceGuard, AFlaggedWorldOfABlockKeepsItsStateAndBodies) {
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    Scene calm(pendulum_worlds(precision)), wild(pendulum_worlds(precision));
+    ASSERT_EQ(wild.solver.batches()->block_count(), 1);
+    calm.run(0.1);
+    wild.run(0.1);
+    wild.state.joint_qd[2] = 2e6;
+    const State before = wild.state;
+    calm.run(kDt);
+    wild.run(kDt);
+    EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+    EXPECT_EQ(wild.state.joint_q[2], before.joint_q[2]);
+    EXPECT_EQ(wild.state.joint_qd[2], before.joint_qd[2]);
+    // its bodies from its kept state
+    State fk = wild.state;
+    eval_fk(wild.model, fk);
+    for (int m = 0; m < 7; ++m) EXPECT_NEAR(wild.state.body_q[7 * 2 + m], fk.body_q[7 * 2 + m], 1e-12);
+    for (int m = 0; m < 6; ++m) EXPECT_NEAR(wild.state.body_qd[6 * 2 + m], fk.body_qd[6 * 2 + m], 1e-9);
+    for (const int k : {0, 1, 3}) {  // the others stepped exactly as without it
+      EXPECT_EQ(wild.state.joint_q[k], calm.state.joint_q[k]);
+      EXPECT_EQ(wild.state.joint_qd[k], calm.state.joint_qd[k]);
+      for (int m = 0; m < 7; ++m) EXPECT_EQ(wild.state.body_q[7 * k + m], calm.state.body_q[7 * k + m]);
+    }
+  }
+}
+
+// a mass matrix that is not positive definite in one world (its link made massless on the Model, as no
+// builder call allows) raises; that world is left as it was, and under Raise every world is
+TEST(SolverFeatherstoneErrors, AFailedMassMatrixLeavesItsWorldAsItWas) {
+  for (const DivergencePolicy policy : {DivergencePolicy::Flag, DivergencePolicy::Raise}) {
+    Model model = pendulum_worlds(Precision::Float32).finalize();
+    model.body_mass[1] = 0;
+    std::fill_n(model.body_inertia.begin() + 9, 9, 0);
+    SolverFeatherstoneSettings settings;
+    settings.on_divergence = policy;
+    SolverFeatherstone solver(model, settings);
+    CollisionPipeline pipeline(model);
+    Contacts contacts = pipeline.contacts();
+    State state = model.state();
+    const State before = state;
+    EXPECT_NOVAPHY_ERROR(solver.step(state, state, model.control(), contacts, kDt),
+                         "articulation 1: mass matrix is not positive definite at dof 1");
+    EXPECT_EQ(state.joint_q[1], before.joint_q[1]);
+    EXPECT_EQ(state.joint_qd[1], before.joint_qd[1]);
+    for (int m = 0; m < 7; ++m) EXPECT_EQ(state.body_q[7 + m], before.body_q[7 + m]);
+    if (policy == DivergencePolicy::Raise) {
+      EXPECT_EQ(state.joint_q, before.joint_q);
+      EXPECT_EQ(state.joint_qd, before.joint_qd);
+      EXPECT_EQ(state.body_q, before.body_q);
+      EXPECT_EQ(state.body_qd, before.body_qd);
+    } else {  // the others were stepped as they went (the one exception to "nothing is written")
+      EXPECT_NE(state.joint_qd[0], before.joint_qd[0]);
+    }
+  }
+}
+
 // a body whose step overflows to infinity while it rests on another: no NaN crosses the contact
 TEST(DivergenceGuard, NoNanSpreadsThroughContacts) {
   ModelBuilder builder;
