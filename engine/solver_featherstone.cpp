@@ -240,13 +240,10 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   fused_step_ = all_on_batch_ && scalar_contacts_.empty() && !settings.profile_stages;
   qd_in_ = in.joint_qd.data();
   std::fill(factor_failure_.begin(), factor_failure_.end(), -1);
-  // the blocks of a fused step write their worlds' new states as they go, except under Raise, whose
-  // divergence error writes nothing: integrate stores them after the guard
-  stored_in_step_ = fused_step_ && settings.on_divergence != DivergencePolicy::Raise;
   if (fused_step_) {
     batches_->step(in, control, control_forces(control), dt, dynamics_options(refactor, dt),
                    block_rows ? &block : nullptr, rows, qd_.data(), limit_impulse_.data(), q_next_.data(), divergence(),
-                   factor_failure_.data(), stored_in_step_ ? &out : nullptr, stream_body_output(), thread_count());
+                   factor_failure_.data(), stores_in_step() ? &out : nullptr, stream_body_output(), thread_count());
     std::fill(factored_batch_.begin(), factored_batch_.end(), 1);
     check_factors();
   } else {
@@ -283,6 +280,10 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   check_finite_step(in, control, &wrenches_, &drives_, thread_count());
+}
+
+bool SolverFeatherstone::stores_in_step() const {
+  return fused_step_ && settings.on_divergence != DivergencePolicy::Raise;
 }
 
 bool SolverFeatherstone::stream_body_output() const { return step_bytes_ > settings.stream_body_output_above; }
@@ -730,7 +731,7 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
     for (int k = 0; k < nq; ++k) q_next_[q0 + k] = keep ? in.joint_q[q0 + k] : model_.joint_q0[q0 + k];
     for (int k = 0; k < nv; ++k) qd_[qd0 + k] = keep ? in.joint_qd[qd0 + k] : 0;
     // (the blocks left out the worlds they flagged; out may be in, whose state Flag keeps)
-    if (stored_in_step_ && on_batch(a)) store(a);
+    if (stores_in_step() && on_batch(a)) store(a);
   });
   if (settings.on_divergence == DivergencePolicy::Raise)
     for (size_t a = 0; a < art_.size(); ++a)
@@ -739,7 +740,7 @@ void SolverFeatherstone::integrate(const State& in, State& out, Scalar dt) {
              "; dt ", dt, " too large for the model's stiffness or forces?)");
   if (&out != &in) out.body_f = in.body_f;
   // (the blocks copy their own articulations' coordinates out with their bodies)
-  if (batch_step_ && !stored_in_step_)
+  if (batch_step_ && !stores_in_step())
     batches_->store_bodies(q_next_.data(), qd_.data(), out, stream_body_output(), thread_count());
   for_each_unbatched([&](int a) {
     if (!on_batch(a)) store(a);

@@ -128,6 +128,9 @@ class SolverFeatherstone {
   ArticulationBatches::DynamicsOptions dynamics_options(bool refactor, Scalar dt) const;
   // the blocks' divergence guard: settings.divergence_speed, into diverged_
   ArticulationBatches::Divergence divergence();
+  // the blocks of this (fused) step write their worlds' new states to out as they step them: not under
+  // Raise, whose divergence error writes nothing (integrate stores them after the guard)
+  bool stores_in_step() const;
   // the blocks write body_q and body_qd around the caches (settings.stream_body_output_above)
   bool stream_body_output() const;
   // the control's joint forces with the actuators' added (rhs_, or joint_f itself when nothing adds)
@@ -182,7 +185,6 @@ class SolverFeatherstone {
   bool batch_step_ = false;
   bool all_on_batch_ = false;          // this step: every articulation with dofs in a block that is on
   bool fused_step_ = false;            // this step: the blocks step a block at a time (ArticulationBatches::step)
-  bool stored_in_step_ = false;        // ... and write their worlds' new states to out as they go
   std::vector<int> unbatched_;         // articulations without dofs (no block has them)
   std::int64_t step_bytes_ = 0;        // what a step touches: the solver's memory when made and the state's arrays
   bool wrenches_ = false;              // the step's input has a nonzero body_f
