@@ -12,6 +12,7 @@
 #include "engine/parallel.h"
 #include "kernels/batch.h"
 #include "kernels/batch_pgs.h"
+#include "kernels/lane_transpose.h"
 #include "kernels/stream.h"
 
 namespace novaphy {
@@ -701,18 +702,21 @@ class Batches final : public ArticulationBatches {
     const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
     const int* body = &G.body[static_cast<size_t>(b) * W * nb];
     // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
-    // every body's 13 numbers in lanes first, then each world's written out in order
-    V* x_all = w.bodies.data();
+    // in lanes first, every body's body_q then every body's body_qd (a world's rows of each array
+    // when its bodies follow each other), then written out world by world
+    V* x_q = w.bodies.data();
+    V* x_qd = x_q + 7 * nb;
     auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
-      V* x = x_all + 13 * k;
+      V* x = x_q + 7 * k;
+      V* y = x_qd + 6 * k;
       V c[3];
       mat_vec(p, Q, com, o, c);
       for (int m = 0; m < 3; ++m) x[m] = p[m];
       for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
-      x[7] = v[3] + v[1] * c[2] - v[2] * c[1];
-      x[8] = v[4] + v[2] * c[0] - v[0] * c[2];
-      x[9] = v[5] + v[0] * c[1] - v[1] * c[0];
-      for (int m = 0; m < 3; ++m) x[10 + m] = v[m];
+      y[0] = v[3] + v[1] * c[2] - v[2] * c[1];
+      y[1] = v[4] + v[2] * c[0] - v[0] * c[2];
+      y[2] = v[5] + v[0] * c[1] - v[1] * c[0];
+      for (int m = 0; m < 3; ++m) y[3 + m] = v[m];
     };
     const V* body_com = G.body_com(b);
     for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
@@ -725,29 +729,36 @@ class Batches final : public ArticulationBatches {
       quat_product(&w.Q[4 * weld.link], weld.q, Q);
       put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
     }
+    IntLanes<T> real{};
+    for (int l = 0; l < lanes; ++l) real[l] = -1;
+    const IntLanes<T> store = written & real;
     bool all = true;
     for (int l = 0; l < lanes; ++l) all &= written[l] != 0;
-    if (stream && all && G.contiguous[b]) {
-      // the block's worlds' bodies follow each other: both arrays' spans staged, then streamed out
-      Scalar* q = out_stage.data();
-      Scalar* qd = q + 7 * nb * lanes;
-      for (int l = 0; l < lanes; ++l)
-        for (int k = 0; k < nb; ++k) {
-          const V* x = x_all + 13 * k;
-          for (int m = 0; m < 7; ++m) q[7 * (l * nb + k) + m] = x[m][l];
-          for (int m = 0; m < 6; ++m) qd[6 * (l * nb + k) + m] = x[7 + m][l];
-        }
-      stream_copy(q, out.body_q.data() + 7 * body[0], 7 * nb * lanes);
-      stream_copy(qd, out.body_qd.data() + 6 * body[0], 6 * nb * lanes);
+    if (G.contiguous[b]) {
+      // the block's worlds' bodies follow each other: each world's rows of body_q and body_qd are
+      // written at once, or with `stream` both arrays' spans staged and then streamed out
+      const bool staged = stream && all;
+      Scalar* q = staged ? out_stage.data() : out.body_q.data() + 7 * body[0];
+      Scalar* qd = staged ? q + 7 * nb * lanes : out.body_qd.data() + 6 * body[0];
+      Scalar *q_rows[W], *qd_rows[W];
+      for (int l = 0; l < W; ++l) {
+        q_rows[l] = q + 7 * nb * (l < lanes ? l : 0);
+        qd_rows[l] = qd + 6 * nb * (l < lanes ? l : 0);
+      }
+      rows_from_lanes<T>(x_q, 7 * nb, store, q_rows);
+      rows_from_lanes<T>(x_qd, 6 * nb, store, qd_rows);
+      if (staged) {
+        stream_copy(q, out.body_q.data() + 7 * body[0], 7 * nb * lanes);
+        stream_copy(qd, out.body_qd.data() + 6 * body[0], 6 * nb * lanes);
+      }
       return;
     }
     for (int l = 0; l < lanes; ++l)
       for (int k = 0; k < nb && written[l]; ++k) {
-        const V* x = x_all + 13 * k;
         Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
         Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
-        for (int m = 0; m < 7; ++m) q[m] = x[m][l];
-        for (int m = 0; m < 6; ++m) qd[m] = x[7 + m][l];
+        for (int m = 0; m < 7; ++m) q[m] = x_q[7 * k + m][l];
+        for (int m = 0; m < 6; ++m) qd[m] = x_qd[6 * k + m][l];
       }
   }
 
@@ -783,11 +794,9 @@ class Batches final : public ArticulationBatches {
       divergence.diverged[a] = diverged;
       if (out && (diverged || factor_failure[a] >= 0)) continue;
       written[l] = -1;
-      Scalar* x = (out ? out->joint_q.data() : q_out) + G.q_off[b * W + l];
-      for (int k = 0; k < nq; ++k) x[k] = w.q_next[k][l];
-      Scalar* v = (out ? out->joint_qd.data() : qd) + G.qd_off[b * W + l];
-      for (int k = 0; k < nv; ++k) v[k] = w.qd[k][l];
     }
+    scatter(&G.q_off[b * W], w.q_next.data(), nq, written, out ? out->joint_q.data() : q_out);
+    scatter(&G.qd_off[b * W], w.qd.data(), nv, written, out ? out->joint_qd.data() : qd);
     return written;
   }
 
@@ -804,10 +813,15 @@ class Batches final : public ArticulationBatches {
 
   // out[k][l] = field[off[l] + k]
   static void gather(const int* off, const Scalar* field, int count, V* out) {
-    for (int l = 0; l < W; ++l) {
-      const Scalar* x = field + off[l];
-      for (int k = 0; k < count; ++k) out[k][l] = static_cast<T>(x[k]);
-    }
+    const Scalar* row[W];
+    for (int l = 0; l < W; ++l) row[l] = field + off[l];
+    lanes_from_rows<T>(row, count, out);
+  }
+  // field[off[l] + k] = in[k][l] for the lanes l set in `lanes`
+  static void scatter(const int* off, const V* in, int count, const IntLanes<T>& lanes, Scalar* field) {
+    Scalar* row[W];
+    for (int l = 0; l < W; ++l) row[l] = field + off[l];
+    rows_from_lanes<T>(in, count, lanes, row);
   }
 
   // c = R(Q) com + p - o
