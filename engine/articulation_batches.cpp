@@ -657,15 +657,14 @@ class Batches final : public ArticulationBatches {
       const V x = r >= 0 ? (R.active[r] ? R.lambda[r] : V{}) : V{};
       kept[m] = lane_abs<T>(x) <= std::numeric_limits<T>::max() ? x : V{};
     }
-    for (int l = 0; l < lanes; ++l) {
+    if (!after_dynamics) scatter(qd_off, w.qd.data(), nv, mine, qd_io);
+    if (G.limit_span[b]) {  // each world's impulses one span
+      Scalar* row[W];
+      for (int l = 0; l < W; ++l) row[l] = impulse + 2 * limit_slot[l * nl];
+      rows_from_lanes<T>(kept, 2 * nl, mine, row);
+    }
+    for (int l = 0; l < lanes && !G.limit_span[b]; ++l) {
       if (!mine[l]) continue;
-      if (!after_dynamics)
-        for (int j = 0; j < nv; ++j) qd_io[qd_off[l] + j] = w.qd[j][l];
-      if (G.limit_span[b]) {
-        Scalar* out = impulse + 2 * limit_slot[l * nl];
-        for (int m = 0; m < 2 * nl; ++m) out[m] = kept[m][l];
-        continue;
-      }
       for (int m = 0; m < 2 * nl; ++m) {
         const int slot = limit_slot[l * nl + m / 2];
         if (slot >= 0) impulse[2 * slot + m % 2] = kept[m][l];
