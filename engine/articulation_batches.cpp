@@ -903,7 +903,13 @@ class Batches final : public ArticulationBatches {
         n, count,
         [&](int k) {
           Group& G = groups_[blocks_[k].first];
-          if (G.enabled) f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
+          if (!G.enabled) return;
+          if constexpr (std::is_same_v<T, float>) {  // (see SubnormalsAsZero: float32 blocks flush them)
+            const SubnormalsAsZero flush;
+            f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
+          } else {
+            f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
+          }
         },
         done);
   }

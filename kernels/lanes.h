@@ -8,6 +8,10 @@
 #include <cstdint>
 #include <cstring>
 
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
 namespace novaphy {
 
 #ifndef NOVAPHY_VECTOR_BYTES
@@ -52,6 +56,29 @@ inline bool any_lane(const IntLanes<T>& m) {
   for (const std::uint64_t word : x) any |= word;
   return any != 0;
 }
+
+// While one lives, the calling thread's vector arithmetic treats subnormal inputs as zero and flushes
+// subnormal results to zero (x86's MXCSR DAZ and FTZ; elsewhere nothing changes); the mode it found is
+// restored when it ends. The float32 blocks run under it: an operand below FLT_MIN (1.2e-38) takes the
+// core a slow microcode path per operation, and a robot near rest makes such operands every step (the
+// squares and products of coordinates and velocities of 1e-26 to 1e-19)
+class SubnormalsAsZero {
+ public:
+#if defined(__SSE__)
+  SubnormalsAsZero() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | kFlushToZero | kDenormalsAreZero); }
+  ~SubnormalsAsZero() { _mm_setcsr(saved_); }
+#else
+  SubnormalsAsZero() = default;
+#endif
+  SubnormalsAsZero(const SubnormalsAsZero&) = delete;
+  SubnormalsAsZero& operator=(const SubnormalsAsZero&) = delete;
+
+ private:
+#if defined(__SSE__)
+  static constexpr unsigned kFlushToZero = 0x8000, kDenormalsAreZero = 0x0040;
+  unsigned saved_;
+#endif
+};
 
 template <typename T>
 inline Lanes<T> lane_sqrt(Lanes<T> x) {

@@ -527,6 +527,29 @@ TEST(DivergenceGuard, AFlaggedWorldOfABlockKeepsItsStateAndBodies) {
   }
 }
 
+// a float32 block flushes subnormal floats to zero (SubnormalsAsZero): a level slider's velocity of 1e-40,
+// below FLT_MIN, steps as zero; float64 keeps it, and the other worlds stay at rest
+TEST(Precision, Float32BlocksFlushSubnormalVelocitiesToZero) {
+#if !defined(__SSE__)
+  GTEST_SKIP() << "subnormals are flushed on x86 only";
+#endif
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    ModelBuilder robot, worlds;
+    const int slider = robot.add_body(RigidBody::from_box(1, Vec3(0.1, 0.1, 0.1)));
+    JointOptions options;
+    options.dof.axis = Vec3::UnitX();
+    robot.add_joint_prismatic(-1, slider, options);
+    worlds.set_precision(precision);
+    worlds.replicate(robot, 4);
+    Scene scene(worlds);
+    ASSERT_EQ(scene.solver.batches()->block_count(), 1);
+    scene.state.joint_qd[1] = 1e-40;
+    scene.run(kDt);
+    EXPECT_EQ(scene.state.joint_qd[1], precision == Precision::Float32 ? 0.0 : 1e-40);
+    for (const int k : {0, 2, 3}) EXPECT_EQ(scene.state.joint_qd[k], 0.0);
+  }
+}
+
 // a mass matrix that is not positive definite in one world (its link made massless on the Model, as no
 // builder call allows) raises; that world is left as it was, and under Raise every world is
 TEST(SolverFeatherstoneErrors, AFailedMassMatrixLeavesItsWorldAsItWas) {

@@ -182,6 +182,23 @@ TEST(StreamCopy, EqualsStdCopyAtEveryAlignment) {
     }
 }
 
+// inside the scope a product below FLT_MIN is zero and a subnormal operand counts as zero; after it,
+// the thread's mode is the one it had
+TEST(SubnormalsAsZero, FlushesInsideItsScopeAndRestoresTheMode) {
+#if !defined(__SSE__)
+  GTEST_SKIP() << "subnormals are flushed on x86 only";
+#endif
+  volatile float tiny = 1e-30f, small = 1e-10f, subnormal = 1e-40f;
+  ASSERT_GT(tiny * small, 0.0f);
+  {
+    const SubnormalsAsZero flush;
+    EXPECT_EQ(tiny * small, 0.0f);
+    EXPECT_EQ(subnormal * 1.0f, 0.0f);
+  }
+  EXPECT_GT(tiny * small, 0.0f);
+  EXPECT_GT(subnormal * 1.0f, 0.0f);
+}
+
 TEST(BatchKernels, Float64LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<double>(64); }
 TEST(BatchKernels, Float32LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<float>(64); }
 
