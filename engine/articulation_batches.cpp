@@ -345,7 +345,8 @@ class Batches final : public ArticulationBatches {
           n += v->size() * sizeof(V);
     for (const RowWork& R : row_work_)
       n += (R.J.size() + R.z.size() + R.target.size() + R.mu.size() + R.inv_mass.size() + R.lambda.size() +
-            R.coef.size() + R.qd_in.size() + R.point.size() + R.frame.size()) *
+            R.coef.size() + R.qd_in.size() + R.point.size() + R.frame.size() + R.kept_limit.size() +
+            R.previous_limit.size()) *
                sizeof(V) +
            R.active.size() * sizeof(IntLanes<T>) +
            (R.limit_row.size() + R.contact.size() + R.normal.size() + R.nonzero_begin.size() + R.nonzero_end.size()) *
@@ -505,6 +506,14 @@ class Batches final : public ArticulationBatches {
 
     // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
     const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
+    // the impulses kept by the last step, read a tile of every world's span at a time where they are spans
+    const V* previous = nullptr;
+    if (s.use_warmstarting && G.limit_span[b]) {
+      const Scalar* row[W];
+      for (int l = 0; l < W; ++l) row[l] = impulse + 2 * limit_slot[l * nl];
+      lanes_from_rows<T>(row, 2 * nl, R.previous_limit.data());
+      previous = R.previous_limit.data();
+    }
     for (int m = 0; m < nl; ++m) {
       const int k = G.limited[m], c = topo.coord_of_dof[k];
       V q = w.q[c];
@@ -520,7 +529,9 @@ class Batches final : public ArticulationBatches {
         if (!any_lane<T>(on)) continue;
         const V depth = -gap - T(s.linear_slop);
         V warm{};
-        if (s.use_warmstarting)
+        if (previous)
+          warm = T(s.warmstarting_factor) * previous[2 * m + side];
+        else if (s.use_warmstarting)
           for (int l = 0; l < W; ++l) {
             const int slot = limit_slot[l * nl + m];
             warm[l] = slot < 0 ? T(0) : T(s.warmstarting_factor) * static_cast<T>(impulse[2 * slot + side]);
@@ -924,6 +935,7 @@ class Batches final : public ArticulationBatches {
     std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
     std::vector<int> limit_row;                         // [limited][2] its row, or -1
     std::vector<V> kept_limit;                          // [limited][2] the impulse kept for the next step
+    std::vector<V> previous_limit;                      // [limited][2] the one the last step kept
     std::vector<int> contact;                           // [slot][lane] the contact, or -1
     std::vector<V> frame;                               // [slot][3][3] the normal and tangents
     std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
@@ -942,6 +954,7 @@ class Batches final : public ArticulationBatches {
         if (static_cast<int>(x->size()) < rows) x->resize(rows);
       if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
       if (kept_limit.size() < static_cast<size_t>(rows)) kept_limit.resize(rows);
+      if (previous_limit.size() < static_cast<size_t>(rows)) previous_limit.resize(rows);
       if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
       if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
       for (auto* x : {&coef, &qd_in})
