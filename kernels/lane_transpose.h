@@ -81,9 +81,12 @@ inline void store_chunk(const typename Chunk<T>::type& x, double* p) {
 // the row of kChunk T in group g of lanes v, and lanes v from two rows (float) or one (double)
 template <typename T, std::size_t... J>
 inline typename Chunk<T>::type group(const Lanes<T>& v, int g, std::index_sequence<J...>) {
-  if constexpr (sizeof(T) == sizeof(double)) return v;
-  if (g == 0) return __builtin_shufflevector(v, v, static_cast<int>(J)...);
-  return __builtin_shufflevector(v, v, static_cast<int>(J + kChunk)...);
+  if constexpr (sizeof(T) == sizeof(double))
+    return v;
+  else if (g == 0)
+    return __builtin_shufflevector(v, v, static_cast<int>(J)...);
+  else
+    return __builtin_shufflevector(v, v, static_cast<int>(J + kChunk)...);
 }
 template <typename T, std::size_t... J>
 inline Lanes<T> join(const typename Chunk<T>::type* g, std::index_sequence<J...>) {
