@@ -61,7 +61,7 @@ inline bool any_lane(const IntLanes<T>& m) {
 // subnormal results to zero (x86's MXCSR DAZ and FTZ; elsewhere nothing changes); the mode it found is
 // restored when it ends. The float32 blocks run under it: an operand below FLT_MIN (1.2e-38) takes the
 // core a slow microcode path per operation, and a robot near rest makes such operands every step (the
-// squares and products of coordinates and velocities of 1e-26 to 1e-19)
+// squares and products of velocities of 1e-26 to 1e-19)
 class SubnormalsAsZero {
  public:
 #if defined(__SSE__)
