@@ -506,12 +506,14 @@ class Batches final : public ArticulationBatches {
 
     // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
     const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
-    // the impulses kept by the last step, read a tile of every world's span at a time where they are spans
+    // where each world's limit impulses are one span (`span` its start per lane), they are read and written
+    // a tile of every world's span at a time: the ones the last step kept, here
+    Scalar* span[W] = {};
+    if (G.limit_span[b])
+      for (int l = 0; l < W; ++l) span[l] = impulse + 2 * limit_slot[l * nl];
     const V* previous = nullptr;
     if (s.use_warmstarting && G.limit_span[b]) {
-      const Scalar* row[W];
-      for (int l = 0; l < W; ++l) row[l] = impulse + 2 * limit_slot[l * nl];
-      lanes_from_rows<T>(row, 2 * nl, R.previous_limit.data());
+      lanes_from_rows<T>(span, 2 * nl, R.previous_limit.data());
       previous = R.previous_limit.data();
     }
     for (int m = 0; m < nl; ++m) {
@@ -669,18 +671,16 @@ class Batches final : public ArticulationBatches {
       kept[m] = lane_abs<T>(x) <= std::numeric_limits<T>::max() ? x : V{};
     }
     if (!after_dynamics) scatter(qd_off, w.qd.data(), nv, mine, qd_io);
-    if (G.limit_span[b]) {  // each world's impulses one span
-      Scalar* row[W];
-      for (int l = 0; l < W; ++l) row[l] = impulse + 2 * limit_slot[l * nl];
-      rows_from_lanes<T>(kept, 2 * nl, mine, row);
-    }
-    for (int l = 0; l < lanes && !G.limit_span[b]; ++l) {
-      if (!mine[l]) continue;
-      for (int m = 0; m < 2 * nl; ++m) {
-        const int slot = limit_slot[l * nl + m / 2];
-        if (slot >= 0) impulse[2 * slot + m % 2] = kept[m][l];
+    if (G.limit_span[b])
+      rows_from_lanes<T>(kept, 2 * nl, mine, span);
+    else
+      for (int l = 0; l < lanes; ++l) {
+        if (!mine[l]) continue;
+        for (int m = 0; m < 2 * nl; ++m) {
+          const int slot = limit_slot[l * nl + m / 2];
+          if (slot >= 0) impulse[2 * slot + m % 2] = kept[m][l];
+        }
       }
-    }
     for (int t = 0; t < slots; ++t) {
       const V* d = &R.frame[9 * t];
       const V* lambda = &R.lambda[rows - 3 * (slots - t)];
