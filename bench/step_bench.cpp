@@ -5,14 +5,21 @@
 // humanoid.xml without contacts, 4 the standing quadruped with settings.pgs_tolerance = 1e-5 m/s,
 // NovaPhy only: MuJoCo's reference is scene 2, which already stops its solver at its own tolerance),
 // worlds, threads, precision (NovaPhy: 0 float64, 1 float32; MuJoCo is double). items_per_second is
-// robot-steps per second. tools/bench_report.py turns the JSON into the README's table.
+// robot-steps per second. BM_PairedStep (scene, precision) times both engines in alternation at 4096
+// worlds, for the targets (below). tools/bench_report.py turns the JSON into the README's tables.
 // The floor scenes collide at margin 0, the MJCF's own (MuJoCo's default geom margin): contacts where shapes
 // touch, the same four a robot MuJoCo finds; at the pipeline's default 1 cm the shins' capsule ends, 5 mm
 // above the floor, add four speculative contacts a robot (the README gives both speeds)
 #include <benchmark/benchmark.h>
 #include <omp.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "engine/mjcf_import.h"
@@ -31,6 +38,11 @@ const SceneSpec kScenes[] = {{NOVAPHY_SCENE_DIR "/chain15.xml", false},
                              {NOVAPHY_SCENE_DIR "/quadruped.xml", true},
                              {NOVAPHY_HUMANOID_XML, false},
                              {NOVAPHY_SCENE_DIR "/quadruped.xml", true, 1e-5}};
+// the scene MuJoCo steps beside each: the tolerance changes only NovaPhy's settings
+constexpr int kMujocoScene[] = {0, 1, 2, 3, 2};
+
+constexpr Scalar kDt = 0.005;
+constexpr int kSettleSteps = 50;  // onto the floor, before timing
 
 void label(benchmark::State& bm, int worlds) {
   bm.SetItemsProcessed(bm.iterations() * worlds);
@@ -40,46 +52,103 @@ void label(benchmark::State& bm, int worlds) {
   bm.counters["precision"] = static_cast<double>(bm.range(3));
 }
 
-void BM_NovaPhyStep(benchmark::State& bm) {
-  const SceneSpec& spec = kScenes[bm.range(0)];
-  const int worlds = static_cast<int>(bm.range(1));
+Model replicated_scene(const SceneSpec& spec, int worlds, Precision precision) {
   ModelBuilder robot, batch;
   ImportOptions options;
   options.static_shapes = spec.floor;
   import_mjcf(robot, spec.path, options);
   batch.set_gravity(robot.gravity());
-  batch.set_precision(bm.range(3) == 1 ? Precision::Float32 : Precision::Float64);
+  batch.set_precision(precision);
   batch.replicate(robot, worlds);
-  const Model model = batch.finalize();
-  CollisionOptions collision;
-  collision.num_threads = static_cast<int>(bm.range(2));
-  collision.margin = 0;
-  CollisionPipeline pipeline(model, collision);
-  Contacts contacts = pipeline.contacts();
+  return batch.finalize();
+}
+
+CollisionOptions collision_options(int threads) {
+  CollisionOptions options;
+  options.num_threads = threads;
+  options.margin = 0;
+  return options;
+}
+
+SolverFeatherstoneSettings solver_settings(const SceneSpec& spec, int threads) {
   SolverFeatherstoneSettings settings;
-  settings.num_threads = static_cast<int>(bm.range(2));
+  settings.num_threads = threads;
   settings.pgs_tolerance = spec.pgs_tolerance;
-  SolverFeatherstone solver(model, settings);
-  State state = model.state();
-  const Control control = model.control();
-  for (int k = 0; k < 50; ++k) {  // settle onto the floor before timing
-    if (spec.floor) pipeline.collide(state, contacts);
-    solver.step(state, state, control, contacts, 0.005);
+  return settings;
+}
+
+// NovaPhy's side of a scene: its replicated worlds, collided (the floor scenes) and stepped on `threads` threads
+struct NovaPhyWorlds {
+  NovaPhyWorlds(const SceneSpec& spec, int worlds, int threads, Precision precision)
+      : floor(spec.floor),
+        model(replicated_scene(spec, worlds, precision)),
+        pipeline(model, collision_options(threads)),
+        contacts(pipeline.contacts()),
+        solver(model, solver_settings(spec, threads)),
+        state(model.state()),
+        control(model.control()) {
+    for (int k = 0; k < kSettleSteps; ++k) step();
   }
-  for (auto _ : bm) {
-    if (spec.floor) pipeline.collide(state, contacts);
-    solver.step(state, state, control, contacts, 0.005);
+  void step() {
+    if (floor) pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, kDt);
   }
-  label(bm, worlds);
-  // the floor scenes' robots still standing: their base's mean height (MuJoCo's beside it)
-  if (spec.floor) {
+  // the floor scenes' robots still standing: their base's mean height
+  double base_height() const {
     double z = 0;
     for (int a = 0; a < model.articulation_count; ++a) z += state.joint_q[model.articulation(a).q_begin() + 2];
-    bm.counters["base_height"] = z / model.articulation_count;
+    return z / model.articulation_count;
   }
+  bool floor;
+  Model model;
+  CollisionPipeline pipeline;
+  Contacts contacts;
+  SolverFeatherstone solver;
+  State state;
+  Control control;
+};
+
+// MuJoCo's side: one mjData per world, stepped in an OpenMP loop
+struct MujocoWorlds {
+  MujocoWorlds(const SceneSpec& spec, int worlds) : m(load_mujoco_model(spec.path), mj_deleteModel), data(worlds) {
+    if (!spec.floor) m->opt.disableflags |= mjDSBL_CONTACT;
+    m->opt.timestep = kDt;
+    for (auto& d : data) d = mj_makeData(m.get());
+    for (int k = 0; k < kSettleSteps; ++k)
+      for (auto* d : data) mj_step(m.get(), d);
+  }
+  ~MujocoWorlds() {
+    for (auto* d : data) mj_deleteData(d);
+  }
+  MujocoWorlds(const MujocoWorlds&) = delete;
+  MujocoWorlds& operator=(const MujocoWorlds&) = delete;
+  void step(int threads) {
+    const int worlds = static_cast<int>(data.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int w = 0; w < worlds; ++w) mj_step(m.get(), data[w]);
+  }
+  double base_height() const {
+    double z = 0;
+    for (const mjData* d : data) z += d->qpos[2];
+    return z / static_cast<double>(data.size());
+  }
+  std::unique_ptr<mjModel, void (*)(mjModel*)> m;
+  std::vector<mjData*> data;
+};
+
+void BM_NovaPhyStep(benchmark::State& bm) {
+  const SceneSpec& spec = kScenes[bm.range(0)];
+  const int worlds = static_cast<int>(bm.range(1));
+  NovaPhyWorlds nova(spec, worlds, static_cast<int>(bm.range(2)),
+                     bm.range(3) == 1 ? Precision::Float32 : Precision::Float64);
+  for (auto _ : bm) nova.step();
+  label(bm, worlds);
+  if (spec.floor) bm.counters["base_height"] = nova.base_height();
   // memory per world: what the solver holds, the State's arrays, and H with its factor (two packed
   // triangles in the model's precision): the least a world can be stepped in
-  bm.counters["solver_bytes_per_world"] = static_cast<double>(solver.memory_bytes()) / worlds;
+  const Model& model = nova.model;
+  const State& state = nova.state;
+  bm.counters["solver_bytes_per_world"] = static_cast<double>(nova.solver.memory_bytes()) / worlds;
   const std::size_t state_scalars =
       state.joint_q.size() + state.joint_qd.size() + state.body_q.size() + state.body_qd.size() + state.body_f.size();
   bm.counters["state_bytes_per_world"] = state_scalars * sizeof(Scalar) / static_cast<double>(worlds);
@@ -94,26 +163,100 @@ void BM_NovaPhyStep(benchmark::State& bm) {
 void BM_MujocoStep(benchmark::State& bm) {
   const SceneSpec& spec = kScenes[bm.range(0)];
   const int worlds = static_cast<int>(bm.range(1));
-  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(spec.path), mj_deleteModel);
-  if (!spec.floor) m->opt.disableflags |= mjDSBL_CONTACT;
-  m->opt.timestep = 0.005;
-  std::vector<mjData*> data(worlds);
-  for (auto& d : data) d = mj_makeData(m.get());
+  MujocoWorlds mujoco(spec, worlds);
   const int threads = static_cast<int>(bm.range(2));
-  for (int k = 0; k < 50; ++k)
-    for (auto* d : data) mj_step(m.get(), d);
-  for (auto _ : bm) {
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int w = 0; w < worlds; ++w) mj_step(m.get(), data[w]);
-  }
+  for (auto _ : bm) mujoco.step(threads);
   label(bm, worlds);
-  if (spec.floor) {
-    double z = 0;
-    for (const mjData* d : data) z += d->qpos[2];
-    bm.counters["base_height"] = z / worlds;
+  if (spec.floor) bm.counters["base_height"] = mujoco.base_height();
+  bm.counters["mjdata_bytes_per_world"] =
+      static_cast<double>(mujoco.data[0]->nbuffer) + mujoco.data[0]->nstack * sizeof(mjtNum);
+}
+
+// seconds of all CPUs' time taken by the host for other guests so far (Linux's steal time; 0 where the
+// kernel does not say)
+double steal_seconds() {
+  std::ifstream stat("/proc/stat");
+  std::string cpu;
+  double field[8] = {};
+  stat >> cpu;
+  for (double& x : field) stat >> x;
+  return stat ? field[7] / static_cast<double>(sysconf(_SC_CLK_TCK)) : 0;
+}
+
+// The targets' figures side by side: at 4096 worlds, each iteration (a round) times four runs of steps in
+// turn, their order rotating from round to round: NovaPhy on all threads, NovaPhy on one, MuJoCo on all,
+// MuJoCo on one (NovaPhy's two runs on two copies of the worlds, each with its own pipeline's thread
+// count; both copies take the same steps). A slow spell of the machine then falls on all four within a
+// fraction of a second, and each round gives its own ratios; the counters are the medians over rounds of
+// each engine's robot-steps/s and of the ratios NovaPhy / MuJoCo on all threads and all threads / one.
+// A run is at least 20 ms: MuJoCo's of k_mujoco steps, NovaPhy's of as many steps as take about as long,
+// each after one step not timed (what the engine's data need to be back in cache after the other's run)
+void BM_PairedStep(benchmark::State& bm) {
+  using Clock = std::chrono::steady_clock;
+  const SceneSpec& spec = kScenes[bm.range(0)];
+  constexpr int kWorlds = 4096;
+  const int all = omp_get_num_procs();
+  const Precision precision = bm.range(1) == 1 ? Precision::Float32 : Precision::Float64;
+  NovaPhyWorlds nova_all(spec, kWorlds, all, precision), nova_one(spec, kWorlds, 1, precision);
+  MujocoWorlds mujoco(kScenes[kMujocoScene[bm.range(0)]], kWorlds);
+  auto seconds = [](auto&& run, int steps) {
+    run();
+    const Clock::time_point start = Clock::now();
+    for (int k = 0; k < steps; ++k) run();
+    return std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  const double mujoco_step = seconds([&] { mujoco.step(all); }, 1);
+  const double nova_step = seconds(
+                               [&] {
+                                 nova_all.step();
+                                 nova_one.step();
+                               },
+                               1) /
+                           2;
+  const int k_mujoco = std::max(1, static_cast<int>(std::ceil(0.02 / mujoco_step)));
+  const int k_nova = std::max(1, static_cast<int>(std::lround(k_mujoco * mujoco_step / nova_step)));
+  std::vector<double> rate[4];  // robot-steps/s: NovaPhy all, NovaPhy one, MuJoCo all, MuJoCo one
+  const double steal_before = steal_seconds();
+  const Clock::time_point start = Clock::now();
+  std::vector<double> ratio, nova_speedup, mujoco_speedup;
+  int round = 0;
+  for (auto _ : bm) {
+    double r[4];
+    for (int turn = 0; turn < 4; ++turn) {
+      const int run = (turn + round) % 4;
+      const int steps = run < 2 ? k_nova : k_mujoco;
+      const double t = run == 0   ? seconds([&] { nova_all.step(); }, steps)
+                       : run == 1 ? seconds([&] { nova_one.step(); }, steps)
+                                  : seconds([&] { mujoco.step(run == 2 ? all : 1); }, steps);
+      r[run] = static_cast<double>(kWorlds) * steps / t;
+      rate[run].push_back(r[run]);
+    }
+    ratio.push_back(r[0] / r[2]);
+    nova_speedup.push_back(r[0] / r[1]);
+    mujoco_speedup.push_back(r[2] / r[3]);
+    ++round;
   }
-  bm.counters["mjdata_bytes_per_world"] = static_cast<double>(data[0]->nbuffer) + data[0]->nstack * sizeof(mjtNum);
-  for (auto* d : data) mj_deleteData(d);
+  // the share of the cores' time the machine's host gave to others while the rounds ran
+  const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  bm.counters["steal"] = (steal_seconds() - steal_before) / (wall * all);
+  auto median = [](std::vector<double> x) {
+    std::sort(x.begin(), x.end());
+    const size_t n = x.size();
+    return n % 2 ? x[n / 2] : (x[n / 2 - 1] + x[n / 2]) / 2;
+  };
+  bm.counters["scene"] = static_cast<double>(bm.range(0));
+  bm.counters["precision"] = static_cast<double>(bm.range(1));
+  bm.counters["worlds"] = kWorlds;
+  bm.counters["threads"] = all;
+  bm.counters["novaphy_all"] = median(rate[0]);
+  bm.counters["novaphy_one"] = median(rate[1]);
+  bm.counters["mujoco_all"] = median(rate[2]);
+  bm.counters["mujoco_one"] = median(rate[3]);
+  bm.counters["ratio"] = median(ratio);
+  bm.counters["novaphy_speedup"] = median(nova_speedup);
+  bm.counters["mujoco_speedup"] = median(mujoco_speedup);
+  bm.counters["novaphy_steps"] = k_nova;
+  bm.counters["mujoco_steps"] = k_mujoco;
 }
 
 // worlds 1 .. 16384 at all threads (MuJoCo to 4096: 16384 of its mjData do not fit in 24 GiB);
@@ -131,6 +274,13 @@ void sweep(benchmark::internal::Benchmark* b, bool novaphy) {
 
 BENCHMARK(BM_NovaPhyStep)->Apply([](benchmark::internal::Benchmark* b) { sweep(b, true); });
 BENCHMARK(BM_MujocoStep)->Apply([](benchmark::internal::Benchmark* b) { sweep(b, false); });
+// its rounds are its repetitions: one run of 16, whatever --benchmark_repetitions says
+BENCHMARK(BM_PairedStep)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})
+    ->ArgNames({"scene", "precision"})
+    ->Iterations(16)
+    ->Repetitions(1)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace novaphy

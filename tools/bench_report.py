@@ -49,9 +49,13 @@ def step_tables(path):
     mjdata = {}  # scene -> MuJoCo's mjData bytes per world
     memory = {}  # (scene, precision) -> (bytes per world at 4096 worlds, state + H + factor bytes)
     height = {}  # (engine, scene, precision, worlds, threads) -> the floor scenes' mean base height at the end
+    paired = {}  # (scene, precision) -> BM_PairedStep's counters
     for name, entries in grouped.items():
-        engine = "novaphy" if name.startswith("BM_NovaPhyStep") else "mujoco"
         e = entries[0]
+        if name.startswith("BM_PairedStep"):
+            paired[(int(e["scene"]), int(e["precision"]))] = e
+            continue
+        engine = "novaphy" if name.startswith("BM_NovaPhyStep") else "mujoco"
         key = (engine, int(e["scene"]), int(e["precision"]), int(e["worlds"]), int(e["threads"]))
         rate[key] = median(entries, "items_per_second")
         if "base_height" in e:
@@ -97,6 +101,20 @@ def step_tables(path):
     if standing:
         lines += ["", "The floor scenes' robots at the end of the 4096-world runs on all threads, mean base height "
                   "(m): " + "; ".join(standing)]
+    if paired:
+        rounds = int(next(iter(paired.values()))["iterations"])
+        lines += ["", f"Side by side at 4096 worlds (BM_PairedStep): {rounds} rounds, each timing in turn NovaPhy on all "
+                  "threads, NovaPhy on one, MuJoCo on all and MuJoCo on one (the order rotating), each run after one "
+                  "step not timed; medians over the rounds of robot-steps/s and of each round's ratios. Steal: the share of the "
+                  "cores' time the host gave to other guests meanwhile (Linux's steal time), which a step of two threads "
+                  "that meet at barriers feels more than one:", "",
+                  "| scene | precision | NovaPhy | MuJoCo | ratio | NovaPhy 1 → all threads | MuJoCo 1 → all threads "
+                  "| steal |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+        for (scene, precision), e in sorted(paired.items()):
+            lines.append(f"| {STEP_SCENES[scene]} | {PRECISION[precision]} | {float(e['novaphy_all']):,.0f} "
+                         f"| {float(e['mujoco_all']):,.0f} | {float(e['ratio']):.1f}x "
+                         f"| {float(e['novaphy_speedup']):.2f}x | {float(e['mujoco_speedup']):.2f}x "
+                         f"| {100 * float(e['steal']):.0f} % |")
     lines += ["", "Memory per world at 4096 worlds, bytes: the solver's (batched blocks, scalar scratch, step vectors)",
               "plus the State's arrays, against the State's arrays plus H and its factor:", "",
               "| scene | precision | solver | state | solver + state | state + H + factor | ratio | MuJoCo mjData |",
