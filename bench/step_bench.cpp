@@ -205,14 +205,12 @@ void BM_PairedStep(benchmark::State& bm) {
     for (int k = 0; k < steps; ++k) run();
     return std::chrono::duration<double>(Clock::now() - start).count();
   };
+  auto both_novaphy = [&] {  // (the two copies stay at the same step)
+    nova_all.step();
+    nova_one.step();
+  };
   const double mujoco_step = seconds([&] { mujoco.step(all); }, 1);
-  const double nova_step = seconds(
-                               [&] {
-                                 nova_all.step();
-                                 nova_one.step();
-                               },
-                               1) /
-                           2;
+  const double nova_step = seconds(both_novaphy, 1) / 2;
   const int k_mujoco = std::max(1, static_cast<int>(std::ceil(0.02 / mujoco_step)));
   const int k_nova = std::max(1, static_cast<int>(std::lround(k_mujoco * mujoco_step / nova_step)));
   std::vector<double> rate[4];  // robot-steps/s: NovaPhy all, NovaPhy one, MuJoCo all, MuJoCo one
