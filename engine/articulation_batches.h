@@ -2,8 +2,8 @@
 // replicated robot) are grouped, kLanes<T> worlds to a block, and stepped by the batched kernels
 // (kernels/batch.h) in the model's precision. Per-world parameters (masses, inertias, armature,
 // damping, springs; gains and targets from the Control) stay per lane, so a randomised batch keeps
-// the batched path. Blocks are spread over OpenMP threads with a static schedule; each thread
-// owns its scratch, and a step allocates nothing.
+// the batched path. Blocks are spread over OpenMP threads by parallel_for (engine/parallel.h: a
+// static schedule but for the last eighth); each thread owns its scratch, and a step allocates nothing.
 #pragma once
 
 #include <cstdint>

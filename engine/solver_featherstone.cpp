@@ -184,7 +184,7 @@ std::size_t SolverFeatherstone::memory_bytes() const {
 
 template <typename F>
 void SolverFeatherstone::for_each_articulation(F&& f) {
-  // articulations are independent here: a static schedule over threads, no shared writes
+  // articulations are independent here: spread over threads by parallel_for, no shared writes
   const int count = static_cast<int>(art_.size());
   parallel_for(std::min(thread_count(), count), count, f);
 }
