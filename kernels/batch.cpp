@@ -159,6 +159,18 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
     ancestor_start.push_back(static_cast<int>(ancestors.size()));
     row_start[k] = packed_index(k, 0);
   }
+  run_start.assign(1, 0);
+  for (int k = 0; k < dof_count; ++k) {
+    for (int p = ancestor_start[k]; p < ancestor_start[k + 1]; ++p) {
+      const bool extends = static_cast<int>(ancestor_runs.size()) > run_start[k] &&
+                           ancestor_runs.back().dof + ancestor_runs.back().count == ancestors[p];
+      if (extends)
+        ++ancestor_runs.back().count;
+      else
+        ancestor_runs.push_back({ancestors[p], 1});
+    }
+    run_start.push_back(static_cast<int>(ancestor_runs.size()));
+  }
   link_dof_start.assign(1, 0);
   for (int i = 0; i < n; ++i) {
     const int d = last_dof[i];
@@ -496,27 +508,35 @@ void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& 
 template <typename T>
 IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
   // row k of L is final once the rows below it have been folded in: divide it by the pivot, then
-  // take its outer product off the rows of its ancestors (all of them ancestors of k too)
+  // take its outer product off the rows of its ancestors (all of them ancestors of k too). Ancestor
+  // i's row takes k's entries in the columns of i's own ancestors and i: the runs of k before i's and
+  // the start of i's run. Each entry takes the same operations, in the same order of k, as it would
+  // one entry at a time
   IntLanes<T> bad = IntLanes<T>{} - 1;
   for (int k = topo.dof_count - 1; k >= 0; --k) {
     V<T>* Lk = H + topo.row_start[k];
-    const int* a = topo.ancestors.data() + topo.ancestor_start[k];
-    const int m = topo.ancestor_start[k + 1] - topo.ancestor_start[k];
+    const auto* run = topo.ancestor_runs.data() + topo.run_start[k];
+    const int runs = topo.run_start[k + 1] - topo.run_start[k];
     const V<T> d = Lk[k];
     bad = (d > 0) ? bad : IntLanes<T>{} + k;
     const V<T> l_kk = lane_sqrt<T>(d);
     const V<T> inv = 1 / l_kk;
     Lk[k] = inv;  // the diagonal is kept inverted: solves multiply
-    for (int p = 0; p < m; ++p) Lk[a[p]] *= inv;
-    for (int p = 0; p < m; ++p) {
-      const V<T> l_ki = Lk[a[p]];
-      V<T>* Li = H + topo.row_start[a[p]];
-      for (int q = 0; q <= p; ++q) Li[a[q]] -= l_ki * Lk[a[q]];
-    }
+    for (int r = 0; r < runs; ++r)
+      for (int j = run[r].dof; j < run[r].dof + run[r].count; ++j) Lk[j] *= inv;
+    for (int r = 0; r < runs; ++r)
+      for (int i = run[r].dof; i < run[r].dof + run[r].count; ++i) {
+        const V<T> l_ki = Lk[i];
+        V<T>* Li = H + topo.row_start[i];
+        for (int s = 0; s < r; ++s)
+          for (int j = run[s].dof; j < run[s].dof + run[s].count; ++j) Li[j] -= l_ki * Lk[j];
+        for (int j = run[r].dof; j <= i; ++j) Li[j] -= l_ki * Lk[j];
+      }
     if (x) {  // L^T y = x: row k of L is final
       const V<T> y = x[k] * inv;
       x[k] = y;
-      for (int p = 0; p < m; ++p) x[a[p]] -= Lk[a[p]] * y;
+      for (int r = 0; r < runs; ++r)
+        for (int j = run[r].dof; j < run[r].dof + run[r].count; ++j) x[j] -= Lk[j] * y;
     }
   }
   return bad;
@@ -527,8 +547,10 @@ void batch_solve_lower(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
   for (int k = 0; k < topo.dof_count; ++k) {
     const V<T>* Lk = L + topo.row_start[k];
     V<T> y = x[k];
-    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
-      y -= Lk[topo.ancestors[p]] * x[topo.ancestors[p]];
+    for (int r = topo.run_start[k]; r < topo.run_start[k + 1]; ++r) {
+      const auto& run = topo.ancestor_runs[r];
+      for (int j = run.dof; j < run.dof + run.count; ++j) y -= Lk[j] * x[j];
+    }
     x[k] = y * Lk[k];
   }
 }
@@ -539,8 +561,10 @@ void batch_solve(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
     const V<T>* Lk = L + topo.row_start[k];
     const V<T> y = x[k] * Lk[k];
     x[k] = y;
-    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p)
-      x[topo.ancestors[p]] -= Lk[topo.ancestors[p]] * y;
+    for (int r = topo.run_start[k]; r < topo.run_start[k + 1]; ++r) {
+      const auto& run = topo.ancestor_runs[r];
+      for (int j = run.dof; j < run.dof + run.count; ++j) x[j] -= Lk[j] * y;
+    }
   }
   batch_solve_lower(topo, L, x);
 }

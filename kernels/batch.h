@@ -42,6 +42,14 @@ struct BatchTopology {
   // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
   // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
   std::vector<int> ancestor_start, ancestors, row_start;
+  // the same ancestors as runs of consecutive dofs (a chain's dofs are numbered in a row), per dof k
+  // ancestor_runs[run_start[k] .. run_start[k + 1]): the factor and the solves walk a run of a row as
+  // one dense stretch, without an index per entry
+  struct Run {
+    int dof, count;
+  };
+  std::vector<int> run_start;
+  std::vector<Run> ancestor_runs;
   // per link i: the dofs that move it (its ancestors' and its own) ascending, link_dofs[link_dof_start[i] ..
   // link_dof_start[i + 1]): the nonzero columns of its Jacobian, which batch_mass_matrix_gemm multiplies
   std::vector<int> link_dof_start, link_dofs;

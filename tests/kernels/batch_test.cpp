@@ -230,6 +230,31 @@ void expect_many_solves_equal_batch_solve() {
   }
 }
 
+// the runs list each dof's ancestors in order, as maximal stretches of consecutive dofs (the factor and
+// the solves walk them in place of the ancestor list)
+TEST(BatchTopology, AncestorRunsAreTheAncestorsInMaximalStretches) {
+  std::mt19937 rng(29);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Model model = test::random_builder_tree(rng, 2 + trial % 9);
+    const BatchTopology<double> topo(model.articulation(0));
+    for (int k = 0; k < topo.dof_count; ++k) {
+      std::vector<int> expanded;
+      for (int r = topo.run_start[k]; r < topo.run_start[k + 1]; ++r) {
+        const auto& run = topo.ancestor_runs[r];
+        ASSERT_GT(run.count, 0);
+        if (r > topo.run_start[k]) {
+          const auto& before = topo.ancestor_runs[r - 1];
+          EXPECT_NE(before.dof + before.count, run.dof) << "trial " << trial << " dof " << k << ": runs not merged";
+        }
+        for (int j = run.dof; j < run.dof + run.count; ++j) expanded.push_back(j);
+      }
+      const std::vector<int> ancestors(topo.ancestors.begin() + topo.ancestor_start[k],
+                                       topo.ancestors.begin() + topo.ancestor_start[k + 1]);
+      EXPECT_EQ(expanded, ancestors) << "trial " << trial << " dof " << k;
+    }
+  }
+}
+
 TEST(BatchKernels, Float64ManySolvesEqualBatchSolve) { expect_many_solves_equal_batch_solve<double>(); }
 TEST(BatchKernels, Float32ManySolvesEqualBatchSolve) { expect_many_solves_equal_batch_solve<float>(); }
 
