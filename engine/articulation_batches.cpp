@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <type_traits>
 
 #include "engine/parallel.h"
@@ -53,10 +54,13 @@ class Batches final : public ArticulationBatches {
   struct Group {
     BatchTopology<T> topo;
     std::vector<Weld> welds;
-    std::vector<int> arts;                 // per slot
-    std::vector<int> q_off, qd_off;        // per slot: the articulation's first coordinate and dof
-    std::vector<int> body;                 // per slot: its link bodies, then its welded bodies
-    std::vector<std::uint8_t> contiguous;  // per block: its worlds' bodies numbered one after another
+    std::vector<int> arts;           // per slot
+    std::vector<int> q_off, qd_off;  // per slot: the articulation's first coordinate and dof
+    std::vector<int> body;           // per slot: its link bodies, then its welded bodies
+    // per body of a world (links, then welds): its place among the world's bodies as the model numbers
+    // them (a welded body's number falls between its links'), where its rows are staged
+    std::vector<int> body_place;
+    std::vector<std::uint8_t> contiguous;  // per block: its worlds' bodies, each world's in one run, one after another
     int world_count = 0;
     int blocks = 0;
     int param_size = 0;
@@ -134,9 +138,20 @@ class Batches final : public ArticulationBatches {
         for (const WeldedBody& b : welded[a]) G.body.push_back(b.body);
       }
       const int nb = G.bodies();
+      // the places from the first world (in the order given where its bodies are not one run); a block is
+      // contiguous when each world's bodies keep those places and the worlds follow each other
+      const int lowest = *std::min_element(G.body.begin(), G.body.begin() + nb);
+      for (int k = 0; k < nb; ++k) G.body_place.push_back(G.body[k] - lowest);
+      std::vector<int> places = G.body_place;
+      std::sort(places.begin(), places.end());
+      for (int k = 0; k < nb; ++k)
+        if (places[k] != k) std::iota(G.body_place.begin(), G.body_place.end(), 0);
       for (int b = 0; b < G.blocks; ++b) {
+        const int* body = &G.body[static_cast<size_t>(b) * W * nb];
         bool contiguous = true;
-        for (int k = 0; k < lanes_in(G, b) * nb; ++k) contiguous &= G.body[b * W * nb + k] == G.body[b * W * nb] + k;
+        for (int l = 0; l < lanes_in(G, b); ++l)
+          for (int k = 0; k < nb; ++k)
+            contiguous &= body[l * nb + k] == body[0] - G.body_place[0] + l * nb + G.body_place[k];
         G.contiguous.push_back(contiguous);
       }
       const int nv = G.topo.dof_count;
@@ -712,8 +727,8 @@ class Batches final : public ArticulationBatches {
     const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
     const int* body = &G.body[static_cast<size_t>(b) * W * nb];
     // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:
-    // in lanes first, every body's body_q then every body's body_qd (a world's rows of each array
-    // when its bodies follow each other), then written out world by world
+    // in lanes first, every body's body_q then every body's body_qd, each body at its place (a world's
+    // rows of each array in the model's order when its bodies are one run), then written out world by world
     V* x_q = w.bodies.data();
     V* x_qd = x_q + 7 * nb;
     auto put = [&](int k, const V* p, const V* Q, const V* com, const V* v) {
@@ -729,7 +744,8 @@ class Batches final : public ArticulationBatches {
       for (int m = 0; m < 3; ++m) y[3 + m] = v[m];
     };
     const V* body_com = G.body_com(b);
-    for (int i = 0; i < n; ++i) put(i, &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
+    const int* place = G.body_place.data();
+    for (int i = 0; i < n; ++i) put(place[i], &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
     for (size_t k = 0; k < G.welds.size(); ++k) {
       const Weld& weld = G.welds[k];
       V p[3], Q[4], d[3];
@@ -737,7 +753,7 @@ class Batches final : public ArticulationBatches {
       for (int m = 0; m < 3; ++m) d[m] = R[3 * m] * weld.p[0] + R[3 * m + 1] * weld.p[1] + R[3 * m + 2] * weld.p[2];
       for (int m = 0; m < 3; ++m) p[m] = w.p[3 * weld.link + m] + d[m];
       quat_product(&w.Q[4 * weld.link], weld.q, Q);
-      put(n + static_cast<int>(k), p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
+      put(place[n + k], p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
     }
     IntLanes<T> real{};
     for (int l = 0; l < lanes; ++l) real[l] = -1;
@@ -751,7 +767,7 @@ class Batches final : public ArticulationBatches {
       // a stage for both at 4096 worlds)
       const bool staged = stream && all;
       auto write = [&](const V* x, int width, std::vector<Scalar>& field) {
-        Scalar* first = field.data() + width * body[0];
+        Scalar* first = field.data() + width * (body[0] - place[0]);
         Scalar* dst = staged ? out_stage.data() : first;
         Scalar* rows[W];
         for (int l = 0; l < W; ++l) rows[l] = dst + width * nb * (l < lanes ? l : 0);
@@ -766,8 +782,8 @@ class Batches final : public ArticulationBatches {
       for (int k = 0; k < nb && written[l]; ++k) {
         Scalar* q = out.body_q.data() + 7 * body[l * nb + k];
         Scalar* qd = out.body_qd.data() + 6 * body[l * nb + k];
-        for (int m = 0; m < 7; ++m) q[m] = x_q[7 * k + m][l];
-        for (int m = 0; m < 6; ++m) qd[m] = x_qd[6 * k + m][l];
+        for (int m = 0; m < 7; ++m) q[m] = x_q[7 * place[k] + m][l];
+        for (int m = 0; m < 6; ++m) qd[m] = x_qd[6 * place[k] + m][l];
       }
   }
 

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <limits>
+
 #include "engine/builder.h"
 #include "engine/dynamics.h"
 #include "engine/solver_featherstone.h"
@@ -117,6 +120,41 @@ TEST(WeldFixedJoints, SolverStepsTheSameWeldedOrNot) {
   for (size_t k = 0; k < welded.body_q.size(); ++k) EXPECT_NEAR(welded.body_q[k], plain.body_q[k], 1e-9) << k;
   for (size_t k = 0; k < welded.body_qd.size(); ++k) EXPECT_NEAR(welded.body_qd[k], plain.body_qd[k], 1e-8) << k;
   EXPECT_LT(welded.body_q[2], 0.2);  // the arm fell 0.8 m onto the ground
+}
+
+// many worlds of the arm, whose welded bodies are numbered between their links: each world's bodies
+// written at their own rows whether streamed around the caches (stream_body_output_above = 0) or stored
+// through them, as the arm stepped with its Fixed links in the kernels writes them
+TEST(WeldFixedJoints, ManyWorldsWriteEachBodyAtItsRow) {
+  for (const Precision precision : {Precision::Float64, Precision::Float32}) {
+    ModelBuilder batch(Vec3(0, 0, -9.81));
+    batch.set_precision(precision);
+    batch.replicate(arm_with_fixed_links(), 37, Vec3(1, 0, 0));
+    const Model model = batch.finalize();
+    auto run = [&](bool weld, std::int64_t stream_above) {
+      SolverFeatherstoneSettings settings;
+      settings.weld_fixed_joints = weld;
+      settings.stream_body_output_above = stream_above;
+      SolverFeatherstone solver(model, settings);
+      CollisionPipeline pipeline(model);
+      Contacts contacts = pipeline.contacts();
+      State state = model.state();
+      const Control control = model.control();
+      for (int k = 0; k < 60; ++k) {
+        pipeline.collide(state, contacts);
+        solver.step(state, state, control, contacts, 1.0 / 240);
+      }
+      return state;
+    };
+    constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
+    const State streamed = run(true, 0), stored = run(true, kNever), plain = run(false, kNever);
+    EXPECT_EQ(std::memcmp(streamed.body_q.data(), stored.body_q.data(), stored.body_q.size() * sizeof(Scalar)), 0);
+    EXPECT_EQ(std::memcmp(streamed.body_qd.data(), stored.body_qd.data(), stored.body_qd.size() * sizeof(Scalar)), 0);
+    const double tolerance = precision == Precision::Float64 ? 1e-9 : 1e-4;
+    for (size_t k = 0; k < plain.body_q.size(); ++k) EXPECT_NEAR(stored.body_q[k], plain.body_q[k], tolerance) << k;
+    for (size_t k = 0; k < plain.body_qd.size(); ++k)
+      EXPECT_NEAR(stored.body_qd[k], plain.body_qd[k], 10 * tolerance) << k;
+  }
 }
 
 }  // namespace
