@@ -236,12 +236,8 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
 
 void control_force(const Model& model, const Control& control, Scalar* tau) {
   std::copy(control.joint_f.begin(), control.joint_f.end(), tau);
-  for (int u = 0; u < model.actuator_count; ++u) {
-    const Scalar ctrl =
-        std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
-    const Scalar force = std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
-    tau[model.joint_qd_start[model.actuator_joint[u]]] += model.actuator_gear[u] * force;
-  }
+  for (int u = 0; u < model.actuator_count; ++u)
+    tau[model.joint_qd_start[model.actuator_joint[u]]] += actuator_force(model, control, u);
 }
 
 VecX eval_control_force(const Model& model, const Control& control) {

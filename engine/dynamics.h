@@ -4,6 +4,8 @@
 // with f_ext the applied body wrenches state.body_f and tau_passive the joint damping and springs.
 #pragma once
 
+#include <algorithm>
+
 #include "engine/model.h"
 
 namespace novaphy {
@@ -30,6 +32,11 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
 // tau = control.joint_f plus every motor's gear * clamp(clamp(actuator_ctrl, ctrl range), force range)
 VecX eval_control_force(const Model& model, const Control& control);
 void control_force(const Model& model, const Control& control, Scalar* tau);  // into joint_dof_count entries
+// motor u's part of it: gear * clamp(clamp(actuator_ctrl[u], ctrl range), force range)
+inline Scalar actuator_force(const Model& model, const Control& control, int u) {
+  const Scalar ctrl = std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
+  return model.actuator_gear[u] * std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
+}
 
 // body_q / body_qd of body b, riding on link `link` at `offset` (its pose in the link frame) with its
 // centre of mass at `com` (body frame), from scratch after forward_kinematics + forward_velocity

@@ -2,8 +2,10 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 #include <sstream>
 
@@ -109,6 +111,14 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   dof_articulation_.resize(model.joint_dof_count);
   for (int a = 0; a < model.articulation_count; ++a)
     std::fill_n(dof_articulation_.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
+  dof_actuator_start_.assign(model.joint_dof_count + 1, 0);
+  for (int u = 0; u < model.actuator_count; ++u)
+    ++dof_actuator_start_[model.joint_qd_start[model.actuator_joint[u]] + 1];
+  for (int d = 0; d < model.joint_dof_count; ++d) dof_actuator_start_[d + 1] += dof_actuator_start_[d];
+  dof_actuators_.resize(model.actuator_count);
+  std::vector<int> next(dof_actuator_start_.begin(), dof_actuator_start_.end() - 1);
+  for (int u = 0; u < model.actuator_count; ++u)
+    dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
   qd_.setZero(model.joint_dof_count);
   zero_.setZero(model.joint_dof_count);
   rhs_.setZero(model.joint_dof_count);
@@ -310,7 +320,19 @@ ArticulationBatches::DynamicsOptions SolverFeatherstone::dynamics_options(bool r
 const Scalar* SolverFeatherstone::control_forces(const Control& control) {
   // the blocks read joint_f itself when nothing adds to it and no scalar articulation writes over it
   if (model_.actuator_count == 0 && all_on_batch_) return control.joint_f.data();
-  control_force(model_, control, rhs_.data());
+  // control_force's sums, dof by dof (joint_f, then its actuators in order), the dofs in runs over the threads
+  const int n = model_.joint_dof_count, runs = std::min(n, 16 * thread_count());
+  const int *start = dof_actuator_start_.data(), *actuator = dof_actuators_.data();
+  const Scalar* joint_f = control.joint_f.data();
+  Scalar* tau = rhs_.data();
+  parallel_for(thread_count(), runs, [&](int r) {
+    const int end = static_cast<int>(static_cast<std::int64_t>(n) * (r + 1) / runs);
+    for (int d = static_cast<int>(static_cast<std::int64_t>(n) * r / runs); d < end; ++d) {
+      Scalar sum = joint_f[d];
+      for (int k = start[d]; k < start[d + 1]; ++k) sum += actuator_force(model_, control, actuator[k]);
+      tau[d] = sum;
+    }
+  });
   return rhs_.data();
 }
 

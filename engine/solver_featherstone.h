@@ -201,6 +201,8 @@ class SolverFeatherstone {
   std::vector<int> block_contact_start_, block_contacts_, fill_;
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;
+  // per dof: the actuators that drive it, in order, dof_actuators_[dof_actuator_start_[d] .. [d + 1])
+  std::vector<int> dof_actuator_start_, dof_actuators_;
   std::vector<int> rotational_dof_;  // dofs scaled by angular damping
   VecX qd_;                          // velocity being solved, all dofs
   const Scalar* qd_in_ = nullptr;    // the step's initial velocity, in.joint_qd (read before out is written)
