@@ -144,8 +144,9 @@ class Batches final : public ArticulationBatches {
       for (int k = 0; k < nb; ++k) G.body_place.push_back(G.body[k] - lowest);
       std::vector<int> places = G.body_place;
       std::sort(places.begin(), places.end());
-      for (int k = 0; k < nb; ++k)
-        if (places[k] != k) std::iota(G.body_place.begin(), G.body_place.end(), 0);
+      bool one_run = true;
+      for (int k = 0; k < nb; ++k) one_run &= places[k] == k;
+      if (!one_run) std::iota(G.body_place.begin(), G.body_place.end(), 0);
       for (int b = 0; b < G.blocks; ++b) {
         const int* body = &G.body[static_cast<size_t>(b) * W * nb];
         bool contiguous = true;
