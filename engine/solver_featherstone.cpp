@@ -29,6 +29,20 @@ Scalar contact_restitution(const Model& model, int a, int b) {
   return std::max(model.shape_restitution[a], model.shape_restitution[b]);
 }
 
+// items [0, n) grouped by key (in [0, buckets); a negative key leaves the item out), a counting sort:
+// items[start[k] .. start[k + 1]) are key k's, ascending. `items` holds them all already; `next` is scratch
+template <typename Key>
+void group_by_key(int n, int buckets, Key key, std::vector<int>& start, std::vector<int>& items,
+                  std::vector<int>& next) {
+  start.assign(buckets + 1, 0);
+  for (int i = 0; i < n; ++i)
+    if (key(i) >= 0) ++start[key(i) + 1];
+  for (int k = 0; k < buckets; ++k) start[k + 1] += start[k];
+  next.assign(start.begin(), start.end() - 1);
+  for (int i = 0; i < n; ++i)
+    if (key(i) >= 0) items[next[key(i)]++] = i;
+}
+
 void check_range(const char* name, Scalar value, Scalar lo, Scalar hi) {
   if (!(value >= lo && value <= hi)) fail("settings.", name, " must be in [", lo, ", ", hi, "], got ", value);
 }
@@ -111,14 +125,10 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   dof_articulation_.resize(model.joint_dof_count);
   for (int a = 0; a < model.articulation_count; ++a)
     std::fill_n(dof_articulation_.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
-  dof_actuator_start_.assign(model.joint_dof_count + 1, 0);
-  for (int u = 0; u < model.actuator_count; ++u)
-    ++dof_actuator_start_[model.joint_qd_start[model.actuator_joint[u]] + 1];
-  for (int d = 0; d < model.joint_dof_count; ++d) dof_actuator_start_[d + 1] += dof_actuator_start_[d];
   dof_actuators_.resize(model.actuator_count);
-  std::vector<int> next(dof_actuator_start_.begin(), dof_actuator_start_.end() - 1);
-  for (int u = 0; u < model.actuator_count; ++u)
-    dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
+  group_by_key(
+      model.actuator_count, model.joint_dof_count, [&](int u) { return model.joint_qd_start[model.actuator_joint[u]]; },
+      dof_actuator_start_, dof_actuators_, fill_);
   qd_.setZero(model.joint_dof_count);
   zero_.setZero(model.joint_dof_count);
   rhs_.setZero(model.joint_dof_count);
@@ -548,16 +558,11 @@ void SolverFeatherstone::list_block_contacts(const Contacts& contacts) {
   const int threads = std::min(thread_count(), n / 1024);
   parallel_for(threads, n, touch);
   parallel_for(threads, n, look_up);
-  std::fill(block_contact_start_.begin(), block_contact_start_.end(), 0);
+  group_by_key(
+      n, static_cast<int>(art_.size()), [&](int c) { return contact_block_[c]; }, block_contact_start_, block_contacts_,
+      fill_);
   for (int c = 0; c < n; ++c)
-    if (contact_block_[c] >= 0) ++block_contact_start_[contact_block_[c] + 1];
-  for (size_t a = 0; a < art_.size(); ++a) block_contact_start_[a + 1] += block_contact_start_[a];
-  fill_.assign(block_contact_start_.begin(), block_contact_start_.end() - 1);
-  for (int c = 0; c < n; ++c)
-    if (contact_block_[c] >= 0)
-      block_contacts_[fill_[contact_block_[c]]++] = c;
-    else
-      scalar_contacts_.push_back(c);
+    if (contact_block_[c] < 0) scalar_contacts_.push_back(c);
 }
 
 int SolverFeatherstone::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind, Scalar target) {
@@ -652,15 +657,12 @@ void SolverFeatherstone::group_islands() {
       island_parent_[std::max(x, y)] = std::min(x, y);
     }
   island_of_row_.resize(row_count_);
-  island_start_.assign(art_.size() + 1, 0);
-  for (int r = 0; r < row_count_; ++r) {
+  for (int r = 0; r < row_count_; ++r)
     island_of_row_[r] = rows_[r].side_count > 0 ? find(art_of(rows_[r], 0)) : 0;  // a row of no dofs does nothing
-    ++island_start_[island_of_row_[r] + 1];
-  }
-  for (size_t a = 0; a < art_.size(); ++a) island_start_[a + 1] += island_start_[a];
   island_rows_.resize(row_count_);
-  island_fill_.assign(island_start_.begin(), island_start_.end() - 1);
-  for (int r = 0; r < row_count_; ++r) island_rows_[island_fill_[island_of_row_[r]]++] = r;
+  group_by_key(
+      row_count_, static_cast<int>(art_.size()), [&](int r) { return island_of_row_[r]; }, island_start_, island_rows_,
+      fill_);
 }
 
 PgsSettings SolverFeatherstone::pgs_settings() const {

@@ -198,7 +198,8 @@ class SolverFeatherstone {
   // links of its bodies there, its friction and restitution; per articulation its contacts
   std::vector<int> contact_block_, contact_link_a_, contact_link_b_;
   std::vector<Scalar> contact_mu_, contact_restitution_;
-  std::vector<int> block_contact_start_, block_contacts_, fill_;
+  std::vector<int> block_contact_start_, block_contacts_;
+  std::vector<int> fill_;  // scratch of the groupings by key (actuators by dof, contacts by block, rows by island)
   std::vector<int> body_articulation_, body_link_;
   std::vector<int> dof_articulation_;
   // per dof: the actuators that drive it, in order, dof_actuators_[dof_actuator_start_[d] .. [d + 1])
@@ -217,7 +218,7 @@ class SolverFeatherstone {
   int row_count_ = 0;
   // islands (articulations joined by rows, named by their lowest articulation): rows of island i are
   // island_rows_[island_start_[i] .. island_start_[i + 1])
-  std::vector<int> island_parent_, island_of_row_, island_start_, island_fill_, island_rows_;
+  std::vector<int> island_parent_, island_of_row_, island_start_, island_rows_;
   std::vector<Scalar> J_, MinvJT_;
   int pool_size_ = 0;
   std::vector<std::uint8_t> diverged_;
