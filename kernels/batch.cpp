@@ -505,39 +505,88 @@ void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& 
   for (int k = 0; k < topo.dof_count; ++k) H[topo.row_start[k] + k] += params.armature[k];
 }
 
+namespace {
+
+// rows i of the runs, each i taking R rows' outer products in turn: L_i[j] -= L_c[i] L_c[j] for j among i's
+// ancestors and i, c = each of the R rows in order (one load and store of L_i[j] for R products)
+template <int R, typename T>
+void take_outer_products(const BatchTopology<T>& topo, const V<T>* const* Lc, const typename BatchTopology<T>::Run* run,
+                         int runs, V<T>* H) {
+  for (int r = 0; r < runs; ++r)
+    for (int i = run[r].dof; i < run[r].dof + run[r].count; ++i) {
+      V<T> l_ci[R];
+      for (int t = 0; t < R; ++t) l_ci[t] = Lc[t][i];
+      V<T>* Li = H + topo.row_start[i];
+      auto entry = [&](int j) {
+        V<T> e = Li[j];
+        for (int t = 0; t < R; ++t) e -= l_ci[t] * Lc[t][j];
+        Li[j] = e;
+      };
+      for (int s = 0; s < r; ++s)
+        for (int j = run[s].dof; j < run[s].dof + run[s].count; ++j) entry(j);
+      for (int j = run[r].dof; j <= i; ++j) entry(j);
+    }
+}
+
+}  // namespace
+
 template <typename T>
 IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
-  // row k of L is final once the rows below it have been folded in: divide it by the pivot, then
-  // take its outer product off the rows of its ancestors (all of them ancestors of k too). Ancestor
-  // i's row takes k's entries in the columns of i's own ancestors and i: the runs of k before i's and
-  // the start of i's run. Each entry takes the same operations, in the same order of k, as it would
-  // one entry at a time
+  // row k of L is final once the rows below it have been folded in: divide it by the pivot, then take
+  // its outer product off the rows of its ancestors (all of them ancestors of k too). Rows are taken in
+  // groups of up to kFactorGroup dofs in a chain (k, k - 1, ..., each the parent dof of the one before:
+  // a multi-dof joint, a chain of hinges): each row of the group is finished and folded into the group's
+  // rows above it in turn, then all the group's outer products come off the rows of the ancestors in one
+  // pass. Each entry takes the same operations in the same order of k as one row at a time would, so the
+  // result is the same to the bit; the pass loads and stores an entry once for the group's products
+  using Run = typename BatchTopology<T>::Run;
+  constexpr int kFactorGroup = 4;
   IntLanes<T> bad = IntLanes<T>{} - 1;
-  for (int k = topo.dof_count - 1; k >= 0; --k) {
-    V<T>* Lk = H + topo.row_start[k];
-    const auto* run = topo.ancestor_runs.data() + topo.run_start[k];
-    const int runs = topo.run_start[k + 1] - topo.run_start[k];
-    const V<T> d = Lk[k];
-    bad = (d > 0) ? bad : IntLanes<T>{} + k;
-    const V<T> l_kk = lane_sqrt<T>(d);
-    const V<T> inv = 1 / l_kk;
-    Lk[k] = inv;  // the diagonal is kept inverted: solves multiply
-    for (int r = 0; r < runs; ++r)
-      for (int j = run[r].dof; j < run[r].dof + run[r].count; ++j) Lk[j] *= inv;
-    for (int r = 0; r < runs; ++r)
-      for (int i = run[r].dof; i < run[r].dof + run[r].count; ++i) {
-        const V<T> l_ki = Lk[i];
-        V<T>* Li = H + topo.row_start[i];
-        for (int s = 0; s < r; ++s)
-          for (int j = run[s].dof; j < run[s].dof + run[s].count; ++j) Li[j] -= l_ki * Lk[j];
-        for (int j = run[r].dof; j <= i; ++j) Li[j] -= l_ki * Lk[j];
-      }
-    if (x) {  // L^T y = x: row k of L is final
-      const V<T> y = x[k] * inv;
-      x[k] = y;
+  auto runs_of = [&](int k, const Run** run) {
+    *run = topo.ancestor_runs.data() + topo.run_start[k];
+    return topo.run_start[k + 1] - topo.run_start[k];
+  };
+  for (int k = topo.dof_count - 1; k >= 0;) {
+    int size = 1;
+    while (size < kFactorGroup && k - size >= 0 && topo.dof_parent[k - size + 1] == k - size) ++size;
+    const V<T>* group[kFactorGroup];
+    for (int t = 0; t < size; ++t) {
+      const int c = k - t;
+      V<T>* Lc = H + topo.row_start[c];
+      group[t] = Lc;
+      const Run* run;
+      const int runs = runs_of(c, &run);
+      const V<T> d = Lc[c];
+      bad = (d > 0) ? bad : IntLanes<T>{} + c;
+      const V<T> inv = 1 / lane_sqrt<T>(d);
+      Lc[c] = inv;  // the diagonal is kept inverted: solves multiply
       for (int r = 0; r < runs; ++r)
-        for (int j = run[r].dof; j < run[r].dof + run[r].count; ++j) x[j] -= Lk[j] * y;
+        for (int j = run[r].dof; j < run[r].dof + run[r].count; ++j) Lc[j] *= inv;
+      for (int m = c - 1; m > k - size; --m) {  // the group's rows above c: their pivots come next
+        V<T>* Lm = H + topo.row_start[m];
+        const V<T> l_cm = Lc[m];
+        const Run* above;
+        const int above_runs = runs_of(m, &above);
+        for (int r = 0; r < above_runs; ++r)
+          for (int j = above[r].dof; j < above[r].dof + above[r].count; ++j) Lm[j] -= l_cm * Lc[j];
+        Lm[m] -= l_cm * Lc[m];
+      }
+      if (x) {  // L^T y = x: row c of L is final
+        const V<T> y = x[c] * inv;
+        x[c] = y;
+        for (int r = 0; r < runs; ++r)
+          for (int j = run[r].dof; j < run[r].dof + run[r].count; ++j) x[j] -= Lc[j] * y;
+      }
     }
+    const Run* run;
+    const int runs = runs_of(k - size + 1, &run);  // the ancestors of the group's top row
+    switch (size) {
+      case 1: take_outer_products<1>(topo, group, run, runs, H); break;
+      case 2: take_outer_products<2>(topo, group, run, runs, H); break;
+      case 3: take_outer_products<3>(topo, group, run, runs, H); break;
+      default: take_outer_products<kFactorGroup>(topo, group, run, runs, H); break;
+    }
+    k -= size;
   }
   return bad;
 }
