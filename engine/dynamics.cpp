@@ -162,11 +162,17 @@ void check_finite_control(const Control& control, bool* any_drive_out, int threa
 }
 
 void check_finite_step(const State& state, const Control& control, bool* any_wrench, bool* any_drive_out, int threads) {
-  Checked arrays[kMostChecked];
-  const int count = control_arrays(control, arrays, state_arrays(state, arrays, 0));
+  Checked all[kMostChecked], arrays[kMostChecked], targets[kMostChecked];
+  const int total = control_arrays(control, all, state_arrays(state, all, 0));
+  int count = 0, target_count = 0;
+  for (int a = 0; a < total; ++a) {
+    const bool target = all[a].x == &control.joint_target_pos || all[a].x == &control.joint_target_vel;
+    (target ? targets[target_count++] : arrays[count++]) = all[a];
+  }
   check_finite(arrays, count, threads);
   *any_wrench = arrays[kBodyF].nonzero;
   *any_drive_out = any_drive(control, arrays, count);
+  if (*any_drive_out) check_finite(targets, target_count, threads);
 }
 
 void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state) {

@@ -54,7 +54,9 @@ void check_finite_state(const State& state, bool* any_wrench = nullptr, int thre
 // throws Error naming the first non-finite entry of any control array
 // any_drive (when given) is set to whether a PD gain (joint_target_ke or joint_target_kd) is nonzero
 void check_finite_control(const Control& control, bool* any_drive = nullptr, int threads = 1);
-// both, in that order, in one pass (one parallel region on `threads` threads)
+// both, in that order, in one pass (one parallel region on `threads` threads), except the PD targets
+// (joint_target_pos, joint_target_vel): a step reads them only where a gain is nonzero, so they are checked
+// only when any_drive is set, in a second pass
 void check_finite_step(const State& state, const Control& control, bool* any_wrench, bool* any_drive, int threads = 1);
 
 }  // namespace novaphy

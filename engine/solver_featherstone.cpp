@@ -385,13 +385,16 @@ void SolverFeatherstone::unconstrained_velocity(const State& in, const Control& 
       for (int m = 0; m < art.dof(i); ++m) {
         const int k = art.qd_start(i) + m, g = qd0 + k;
         const Scalar damping = model_.joint_damping[g], kd = control.joint_target_kd[g];
-        rhs[k] += -damping * qd[k] + kd * (control.joint_target_vel[g] - qd[k]);
+        // (the targets are read only when some gain is nonzero: unchecked otherwise)
+        const Scalar target_vel = drives_ ? control.joint_target_vel[g] : qd[k];
+        rhs[k] += -damping * qd[k] + kd * (target_vel - qd[k]);
         s.u[k] = dt * (damping + kd);  // diagonal added to H
         if (type != JointType::Revolute && type != JointType::Prismatic) continue;
         const int c = art.q_start(i);
         const Scalar stiffness = model_.joint_stiffness[g], ke = control.joint_target_ke[g];
         const Scalar q_end = q[c] + dt * qd[k];
-        rhs[k] += -stiffness * (q_end - model_.joint_q_ref[q0 + c]) + ke * (control.joint_target_pos[g] - q_end);
+        const Scalar target_pos = drives_ ? control.joint_target_pos[g] : q_end;
+        rhs[k] += -stiffness * (q_end - model_.joint_q_ref[q0 + c]) + ke * (target_pos - q_end);
         s.u[k] += dt * dt * (stiffness + ke);
       }
     }

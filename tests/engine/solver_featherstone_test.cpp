@@ -300,6 +300,44 @@ TEST(SolverFeatherstoneErrors, ANonFiniteEntryOfALargeStateIsNamedOnAnyThreadCou
   }
 }
 
+// the PD targets enter a step only through a nonzero gain: without one, non-finite targets are not read (the
+// steps equal those with finite targets, on the batched and the scalar path); with one, the first is named
+// and nothing is written
+TEST(SolverFeatherstoneErrors, PdTargetsAreCheckedWhenAGainReadsThem) {
+  ModelBuilder builder;
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.child_xform.p = Vec3(0, 0.25, 0);  // each hinge at the top of its link
+  const int upper = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  builder.add_joint_revolute(-1, upper, options);
+  const int lower = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  options.parent_xform.p = Vec3(0, -0.25, 0);
+  builder.add_joint_revolute(upper, lower, options);
+  for (const bool batched : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.use_batch_kernels = batched;
+    Scene finite(builder, settings), bad(builder, settings);
+    finite.state.joint_q[0] = bad.state.joint_q[0] = 0.5;
+    bad.control.joint_target_pos[0] = std::nan("");
+    bad.control.joint_target_vel[1] = std::numeric_limits<Scalar>::infinity();
+    finite.run(0.5);
+    bad.run(0.5);
+    EXPECT_EQ(bad.state.joint_q, finite.state.joint_q) << "batched " << batched;
+    EXPECT_EQ(bad.state.joint_qd, finite.state.joint_qd) << "batched " << batched;
+    EXPECT_EQ(bad.state.body_q, finite.state.body_q) << "batched " << batched;
+
+    const State before = bad.state;
+    bad.control.joint_target_kd[1] = 1;
+    EXPECT_NOVAPHY_ERROR(bad.solver.step(bad.state, bad.state, bad.control, bad.contacts, kDt),
+                         "joint_target_pos[0] is not finite: nan");
+    bad.control.joint_target_pos[0] = 0;
+    EXPECT_NOVAPHY_ERROR(bad.solver.step(bad.state, bad.state, bad.control, bad.contacts, kDt),
+                         "joint_target_vel[1] is not finite: inf");
+    EXPECT_EQ(bad.state.joint_q, before.joint_q);
+    EXPECT_EQ(bad.state.body_q, before.body_q);
+  }
+}
+
 TEST(SolverFeatherstoneErrors, BadStepArguments) {
   ModelBuilder builder;
   builder.add_ground_plane();
