@@ -591,16 +591,47 @@ IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
   return bad;
 }
 
+namespace {
+
+// L x = y for the R rows k, k + 1, ... of a chain (each the parent dof of the next): their sums over the
+// first row's ancestors side by side (independent chains of operations, each in its own order), then
+// over the group's rows before each
+template <int R, typename T>
+void solve_lower_group(const BatchTopology<T>& topo, const V<T>* L, int k, V<T>* x) {
+  const V<T>* Lt[R];
+  V<T> y[R];
+  for (int t = 0; t < R; ++t) Lt[t] = L + topo.row_start[k + t], y[t] = x[k + t];
+  for (int r = topo.run_start[k]; r < topo.run_start[k + 1]; ++r) {
+    const auto& run = topo.ancestor_runs[r];
+    for (int j = run.dof; j < run.dof + run.count; ++j) {
+      const V<T> x_j = x[j];
+      for (int t = 0; t < R; ++t) y[t] -= Lt[t][j] * x_j;
+    }
+  }
+  for (int t = 0; t < R; ++t) {
+    for (int s = 0; s < t; ++s) y[t] -= Lt[t][k + s] * x[k + s];
+    x[k + t] = y[t] * Lt[t][k + t];
+  }
+}
+
+}  // namespace
+
 template <typename T>
 void batch_solve_lower(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
-  for (int k = 0; k < topo.dof_count; ++k) {
-    const V<T>* Lk = L + topo.row_start[k];
-    V<T> y = x[k];
-    for (int r = topo.run_start[k]; r < topo.run_start[k + 1]; ++r) {
-      const auto& run = topo.ancestor_runs[r];
-      for (int j = run.dof; j < run.dof + run.count; ++j) y -= Lk[j] * x[j];
+  // row k: x_k = (x_k - the sum over its ancestors j, ascending, of L_kj x_j) / L_kk. A chain's rows (a
+  // multi-dof joint, a chain of hinges) go up to four at a time: each row's sum takes the same operations
+  // in the same order as alone, so the result is the same to the bit, and the group's sums overlap
+  constexpr int kGroup = 4;
+  for (int k = 0; k < topo.dof_count;) {
+    int size = 1;
+    while (size < kGroup && k + size < topo.dof_count && topo.dof_parent[k + size] == k + size - 1) ++size;
+    switch (size) {
+      case 1: solve_lower_group<1>(topo, L, k, x); break;
+      case 2: solve_lower_group<2>(topo, L, k, x); break;
+      case 3: solve_lower_group<3>(topo, L, k, x); break;
+      default: solve_lower_group<kGroup>(topo, L, k, x); break;
     }
-    x[k] = y * Lk[k];
+    k += size;
   }
 }
 
