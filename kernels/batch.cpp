@@ -507,6 +507,9 @@ void batch_mass_matrix_gemm(const BatchTopology<T>& topo, const BatchParams<T>& 
 
 namespace {
 
+// the most rows of a chain (dofs each the parent of the next) the factor and L x = y take together
+constexpr int kChainGroup = 4;
+
 // rows i of the runs, each i taking R rows' outer products in turn: L_i[j] -= L_c[i] L_c[j] for j among i's
 // ancestors and i, c = each of the R rows in order (one load and store of L_i[j] for R products)
 template <int R, typename T>
@@ -534,13 +537,12 @@ template <typename T>
 IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
   // row k of L is final once the rows below it have been folded in: divide it by the pivot, then take
   // its outer product off the rows of its ancestors (all of them ancestors of k too). Rows are taken in
-  // groups of up to kFactorGroup dofs in a chain (k, k - 1, ..., each the parent dof of the one before:
+  // groups of up to kChainGroup dofs in a chain (k, k - 1, ..., each the parent dof of the one before:
   // a multi-dof joint, a chain of hinges): each row of the group is finished and folded into the group's
   // rows above it in turn, then all the group's outer products come off the rows of the ancestors in one
   // pass. Each entry takes the same operations in the same order of k as one row at a time would, so the
   // result is the same to the bit; the pass loads and stores an entry once for the group's products
   using Run = typename BatchTopology<T>::Run;
-  constexpr int kFactorGroup = 4;
   IntLanes<T> bad = IntLanes<T>{} - 1;
   auto runs_of = [&](int k, const Run** run) {
     *run = topo.ancestor_runs.data() + topo.run_start[k];
@@ -548,8 +550,8 @@ IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
   };
   for (int k = topo.dof_count - 1; k >= 0;) {
     int size = 1;
-    while (size < kFactorGroup && k - size >= 0 && topo.dof_parent[k - size + 1] == k - size) ++size;
-    const V<T>* group[kFactorGroup];
+    while (size < kChainGroup && k - size >= 0 && topo.dof_parent[k - size + 1] == k - size) ++size;
+    const V<T>* group[kChainGroup];
     for (int t = 0; t < size; ++t) {
       const int c = k - t;
       V<T>* Lc = H + topo.row_start[c];
@@ -584,7 +586,7 @@ IntLanes<T> batch_factor(const BatchTopology<T>& topo, V<T>* H, V<T>* x) {
       case 1: take_outer_products<1>(topo, group, run, runs, H); break;
       case 2: take_outer_products<2>(topo, group, run, runs, H); break;
       case 3: take_outer_products<3>(topo, group, run, runs, H); break;
-      default: take_outer_products<kFactorGroup>(topo, group, run, runs, H); break;
+      default: take_outer_products<kChainGroup>(topo, group, run, runs, H); break;
     }
     k -= size;
   }
@@ -621,15 +623,14 @@ void batch_solve_lower(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
   // row k: x_k = (x_k - the sum over its ancestors j, ascending, of L_kj x_j) / L_kk. A chain's rows (a
   // multi-dof joint, a chain of hinges) go up to four at a time: each row's sum takes the same operations
   // in the same order as alone, so the result is the same to the bit, and the group's sums overlap
-  constexpr int kGroup = 4;
   for (int k = 0; k < topo.dof_count;) {
     int size = 1;
-    while (size < kGroup && k + size < topo.dof_count && topo.dof_parent[k + size] == k + size - 1) ++size;
+    while (size < kChainGroup && k + size < topo.dof_count && topo.dof_parent[k + size] == k + size - 1) ++size;
     switch (size) {
       case 1: solve_lower_group<1>(topo, L, k, x); break;
       case 2: solve_lower_group<2>(topo, L, k, x); break;
       case 3: solve_lower_group<3>(topo, L, k, x); break;
-      default: solve_lower_group<kGroup>(topo, L, k, x); break;
+      default: solve_lower_group<kChainGroup>(topo, L, k, x); break;
     }
     k += size;
   }
