@@ -71,8 +71,9 @@ class Batches final : public ArticulationBatches {
     std::vector<int> rotational;  // dofs angular damping scales: Revolute ones and Ball's and Free's angular ones
     std::vector<int> limited;     // Revolute / Prismatic dofs with a finite limit in some world
     std::vector<V> limits;        // per block: [limited][2] lower and upper limit
-    std::vector<int> limit_slot;  // per slot: [limited] the solver's slot of its limit impulses, -1 for none
-    std::vector<std::uint8_t> limit_span;  // per block: each world's slots follow each other (one span)
+    // where its blocks' kept limit impulses start in the solver's array (limit_cells): per block
+    // [limited][2][lane], each lane's W numbers one vector of doubles
+    int impulse_base = 0;
     bool enabled = true;
     bool factored = false;  // H of every block factored by an earlier step
     bool refactor = true;   // this step computes and factors H
@@ -188,14 +189,16 @@ class Batches final : public ArticulationBatches {
         if (finite) G.limited.push_back(k);
       }
       const int nl = static_cast<int>(G.limited.size());
-      for (const int a : G.arts)
-        for (const int k : G.limited) G.limit_slot.push_back(limit_slot[art[a].qd_begin() + k]);
-      for (int b = 0; b < G.blocks; ++b) {
-        bool span = nl > 0;
-        for (int k = b * W * nl; k < (b + 1) * W * nl; ++k)
-          span &= G.limit_slot[k] >= 0 && G.limit_slot[k] == G.limit_slot[k - k % nl] + k % nl;
-        G.limit_span.push_back(span);
-      }
+      G.impulse_base = limit_cell_count_;
+      limit_cell_count_ += G.blocks * 2 * nl * W;
+      for (int k = 0; k < G.world_count; ++k)
+        for (int m = 0; m < nl; ++m) {
+          const int slot = limit_slot[art[G.arts[k]].qd_begin() + G.limited[m]];
+          if (slot < 0) continue;
+          if (static_cast<int>(limit_cell_.size()) < 2 * slot + 2) limit_cell_.resize(2 * slot + 2, -1);
+          for (int side = 0; side < 2; ++side)
+            limit_cell_[2 * slot + side] = G.impulse_base + (((k / W) * nl + m) * 2 + side) * W + k % W;
+        }
       G.limits.resize(static_cast<size_t>(G.blocks) * 2 * nl);
       for (int b = 0; b < G.blocks; ++b)
         for (int m = 0; m < nl; ++m)
@@ -244,6 +247,9 @@ class Batches final : public ArticulationBatches {
   }
 
   int active_count() const override { return active_count_; }
+
+  const std::vector<int>& limit_cells() const override { return limit_cell_; }
+  int limit_cell_count() const override { return limit_cell_count_; }
 
   bool active(int a) const override { return slot_[a].group >= 0 && groups_[slot_[a].group].enabled; }
 
@@ -348,9 +354,10 @@ class Batches final : public ArticulationBatches {
   std::size_t bytes() const override {
     std::size_t n = 0;
     for (const Group& G : groups_)
-      n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size()) * sizeof(V) +
+      n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size() + G.limits.size()) * sizeof(V) +
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int);
     for (const Group& G : groups_) n += G.contiguous.size();
+    n += limit_cell_.size() * sizeof(int);
     for (const LaneFactor& copy : lane_factor_) n += copy.L.size() * sizeof(Scalar);
     for (const Output& out : output_)
       n += out.stage.size() * sizeof(Scalar) + (out.S.size() + out.H.size()) * sizeof(V);
@@ -361,8 +368,7 @@ class Batches final : public ArticulationBatches {
           n += v->size() * sizeof(V);
     for (const RowWork& R : row_work_)
       n += (R.J.size() + R.z.size() + R.target.size() + R.mu.size() + R.inv_mass.size() + R.lambda.size() +
-            R.coef.size() + R.qd_in.size() + R.point.size() + R.frame.size() + R.kept_limit.size() +
-            R.previous_limit.size()) *
+            R.coef.size() + R.qd_in.size() + R.point.size() + R.frame.size()) *
                sizeof(V) +
            R.active.size() * sizeof(IntLanes<T>) +
            (R.limit_row.size() + R.contact.size() + R.normal.size() + R.nonzero_begin.size() + R.nonzero_end.size()) *
@@ -490,7 +496,6 @@ class Batches final : public ArticulationBatches {
     const T dt = static_cast<T>(dt_);
     const int* qd_off = &G.qd_off[b * W];
     const int* q_off = &G.q_off[b * W];
-    const int* limit_slot = G.limit_slot.data() + static_cast<size_t>(b) * W * nl;
     IntLanes<T> mine{};             // lanes solved here: worlds of this block no contact joins to another articulation
     int listed[W] = {}, slots = 0;  // each lane's contacts, their most in a lane
     bool any_mine = false;
@@ -522,16 +527,8 @@ class Batches final : public ArticulationBatches {
 
     // limit rows first, in dof order: J = +-e_k, kept where some lane has the row
     const V* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
-    // where each world's limit impulses are one span (`span` its start per lane), they are read and written
-    // a tile of every world's span at a time: the ones the last step kept, here
-    Scalar* span[W] = {};
-    if (G.limit_span[b])
-      for (int l = 0; l < W; ++l) span[l] = impulse + 2 * limit_slot[l * nl];
-    const V* previous = nullptr;
-    if (s.use_warmstarting && G.limit_span[b]) {
-      lanes_from_rows<T>(span, 2 * nl, R.previous_limit.data());
-      previous = R.previous_limit.data();
-    }
+    // the block's kept limit impulses, [limited][side] a vector of lanes each (0 where a world has no such limit)
+    Scalar* kept = impulse + G.impulse_base + static_cast<size_t>(b) * 2 * nl * W;
     for (int m = 0; m < nl; ++m) {
       const int k = G.limited[m], c = topo.coord_of_dof[k];
       V q = w.q[c];
@@ -546,14 +543,8 @@ class Batches final : public ArticulationBatches {
         R.limit_row[2 * m + side] = -1;
         if (!any_lane<T>(on)) continue;
         const V depth = -gap - T(s.linear_slop);
-        V warm{};
-        if (previous)
-          warm = T(s.warmstarting_factor) * previous[2 * m + side];
-        else if (s.use_warmstarting)
-          for (int l = 0; l < W; ++l) {
-            const int slot = limit_slot[l * nl + m];
-            warm[l] = slot < 0 ? T(0) : T(s.warmstarting_factor) * static_cast<T>(impulse[2 * slot + side]);
-          }
+        const V warm =
+            s.use_warmstarting ? T(s.warmstarting_factor) * lanes_from_doubles<T>(kept + (2 * m + side) * W) : V{};
         const int r =
             add_row(RowKind::Unilateral, on, gap >= 0 ? -gap / dt : T(s.erp) * (depth > 0 ? depth : V{}) / dt, warm);
         R.limit_row[2 * m + side] = r;
@@ -678,25 +669,14 @@ class Batches final : public ArticulationBatches {
     batch_rows.lambda = R.lambda.data();
     batch_pgs_solve(batch_rows, s.pgs, w.qd.data());
 
-    // velocities and the impulses kept for warm starting: limits per dof and side (each side's lanes at
-    // once: 0 where its row is off or not finite; then each world's), contacts as world vectors on body b
-    V* kept = R.kept_limit.data();
+    // velocities and the impulses kept for warm starting: limits per dof and side (0 where its row is off
+    // or not finite), contacts as world vectors on body b
     for (int m = 0; m < 2 * nl; ++m) {
       const int r = R.limit_row[m];
       const V x = r >= 0 ? (R.active[r] ? R.lambda[r] : V{}) : V{};
-      kept[m] = lane_abs<T>(x) <= std::numeric_limits<T>::max() ? x : V{};
+      doubles_from_lanes<T>(lane_abs<T>(x) <= std::numeric_limits<T>::max() ? x : V{}, mine, kept + m * W);
     }
     if (!after_dynamics) scatter(qd_off, w.qd.data(), nv, mine, qd_io);
-    if (G.limit_span[b])
-      rows_from_lanes<T>(kept, 2 * nl, mine, span);
-    else
-      for (int l = 0; l < lanes; ++l) {
-        if (!mine[l]) continue;
-        for (int m = 0; m < 2 * nl; ++m) {
-          const int slot = limit_slot[l * nl + m / 2];
-          if (slot >= 0) impulse[2 * slot + m % 2] = kept[m][l];
-        }
-      }
     for (int t = 0; t < slots; ++t) {
       const V* d = &R.frame[9 * t];
       const V* lambda = &R.lambda[rows - 3 * (slots - t)];
@@ -950,8 +930,6 @@ class Batches final : public ArticulationBatches {
     std::vector<IntLanes<T>> active;
     std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
     std::vector<int> limit_row;                         // [limited][2] its row, or -1
-    std::vector<V> kept_limit;                          // [limited][2] the impulse kept for the next step
-    std::vector<V> previous_limit;                      // [limited][2] the one the last step kept
     std::vector<int> contact;                           // [slot][lane] the contact, or -1
     std::vector<V> frame;                               // [slot][3][3] the normal and tangents
     std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
@@ -969,8 +947,6 @@ class Batches final : public ArticulationBatches {
       for (auto* x : {&nonzero_begin, &nonzero_end})
         if (static_cast<int>(x->size()) < rows) x->resize(rows);
       if (limit_row.size() < static_cast<size_t>(rows)) limit_row.resize(rows);
-      if (kept_limit.size() < static_cast<size_t>(rows)) kept_limit.resize(rows);
-      if (previous_limit.size() < static_cast<size_t>(rows)) previous_limit.resize(rows);
       if (contact.size() < static_cast<size_t>(slots) * W) contact.resize(static_cast<size_t>(slots) * W);
       if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
       for (auto* x : {&coef, &qd_in})
@@ -1003,7 +979,9 @@ class Batches final : public ArticulationBatches {
     V origin[3];
   };
   std::vector<Output> output_;
-  int active_count_ = 0;                         // articulations in groups that are on
+  int active_count_ = 0;         // articulations in groups that are on
+  std::vector<int> limit_cell_;  // [2 * limit slot + side] (limit_cells)
+  int limit_cell_count_ = 0;
   std::vector<std::uint8_t> no_skip_;            // per articulation: 0, step()'s skip for solve_rows
   std::vector<std::vector<BatchWork<T>>> work_;  // per thread, per group
   std::vector<RowWork> row_work_;                // per thread

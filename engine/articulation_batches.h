@@ -29,8 +29,8 @@ class ArticulationBatches {
 
   // batches over the articulations a with batched[a] != 0, in precision `precision`; `model`
   // holds the arrays the views `art` point into (the welded model), `welded[a]` articulation a's
-  // welded bodies, `com` every body's own centre of mass and `limit_slot[dof]` where the solver keeps
-  // that dof's limit impulses (-1: a dof without a finite limit)
+  // welded bodies, `com` every body's own centre of mass and `limit_slot[dof]` the solver's number for
+  // that dof's limit (-1: a dof without a finite limit)
   static std::unique_ptr<ArticulationBatches> make(const Model& model, const std::vector<ArticulationView>& art,
                                                    const std::vector<std::uint8_t>& batched,
                                                    const std::vector<std::vector<WeldedBody>>& welded,
@@ -44,6 +44,13 @@ class ArticulationBatches {
   virtual bool active(int a) const = 0;
   // how many articulations are in batches that are on
   virtual int active_count() const = 0;
+  // where solve_rows and step keep the limit impulses of batched articulations (the warm starts of their
+  // limit rows) in their array `impulse`: cell [2 * slot + side] for the limit slots given to make() (side
+  // 0 the lower limit, 1 the upper), -1 for the others (the vector may be shorter than twice the slots).
+  // They take cells [0, limit_cell_count()), a block's laid out [limited dof][side][lane], so that a
+  // block reads and writes each as one vector
+  virtual const std::vector<int>& limit_cells() const = 0;
+  virtual int limit_cell_count() const = 0;
 
   // how dynamics treats a step
   struct DynamicsOptions {
@@ -86,8 +93,8 @@ class ArticulationBatches {
   // moving articulation), solved here a block at a time: joint-limit rows, then each world's listed
   // contacts (a normal row and two friction rows each), with the same targets, warm start and PGS
   // sweeps as the solver's scalar path (kernels/batch_pgs.h); a lane's absent rows are masked.
-  // qd [dof] and impulse [limit slot][2] (the warm-start impulses of the lower and upper limit) are read and
-  // written for those articulations; in.joint_qd (the step's initial velocity) is read for restitution
+  // qd [dof] and impulse [limit_cells()] (the warm-start impulses of the lower and upper limits) are read
+  // and written for those articulations; in.joint_qd (the step's initial velocity) is read for restitution
   virtual void solve_rows(const State& in, const std::uint8_t* skip, const BlockContacts& contacts,
                           const RowSettings& settings, Scalar dt, Scalar* qd, Scalar* impulse, int threads) = 0;
   // true where articulation a's rows are solved by solve_rows (given the same skip)

@@ -166,7 +166,17 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     batches_ =
         ArticulationBatches::make(kernel_model, art_, batchable, welded, model.body_com, limit_slot, model.precision);
   limit_row_.assign(2 * model.joint_dof_count, -1);
-  limit_impulse_.assign(2 * limited_joints_.size(), 0);
+  // the impulses of the batched articulations' limits where the blocks read them as vectors, the others after
+  limit_cell_.assign(2 * limited_joints_.size(), -1);
+  int cells = 0;
+  if (batches_) {
+    const std::vector<int>& batched = batches_->limit_cells();
+    std::copy(batched.begin(), batched.end(), limit_cell_.begin());
+    cells = batches_->limit_cell_count();
+  }
+  for (int& cell : limit_cell_)
+    if (cell < 0) cell = cells++;
+  limit_impulse_.assign(cells, 0);
   step_bytes_ = static_cast<std::int64_t>(memory_bytes()) +
                 static_cast<std::int64_t>(sizeof(Scalar)) * (model.joint_coord_count + model.joint_dof_count +
                                                              (7 + 6 + 6) * static_cast<std::int64_t>(model.body_count));
@@ -198,8 +208,8 @@ std::size_t SolverFeatherstone::memory_bytes() const {
          (s.c.size() + s.v.size() + s.a.size() + s.f.size() + s.pA.size()) * sizeof(Vec6);
     n += bytes(s.S) + bytes(s.U) + bytes(s.H) + bytes(s.S_world) + bytes(s.u) + bytes(s.C);
   }
-  n += bytes(qd_) + bytes(q_next_) + bytes(rhs_) + bytes(zero_);
-  return n;
+  n += bytes(qd_) + bytes(q_next_) + bytes(rhs_) + bytes(zero_) + bytes(limit_impulse_);
+  return n + limit_cell_.size() * sizeof(int);
 }
 
 template <typename F>
@@ -599,7 +609,8 @@ void SolverFeatherstone::build_limit_rows(const State& in, Scalar dt) {
       const Scalar target = gap >= 0 ? -gap / dt : settings.erp * std::max<Scalar>(-gap - settings.linear_slop, 0) / dt;
       const int r = begin_row(a, -1, RowKind::Unilateral, target);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
-      if (settings.use_warmstarting) rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[2 * m + side];
+      if (settings.use_warmstarting)
+        rows_[r].lambda = settings.warmstarting_factor * limit_impulse_[limit_cell_[2 * m + side]];
       limit_row_[2 * g + side] = r;
     }
   });
@@ -710,7 +721,7 @@ void SolverFeatherstone::solve_constraints(Contacts& contacts) {
       for (int side = 0; side < 2; ++side) {
         const int r = limit_row_[2 * g + side];
         const Scalar lambda = r < 0 ? 0 : rows_[r].lambda;
-        limit_impulse_[2 * m + side] = std::isfinite(lambda) ? lambda : 0;
+        limit_impulse_[limit_cell_[2 * m + side]] = std::isfinite(lambda) ? lambda : 0;
       }
     }
 }

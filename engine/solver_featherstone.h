@@ -233,8 +233,10 @@ class SolverFeatherstone {
   // Revolute and Prismatic joints with a finite limit, by articulation: a's are from limited_start_[a]
   std::vector<int> limited_joints_, limited_start_;
   std::vector<int> limit_row_;  // [dof][2] row of each active limit, -1
-  // [limited joint][2] impulses of the previous step's limit rows, in limited_joints_' order
+  // the impulses of the previous step's limit rows: limited joint m's lower (side 0) and upper (1) at
+  // limit_impulse_[limit_cell_[2 * m + side]] (the batches lay out their articulations' cells)
   std::vector<Scalar> limit_impulse_;
+  std::vector<int> limit_cell_;
   SolverStageSeconds stage_seconds_;
 };
 

@@ -9,6 +9,7 @@
 // round the same).
 #pragma once
 
+#include <cstdint>
 #include <cstring>
 #include <utility>
 
@@ -110,6 +111,30 @@ template <typename T>
 void rows_from_lanes_reference(const Lanes<T>* in, int count, const IntLanes<T>& lanes, double* const* row) {
   for (int l = 0; l < kLanes<T>; ++l)
     for (int k = 0; k < count && lanes[l]; ++k) row[l][k] = in[k][l];
+}
+
+// one number of every lane kept as kLanes<T> consecutive doubles: x[l] = T(p[l]), and p[l] = x[l] for the
+// lanes set in `lanes` (whole vectors converted, the others' doubles blended back in; nothing to transpose)
+template <typename T>
+Lanes<T> lanes_from_doubles(const double* p) {
+  using namespace lane_detail;
+  typename Chunk<T>::type g[kLanes<T> / kChunk];
+  for (int h = 0; h < kLanes<T> / kChunk; ++h) g[h] = load_chunk<T>(p + h * kChunk);
+  return join<T>(g, std::make_index_sequence<kLanes<T>>());
+}
+template <typename T>
+void doubles_from_lanes(const Lanes<T>& x, const IntLanes<T>& lanes, double* p) {
+  using namespace lane_detail;
+  typedef std::int64_t Mask __attribute__((vector_size(kVectorBytes)));
+  for (int h = 0; h < kLanes<T> / kChunk; ++h) {
+    Doubles old;
+    std::memcpy(&old, p + h * kChunk, sizeof(old));
+    const Doubles in = __builtin_convertvector(group<T>(x, h, std::make_index_sequence<kChunk>()), Doubles);
+    Mask on;
+    for (int l = 0; l < kChunk; ++l) on[l] = lanes[h * kChunk + l];
+    const Doubles out = on != 0 ? in : old;
+    std::memcpy(p + h * kChunk, &out, sizeof(out));
+  }
 }
 
 template <typename T>

@@ -131,8 +131,8 @@ TEST(ArticulationBatches, TiledMassMatrixMatchesTheScalarProduct) {
 
 TEST(ArticulationBatches, LimitRowsSolvedInBlocksMatchTheScalarRows) {
   // the hanging quadruped pushed against its limits: every leg joint beyond its range at the start.
-  // World 2's first leg joint has no limit, so its block's worlds keep their limit impulses apart
-  // (not one span a world); the last block's worlds in one span each
+  // World 2's first leg joint has no limit: its lane of that joint's rows stays off and its kept
+  // impulse 0, the other worlds' limit impulses kept beside it
   Model model = replicated(quadruped(false), 12, Precision::Float64);
   State batched = model.state();
   for (int j = 0; j < model.joint_count; ++j) {

@@ -1,7 +1,9 @@
 // The tiled transposes between worlds' rows of doubles and lanes against their twins, which move
 // one number at a time: every row length to a few tiles past one, rows at odd offsets in one buffer
 // (unaligned loads and stores), every lane written or not, bit for bit (NaN and values that round
-// in float included); nothing outside a written row's numbers touched
+// in float included); nothing outside a written row's numbers touched. Likewise one vector of doubles
+// to lanes and back (a block's kept limit impulses): each lane converted on its own, the lanes not
+// written keeping their doubles' bits
 #include "kernels/lane_transpose.h"
 
 #include <gtest/gtest.h>
@@ -48,8 +50,38 @@ void expect_transposes_equal_their_twins() {
   }
 }
 
+template <typename T>
+void expect_one_vector_each_lane() {
+  constexpr int W = kLanes<T>;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-10, 10);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> buffer(W + 2);  // the vector at offset 1: unaligned
+    for (double& x : buffer) x = u(rng) + 1e-9 * u(rng);
+    buffer[1 + trial % W] = trial % 2 ? std::numeric_limits<double>::quiet_NaN() : -HUGE_VAL;
+    const Lanes<T> x = lanes_from_doubles<T>(buffer.data() + 1);
+    for (int l = 0; l < W; ++l) {
+      const T expected = static_cast<T>(buffer[1 + l]);
+      ASSERT_EQ(std::memcmp(&x[l], &expected, sizeof(T)), 0) << "lane " << l << " in";
+    }
+    Lanes<T> y;
+    IntLanes<T> written{};
+    for (int l = 0; l < W; ++l) {
+      y[l] = static_cast<T>(u(rng));
+      written[l] = rng() % 3 == 0 ? 0 : -1;
+    }
+    std::vector<double> expected = buffer;
+    for (int l = 0; l < W; ++l)
+      if (written[l]) expected[1 + l] = y[l];
+    doubles_from_lanes<T>(y, written, buffer.data() + 1);
+    ASSERT_EQ(std::memcmp(buffer.data(), expected.data(), buffer.size() * sizeof(double)), 0) << "trial " << trial;
+  }
+}
+
 TEST(LaneTranspose, Float64TilesEqualTheirTwinsBitForBit) { expect_transposes_equal_their_twins<double>(); }
 TEST(LaneTranspose, Float32TilesEqualTheirTwinsBitForBit) { expect_transposes_equal_their_twins<float>(); }
+TEST(LaneTranspose, OneVectorOfDoublesIsEachLaneInFloat64) { expect_one_vector_each_lane<double>(); }
+TEST(LaneTranspose, OneVectorOfDoublesIsEachLaneInFloat32) { expect_one_vector_each_lane<float>(); }
 
 }  // namespace
 }  // namespace novaphy
