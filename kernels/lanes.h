@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <cstring>
 
-#if defined(__SSE__)
+#if defined(__AVX__)
+#include <immintrin.h>
+#elif defined(__SSE__)
 #include <xmmintrin.h>
 #endif
 
@@ -47,10 +49,26 @@ using Lanes = typename LaneTypes<T>::type;
 template <typename T>
 using IntLanes = typename LaneTypes<T>::mask;
 
-// true when some lane of the mask m is set (read as words: a vector compare and a branch per lane
-// would cost more than the test it guards)
+// true when some lane of the mask m is set: one test of the whole register where the machine has one
+// (AVX-512's into a mask register, AVX's vptest: measured 1.01-1.015x the contact-free quadruped's step
+// and 1.036x the standing one's, one thread, against ORing its words), else read as words (a vector
+// compare and a branch per lane would cost more than the test it guards)
 template <typename T>
 inline bool any_lane(const IntLanes<T>& m) {
+#if defined(__AVX512F__)
+  if constexpr (sizeof(m) == 64) {
+    __m512i x;
+    std::memcpy(&x, &m, sizeof(x));
+    return _mm512_test_epi64_mask(x, x) != 0;
+  }
+#endif
+#if defined(__AVX__)
+  if constexpr (sizeof(m) == 32) {
+    __m256i x;
+    std::memcpy(&x, &m, sizeof(x));
+    return !_mm256_testz_si256(x, x);
+  }
+#endif
   std::uint64_t x[sizeof(m) / 8], any = 0;
   std::memcpy(x, &m, sizeof(m));
   for (const std::uint64_t word : x) any |= word;

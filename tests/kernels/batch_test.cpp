@@ -5,8 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstring>
 #include <limits>
+#include <random>
+#include <type_traits>
 
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -198,6 +201,33 @@ TEST(SubnormalsAsZero, FlushesInsideItsScopeAndRestoresTheMode) {
   EXPECT_GT(tiny * small, 0.0f);
   EXPECT_GT(subnormal * 1.0f, 0.0f);
 }
+
+// any_lane against a look at each lane: no lane, each lane alone (with any of its bits), random masks
+template <typename T>
+void expect_any_lane_is_some_lane_set() {
+  constexpr int W = kLanes<T>;
+  using Int = std::conditional_t<sizeof(T) == 4, std::int32_t, std::int64_t>;  // IntLanes<T>'s entries
+  EXPECT_FALSE(any_lane<T>(IntLanes<T>{}));
+  std::mt19937 rng(5);
+  for (int l = 0; l < W; ++l)
+    for (int bit = 0; bit < 8 * static_cast<int>(sizeof(T)); ++bit) {
+      IntLanes<T> m{};
+      m[l] = static_cast<Int>(std::make_unsigned_t<Int>{1} << bit);
+      ASSERT_TRUE(any_lane<T>(m)) << "lane " << l << " bit " << bit;
+    }
+  for (int trial = 0; trial < 200; ++trial) {
+    IntLanes<T> m{};
+    bool some = false;
+    for (int l = 0; l < W; ++l) {
+      m[l] = rng() % 4 == 0 ? -1 : 0;
+      some |= m[l] != 0;
+    }
+    ASSERT_EQ(any_lane<T>(m), some) << "trial " << trial;
+  }
+}
+
+TEST(Lanes, AnyLaneIsTrueExactlyWhenSomeLaneIsSetFloat64) { expect_any_lane_is_some_lane_set<double>(); }
+TEST(Lanes, AnyLaneIsTrueExactlyWhenSomeLaneIsSetFloat32) { expect_any_lane_is_some_lane_set<float>(); }
 
 TEST(BatchKernels, Float64LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<double>(64); }
 TEST(BatchKernels, Float32LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<float>(64); }
