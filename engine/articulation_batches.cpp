@@ -906,17 +906,14 @@ class Batches final : public ArticulationBatches {
     // no more threads than blocks: a team with idle members still pays for waking them at every call
     const int n =
         std::min({threads > 0 ? threads : static_cast<int>(work_.size()), static_cast<int>(work_.size()), count});
-    parallel_for(
+    // float32 blocks flush subnormals (see SubnormalsAsZero), the mode set once on each thread: setting it
+    // around each block cost 1.5 % of the contact-free quadruped's float32 step at 4096 worlds
+    using Flush = std::conditional_t<std::is_same_v<T, float>, SubnormalsAsZero, NoScope>;
+    parallel_for<Flush>(
         n, count,
         [&](int k) {
           Group& G = groups_[blocks_[k].first];
-          if (!G.enabled) return;
-          if constexpr (std::is_same_v<T, float>) {  // (see SubnormalsAsZero: float32 blocks flush them)
-            const SubnormalsAsZero flush;
-            f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
-          } else {
-            f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
-          }
+          if (G.enabled) f(G, blocks_[k].second, work_[omp_get_thread_num()][blocks_[k].first]);
         },
         done);
   }

@@ -14,14 +14,17 @@ namespace novaphy {
 // steps/s at two threads on this machine's two vCPUs; none at one). f must not depend on which thread
 // runs i. One thread runs the loop without a parallel region (one costs more than a short loop: 0.35 us
 // here), unless this runs inside another region, where only a region of its own numbers its thread 0,
-// which per-thread scratch is indexed by
-template <typename F, typename Done>
+// which per-thread scratch is indexed by. Each thread makes a Scope before its share and destroys it after
+// done() (a mode the thread keeps while it runs f, such as SubnormalsAsZero: set once a call, not once an i)
+struct NoScope {};
+template <typename Scope = NoScope, typename F, typename Done>
 void parallel_for(int threads, int count, F&& f, Done&& done) {
   if (threads > 1 || omp_in_parallel()) {
     const int team = std::max(threads, 1), bulk = count - count / 8;
     const int chunk = std::max(1, (count - bulk) / (4 * team));
 #pragma omp parallel num_threads(team)
     {
+      [[maybe_unused]] const Scope scope;
 #pragma omp for schedule(static) nowait
       for (int i = 0; i < bulk; ++i) f(i);
 #pragma omp for schedule(dynamic, chunk) nowait
@@ -29,6 +32,7 @@ void parallel_for(int threads, int count, F&& f, Done&& done) {
       done();
     }
   } else {
+    [[maybe_unused]] const Scope scope;
     for (int i = 0; i < count; ++i) f(i);
     done();
   }
