@@ -693,18 +693,16 @@ class Batches final : public ArticulationBatches {
   }
 
   // body_q and body_qd of block b's worlds where `written` has their lane, from the coordinates q and the
-  // velocities w.qd (lanes): the kinematics in the thread's scratch (the block's own S and o stay those of
-  // the step). With `stream`, a block whose worlds' bodies follow each other, all written, is staged and
-  // streamed around the caches
+  // velocities w.qd (lanes): the kinematics in the thread's scratch (the block's own o stays that of the
+  // step; the motion subspaces are not written out). With `stream`, a block whose worlds' bodies follow each other, all
+  // written, is staged and streamed around the caches
   void store_block(Group& G, int b, BatchWork<T>& w, const V* q, const IntLanes<T>& written, State& out, bool stream) {
     const BatchTopology<T>& topo = G.topo;
     Output& scratch = output_[omp_get_thread_num()];
     std::vector<Scalar>& out_stage = scratch.stage;
     V* o = scratch.origin;
-    V* S = scratch.S.data();
     batch_kinematics(topo, q, w, o);
-    batch_subspace(topo, w, o, S);
-    batch_velocity(topo, S, w.qd.data(), w);
+    batch_subspace_velocity(topo, o, w.qd.data(), w);
     const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
     const int* body = &G.body[static_cast<size_t>(b) * W * nb];
     // body_q = [p, Q]; body_qd = [velocity of the centre of mass, angular velocity], world frame:

@@ -121,6 +121,11 @@ void batch_subspace(const BatchTopology<T>& topo, const BatchWork<T>& w, const L
 template <typename T>
 void batch_velocity(const BatchTopology<T>& topo, const Lanes<T>* S, const Lanes<T>* qd, BatchWork<T>& w);
 
+// batch_subspace then batch_velocity with each link's columns kept in registers instead of written to S
+// (for velocities alone: body_qd at the end of a step); the same operations in the same order, the same bits
+template <typename T>
+void batch_subspace_velocity(const BatchTopology<T>& topo, const Lanes<T>* o, const Lanes<T>* qd, BatchWork<T>& w);
+
 // link spatial inertias about o, world axes, into w.I
 template <typename T>
 void batch_link_inertia(const BatchTopology<T>& topo, const BatchParams<T>& params, const Lanes<T>* o, BatchWork<T>& w);
