@@ -694,8 +694,8 @@ class Batches final : public ArticulationBatches {
 
   // body_q and body_qd of block b's worlds where `written` has their lane, from the coordinates q and the
   // velocities w.qd (lanes): the kinematics in the thread's scratch (the block's own o stays that of the
-  // step; the motion subspaces are not written out). With `stream`, a block whose worlds' bodies follow each other, all
-  // written, is staged and streamed around the caches
+  // step; the motion subspaces are not written out). With `stream`, a block whose worlds' bodies follow
+  // each other, all written, is staged and streamed around the caches
   void store_block(Group& G, int b, BatchWork<T>& w, const V* q, const IntLanes<T>& written, State& out, bool stream) {
     const BatchTopology<T>& topo = G.topo;
     Output& scratch = output_[omp_get_thread_num()];
