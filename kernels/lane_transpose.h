@@ -67,15 +67,20 @@ inline typename Chunk<T>::type load_chunk(const double* p) {
   return __builtin_convertvector(d, typename Chunk<T>::type);
 }
 
+// the kChunk T of x as doubles, and stored at p
 template <typename T>
-inline void store_chunk(const typename Chunk<T>::type& x, double* p) {
+inline Doubles widen(const typename Chunk<T>::type& x) {
 #if defined(__AVX512F__) && NOVAPHY_VECTOR_BYTES == 64
   if constexpr (sizeof(T) == sizeof(float)) {  // (GCC 12 widens eight floats in two halves)
-    _mm512_storeu_pd(p, _mm512_cvtps_pd(reinterpret_cast<const __m256&>(x)));
-    return;
+    const __m512d d = _mm512_cvtps_pd(reinterpret_cast<const __m256&>(x));
+    return reinterpret_cast<const Doubles&>(d);
   }
 #endif
-  const Doubles d = __builtin_convertvector(x, Doubles);
+  return __builtin_convertvector(x, Doubles);
+}
+template <typename T>
+inline void store_chunk(const typename Chunk<T>::type& x, double* p) {
+  const Doubles d = widen<T>(x);
   std::memcpy(p, &d, sizeof(d));
 }
 
@@ -129,7 +134,7 @@ void doubles_from_lanes(const Lanes<T>& x, const IntLanes<T>& lanes, double* p) 
   for (int h = 0; h < kLanes<T> / kChunk; ++h) {
     Doubles old;
     std::memcpy(&old, p + h * kChunk, sizeof(old));
-    const Doubles in = __builtin_convertvector(group<T>(x, h, std::make_index_sequence<kChunk>()), Doubles);
+    const Doubles in = widen<T>(group<T>(x, h, std::make_index_sequence<kChunk>()));
     Mask on;
     for (int l = 0; l < kChunk; ++l) on[l] = lanes[h * kChunk + l];
     const Doubles out = on != 0 ? in : old;
