@@ -68,8 +68,59 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
       world_pairs_.push_back(mask);
     }
   }
+  // consecutive worlds alike, up to kLanes<Scalar> of them, have their boxes and pairs' overlaps found
+  // together, a world per lane
+  for (int w = 0; w < model.world_count;) {
+    int end = w + 1;
+    while (end < model.world_count && end - w < kLanes<Scalar> && alike(w, end)) ++end;
+    group_first_.push_back(w);
+    w = end;
+  }
+  group_first_.push_back(model.world_count);
+  // per group of several: each shape's body in each lane (-1: none; the first world's again in lanes
+  // past the group's), and a bit per shape whose local pose and size are the same in all its worlds
+  // (read once: a replicated robot's), where group_boxes reads the model's arrays from the first world
+  // only (a collide after a step finds little of them in cache)
+  const int L = kLanes<Scalar>;
+  group_body_start_.assign(group_first_.size() - 1, -1);
+  group_same_.assign(group_first_.size() - 1, 0);
+  for (size_t g = 0; g + 1 < group_first_.size(); ++g) {
+    const int first = group_first_[g], count = group_first_[g + 1] - first;
+    if (count == 1) continue;
+    const std::vector<int>& shapes = world_others_[first];
+    group_body_start_[g] = static_cast<int>(group_body_.size());
+    for (size_t i = 0; i < shapes.size(); ++i) {
+      bool same = true;
+      for (int l = 0; l < L; ++l) {
+        const int a = shapes[i], s = world_others_[first + (l < count ? l : 0)][i];
+        group_body_.push_back(model.shape_body[s]);
+        for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
+        for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
+      }
+      if (same) group_same_[g] |= std::uint64_t{1} << i;
+    }
+  }
+  // a plane on no body stays where the model put it; those on bodies move
   plane_pose_.resize(model.shape_count);
+  for (const int p : planes_) {
+    if (model.shape_body[p] >= 0)
+      moving_planes_.push_back(p);
+    else
+      plane_pose_[p] = Transform::from_array(&model.shape_transform[7 * p]);
+  }
   shared_boxes_.resize(shared_others_.size());
+}
+
+bool CollisionPipeline::alike(int v, int w) const {
+  // both test their pairs by masks, the same masks, over shapes of the same types, each on a body or not
+  const std::vector<int>&a = world_others_[v], &b = world_others_[w];
+  if (world_pair_start_[v] < 0 || world_pair_start_[w] < 0 || a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (model_.shape_type[a[i]] != model_.shape_type[b[i]] ||
+        (model_.shape_body[a[i]] < 0) != (model_.shape_body[b[i]] < 0) ||
+        world_pairs_[world_pair_start_[v] + i] != world_pairs_[world_pair_start_[w] + i])
+      return false;
+  return true;
 }
 
 Contacts CollisionPipeline::contacts() const {
@@ -98,30 +149,89 @@ bool CollisionPipeline::may_collide(int a, int b) const {
 
 namespace {
 
-Transform shape_pose(const Model& model, const State& state, int s) {
-  const Transform local = Transform::from_array(&model.shape_transform[7 * s]);
-  const int b = model.shape_body[s];
-  return b < 0 ? local : Transform::from_array(&state.body_q[7 * b]) * local;
+constexpr Scalar kIdentity[7] = {0, 0, 0, 0, 0, 0, 1};  // where a shape on no body has its "body"
+
+BoundsKind bounds_kind(int type) {
+  switch (static_cast<ShapeType>(type)) {
+    case ShapeType::Sphere: return BoundsKind::Sphere;
+    case ShapeType::Box: return BoundsKind::Box;
+    case ShapeType::Capsule: return BoundsKind::Capsule;
+    case ShapeType::Plane: break;
+  }
+  return BoundsKind::Plane;
 }
 
 }  // namespace
 
 CollisionPipeline::Box CollisionPipeline::box(const State& state, int s) const {
-  // the world AABB of a sphere, box or capsule
-  Box x;
-  x.pose = shape_pose(model_, state, s);
-  const Transform& X = x.pose;
-  const Vec3 scale = Eigen::Map<const Vec3>(&model_.shape_scale[3 * s]);
-  Vec3 extent = Vec3::Zero();
-  switch (static_cast<ShapeType>(model_.shape_type[s])) {
-    case ShapeType::Sphere: extent = Vec3::Constant(scale.x()); break;
-    case ShapeType::Box: extent = X.rotation().cwiseAbs() * scale; break;
-    case ShapeType::Capsule: extent = (X.q * Vec3(0, scale.y(), 0)).cwiseAbs() + Vec3::Constant(scale.x()); break;
-    case ShapeType::Plane: break;
+  const int b = model_.shape_body[s];
+  Scalar pose[7];
+  Vec3 lower, upper;
+  shape_bounds(bounds_kind(model_.shape_type[s]), b < 0 ? kIdentity : &state.body_q[7 * b],
+               &model_.shape_transform[7 * s], &model_.shape_scale[3 * s], options_.margin, pose, lower.data(),
+               upper.data());
+  return {Transform::from_array(pose), lower, upper};
+}
+
+void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch) const {
+  using V = Lanes<Scalar>;
+  constexpr int L = kLanes<Scalar>;
+  const int first = group_first_[g], count = group_first_[g + 1] - first;
+  const int n = static_cast<int>(world_others_[first].size());
+  const int* group_body = &group_body_[group_body_start_[g]];
+  scratch.lanes.resize(n);
+  for (int i = 0; i < n; ++i) {
+    // shape i of each world
+    V body[7], local[7], scale[3];
+    for (int l = 0; l < L; ++l) {
+      const int b = group_body[L * i + l];
+      const Scalar* x = b < 0 ? kIdentity : &state.body_q[7 * b];
+      for (int k = 0; k < 7; ++k) body[k][l] = x[k];
+    }
+    if (group_same_[g] >> i & 1) {
+      const int s = world_others_[first][i];
+      for (int k = 0; k < 7; ++k) local[k] = V{} + model_.shape_transform[7 * s + k];
+      for (int k = 0; k < 3; ++k) scale[k] = V{} + model_.shape_scale[3 * s + k];
+    } else {
+      for (int l = 0; l < L; ++l) {
+        const int s = world_others_[first + (l < count ? l : 0)][i];
+        for (int k = 0; k < 7; ++k) local[k][l] = model_.shape_transform[7 * s + k];
+        for (int k = 0; k < 3; ++k) scale[k][l] = model_.shape_scale[3 * s + k];
+      }
+    }
+    ShapeLanes& X = scratch.lanes[i];
+    shape_bounds(bounds_kind(model_.shape_type[world_others_[first][i]]), body, local, scale, options_.margin, X.pose,
+                 X.lower, X.upper);
   }
-  x.lower = X.p - extent - Vec3::Constant(options_.margin);
-  x.upper = X.p + extent + Vec3::Constant(options_.margin);
-  return x;
+  // the pairs the masks allow whose boxes overlap, tested in every world at once
+  scratch.hits.assign(static_cast<size_t>(L) * n, 0);
+  const std::uint64_t* mask = world_pairs_.data() + world_pair_start_[first];
+  for (int i = 0; i < n; ++i) {
+    const ShapeLanes& A = scratch.lanes[i];
+    for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
+      const int j = __builtin_ctzll(m);
+      const ShapeLanes& B = scratch.lanes[j];
+      const IntLanes<Scalar> hit = (B.lower[0] <= A.upper[0]) & (A.lower[0] <= B.upper[0]) &
+                                   (B.lower[1] <= A.upper[1]) & (A.lower[1] <= B.upper[1]) &
+                                   (B.lower[2] <= A.upper[2]) & (A.lower[2] <= B.upper[2]);
+      if (!any_lane<Scalar>(hit)) continue;
+      for (int l = 0; l < count; ++l)
+        if (hit[l]) scratch.hits[l * n + i] |= std::uint64_t{1} << j;
+    }
+  }
+}
+
+void CollisionPipeline::lane_boxes(int l, Scratch& scratch) const {
+  const int n = static_cast<int>(scratch.lanes.size());
+  if (static_cast<int>(scratch.boxes.size()) < n) scratch.boxes.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const ShapeLanes& X = scratch.lanes[i];
+    Box& box = scratch.boxes[i];
+    box.pose.p = Vec3(X.pose[0][l], X.pose[1][l], X.pose[2][l]);
+    box.pose.q = Quat(X.pose[6][l], X.pose[3][l], X.pose[4][l], X.pose[5][l]);
+    box.lower = Vec3(X.lower[0][l], X.lower[1][l], X.lower[2][l]);
+    box.upper = Vec3(X.upper[0][l], X.upper[1][l], X.upper[2][l]);
+  }
 }
 
 void CollisionPipeline::collide(const State& state, Contacts& contacts) {
@@ -142,13 +252,14 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   contacts.contact_count = 0;
   contacts.contact_dropped = 0;
 
-  // the planes' poses and the boxes of the shapes of no world first: every world meets them. Then per
-  // world, its shapes' boxes into the thread's scratch (in cache while used): its pairs (those its
-  // masks allow whose bounds overlap, in index order; a world of many shapes sweeps and prunes along
-  // x), the shapes of no world against its shapes, then its planes and the shared ones against its
-  // shapes. Then the shapes of no world against each other, and every plane against them. Worlds (and
-  // shared shapes, and planes) spread over threads
-  for (const int p : planes_) plane_pose_[p] = shape_pose(model_, state, p);
+  // the poses of the planes on bodies and the boxes of the shapes of no world first: every world meets
+  // them. Then per world, its shapes' boxes into the thread's scratch (in cache while used): its pairs
+  // (those its masks allow whose bounds overlap, in index order; a world of many shapes sweeps and
+  // prunes along x), the shapes of no world against its shapes, then its planes and the shared ones
+  // against its shapes. Worlds alike go a group at a time: their boxes and their pairs' overlaps in
+  // lanes (group_boxes), then each world as above. Then the shapes of no world against each other, and
+  // every plane against them. Groups of worlds (and shared shapes, and planes) spread over threads
+  for (const int p : moving_planes_) plane_pose_[p] = box(state, p).pose;
   for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
   auto overlap = [](const Box& a, const Box& b) {
     return (b.lower.x() <= a.upper.x()) & (a.lower.x() <= b.upper.x()) & (b.lower.y() <= a.upper.y()) &
@@ -161,19 +272,24 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     else
       narrow_phase(b, B.pose, a, A.pose, out);
   };
-  find_contacts(model_.world_count, contacts, [&](int w, Scratch& scratch) {
+  // world w, its boxes in the scratch already with `hits`, the pairs found overlapping (for each shape,
+  // a bit for each of the shapes after it)
+  auto world = [&](int w, Scratch& scratch, const std::uint64_t* hits) {
     std::vector<Found>& out = scratch.found;
     const std::vector<int>& shapes = world_others_[w];
     const int n = static_cast<int>(shapes.size());
     std::vector<Box>& boxes = scratch.boxes;
-    if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
-    for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
-    if (world_pair_start_[w] >= 0) {
-      const std::uint64_t* mask = world_pairs_.data() + world_pair_start_[w];
+    if (!hits) {
+      if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
+      for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
+    }
+    if (hits || world_pair_start_[w] >= 0) {
+      const std::uint64_t* mask = hits ? hits : world_pairs_.data() + world_pair_start_[w];
       for (int i = 0; i < n; ++i)
         for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
           const int j = __builtin_ctzll(m);
-          if (overlap(boxes[i], boxes[j])) narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out);
+          if (hits || overlap(boxes[i], boxes[j]))
+            narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out);
         }
     } else {
       std::vector<int>& order = world_sweep_[w];  // local indices
@@ -192,12 +308,25 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
       const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
       against_plane(take_own ? own[i++] : shared_planes_[j++], shapes.data(), boxes.data(), n, out);
     }
+  };
+  const int groups = static_cast<int>(group_first_.size()) - 1;
+  find_contacts(groups, contacts, kWorldsPerThread / kLanes<Scalar>, [&](int g, Scratch& scratch) {
+    const int first = group_first_[g], count = group_first_[g + 1] - first;
+    if (count == 1) {
+      world(first, scratch, nullptr);
+      return;
+    }
+    group_boxes(state, g, scratch);
+    for (int l = 0; l < count; ++l) {
+      lane_boxes(l, scratch);
+      world(first + l, scratch, &scratch.hits[l * world_others_[first].size()]);
+    }
   });
-  find_contacts(static_cast<int>(shared_others_.size()), contacts, [&](int i, Scratch& scratch) {
+  find_contacts(static_cast<int>(shared_others_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
     for (size_t k = i + 1; k < shared_others_.size(); ++k)
       test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
   });
-  find_contacts(static_cast<int>(planes_.size()), contacts, [&](int i, Scratch& scratch) {
+  find_contacts(static_cast<int>(planes_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
     against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), static_cast<int>(shared_others_.size()),
                   scratch.found);
   });
@@ -251,11 +380,11 @@ int CollisionPipeline::team(int count, int grain) const {
 }
 
 template <typename F>
-void CollisionPipeline::find_contacts(int count, Contacts& contacts, F&& f) {
+void CollisionPipeline::find_contacts(int count, Contacts& contacts, int grain, F&& f) {
   // a static schedule hands thread t the t-th run of consecutive i: the threads' lists in thread
   // order are the contacts in the order of i, and each thread writes its own after the others' before
   if (count <= 0) return;
-  const int threads = team(count, kWorldsPerThread);
+  const int threads = team(count, grain);
   if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
   for (int t = 0; t < threads; ++t) scratch_[t].found.clear();
   const int first = contacts.contact_count;

@@ -88,20 +88,32 @@ class CollisionPipeline {
   };
   // shape s's box at the body poses of `state`
   Box box(const State& state, int s) const;
+  // shape i of each world in lanes: its pose and bounds
+  struct ShapeLanes {
+    Lanes<Scalar> pose[7], lower[3], upper[3];
+  };
+  struct Scratch;
+  // the boxes of the worlds of group g into scratch.lanes (a world per lane), and the pairs whose boxes
+  // overlap into scratch.hits ([lane][shape]: a bit for each shape after it)
+  void group_boxes(const State& state, int g, Scratch& scratch) const;
+  // lane l's boxes from scratch.lanes into scratch.boxes
+  void lane_boxes(int l, Scratch& scratch) const;
+  // whether worlds v and w can be found together (group_boxes)
+  bool alike(int v, int w) const;
   // shapes a < b at those poses
   void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
   // where each contact of the buffer was among the previous ones (Contacts::previous_match)
   void match_previous(Contacts& contacts);
-  // f(i, scratch) for i in [0, count) on the threads, each appending its contacts to its scratch's
-  // `found`; then every contact into the buffer in the order of i, so the order does not depend on the
-  // thread count
+  // f(i, scratch) for i in [0, count) on the threads (at least `grain` i each), each appending its
+  // contacts to its scratch's `found`; then every contact into the buffer in the order of i, so the
+  // order does not depend on the thread count
   template <typename F>
-  void find_contacts(int count, Contacts& contacts, F&& f);
+  void find_contacts(int count, Contacts& contacts, int grain, F&& f);
   // threads for a loop of `count` items, at least `grain` items each
   int team(int count, int grain) const;
-  static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes)
+  static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes) a thread at least
   // a world of at most this many shapes tests the pairs may_collide allows, from a bit mask per shape
   // worked out once; a larger one sweeps and prunes
   static constexpr int kMaskedWorldShapes = 64;
@@ -111,22 +123,30 @@ class CollisionPipeline {
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
   std::vector<int> planes_;                     // shape indices of the planes
+  std::vector<int> moving_planes_;              // those on a body
   std::vector<std::vector<int>> world_others_;  // non-plane shapes of each world, in index order
   std::vector<std::vector<int>> world_sweep_;   // per world of many shapes: theirs, sorted along x
   // per world of few shapes, where its masks start in world_pairs_ (-1: it sweeps); per shape of it,
   // bit j set where it may collide with the world's shape j after it
   std::vector<int> world_pair_start_;
   std::vector<std::uint64_t> world_pairs_;
+  std::vector<int> group_first_;                    // the first world of each group found together, then world_count
+  std::vector<int> group_body_start_;               // [group] where its bodies start in group_body_ (-1: a world alone)
+  std::vector<int> group_body_;                     // [shape of the group's worlds][lane] the shape's body, or -1
+  std::vector<std::uint64_t> group_same_;           // [group] a bit per shape the same in all its worlds
   std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
   std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch
   std::vector<Box> shared_boxes_;      // [shared_others_]
   std::vector<Transform> plane_pose_;  // [shape] of the planes
   std::vector<int> previous_order_;    // previous contacts by key, when a contact is not where it was
-  // per thread: the contacts it found, the boxes of the world it is at
+  // per thread: the contacts it found, the boxes of the world it is at, of the group of worlds it is at
+  // and their pairs' overlaps
   struct Scratch {
     std::vector<Found> found;
     std::vector<Box> boxes;
+    std::vector<ShapeLanes> lanes;
+    std::vector<std::uint64_t> hits;
   };
   std::vector<Scratch> scratch_;
 };

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 namespace novaphy {
 
@@ -374,6 +375,73 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
   found = reduce_to_four(found, points.data());
   std::copy(points.begin(), points.begin() + found, out);
   return found;
+}
+
+template <typename V>
+void shape_bounds(BoundsKind kind, const V* body, const V* local, const V* scale, Scalar margin, V* pose, V* lower,
+                  V* upper) {
+  auto abs = [](const V& x) {
+    if constexpr (std::is_same_v<V, Scalar>)
+      return std::abs(x);
+    else
+      return lane_abs<Scalar>(x);
+  };
+  const V ax = body[3], ay = body[4], az = body[5], aw = body[6];
+  const V bx = local[3], by = local[4], bz = local[5], bw = local[6];
+  // p = R(body) local.p + body.p, rotating by t = 2 a x v: v + aw t + a x t
+  const V tx = 2 * (ay * local[2] - az * local[1]), ty = 2 * (az * local[0] - ax * local[2]),
+          tz = 2 * (ax * local[1] - ay * local[0]);
+  pose[0] = local[0] + aw * tx + (ay * tz - az * ty) + body[0];
+  pose[1] = local[1] + aw * ty + (az * tx - ax * tz) + body[1];
+  pose[2] = local[2] + aw * tz + (ax * ty - ay * tx) + body[2];
+  const V x = aw * bx + ax * bw + ay * bz - az * by, y = aw * by - ax * bz + ay * bw + az * bx,
+          z = aw * bz + ax * by - ay * bx + az * bw, w = aw * bw - ax * bx - ay * by - az * bz;
+  pose[3] = x, pose[4] = y, pose[5] = z, pose[6] = w;
+  // the rotation's entries |R_ij| where the extent needs them
+  V extent[3];
+  switch (kind) {
+    case BoundsKind::Plane:
+      for (V& e : extent) e = V{};
+      break;
+    case BoundsKind::Sphere:
+      for (V& e : extent) e = scale[0];
+      break;
+    case BoundsKind::Box: {
+      const V R[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                         {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                         {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+      for (int i = 0; i < 3; ++i)
+        extent[i] = abs(R[i][0]) * scale[0] + abs(R[i][1]) * scale[1] + abs(R[i][2]) * scale[2];
+      break;
+    }
+    case BoundsKind::Capsule: {  // the segment's half along R's second column, and the radius
+      const V column[3] = {2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)};
+      for (int i = 0; i < 3; ++i) extent[i] = abs(column[i]) * scale[1] + scale[0];
+      break;
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    lower[i] = pose[i] - extent[i] - margin;
+    upper[i] = pose[i] + extent[i] + margin;
+  }
+}
+
+template void shape_bounds<Scalar>(BoundsKind, const Scalar*, const Scalar*, const Scalar*, Scalar, Scalar*, Scalar*,
+                                   Scalar*);
+template void shape_bounds<Lanes<Scalar>>(BoundsKind, const Lanes<Scalar>*, const Lanes<Scalar>*, const Lanes<Scalar>*,
+                                          Scalar, Lanes<Scalar>*, Lanes<Scalar>*, Lanes<Scalar>*);
+
+void shape_bounds_lanes_reference(BoundsKind kind, const Lanes<Scalar>* body, const Lanes<Scalar>* local,
+                                  const Lanes<Scalar>* scale, Scalar margin, Lanes<Scalar>* pose, Lanes<Scalar>* lower,
+                                  Lanes<Scalar>* upper) {
+  for (int l = 0; l < kLanes<Scalar>; ++l) {
+    Scalar b[7], x[7], s[3], p[7], lo[3], up[3];
+    for (int k = 0; k < 7; ++k) b[k] = body[k][l], x[k] = local[k][l];
+    for (int k = 0; k < 3; ++k) s[k] = scale[k][l];
+    shape_bounds(kind, b, x, s, margin, p, lo, up);
+    for (int k = 0; k < 7; ++k) pose[k][l] = p[k];
+    for (int k = 0; k < 3; ++k) lower[k][l] = lo[k], upper[k][l] = up[k];
+  }
 }
 
 }  // namespace novaphy

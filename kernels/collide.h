@@ -8,9 +8,24 @@
 // capsules run along their local Y axis (radius, half height of the segment); boxes take half extents.
 #pragma once
 
+#include "kernels/lanes.h"
 #include "kernels/spatial.h"
 
 namespace novaphy {
+
+// The world pose and axis-aligned bounds of a shape on a body: pose = body * local (transforms
+// [px, py, pz, qx, qy, qz, qw]), lower and upper = pose's origin -+ (the shape's extent along each
+// world axis + margin). scale: a sphere's radius; a box's half extents; a capsule's radius and half
+// height; a plane's bounds are its origin. V is Scalar (one shape) or Lanes<Scalar> (one shape in each
+// of kLanes worlds, the broad phase of worlds alike): one formula, so both give the same bits
+// (shape_bounds_lanes_reference, its twin, calls the Scalar one lane by lane)
+enum class BoundsKind { Plane, Sphere, Box, Capsule };
+template <typename V>
+void shape_bounds(BoundsKind kind, const V* body, const V* local, const V* scale, Scalar margin, V* pose, V* lower,
+                  V* upper);
+void shape_bounds_lanes_reference(BoundsKind kind, const Lanes<Scalar>* body, const Lanes<Scalar>* local,
+                                  const Lanes<Scalar>* scale, Scalar margin, Lanes<Scalar>* pose, Lanes<Scalar>* lower,
+                                  Lanes<Scalar>* upper);
 
 struct ContactPoint {
   Vec3 point = Vec3::Zero();

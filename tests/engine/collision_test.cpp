@@ -295,6 +295,75 @@ TEST(CollisionPipeline, ShapesOfNoWorldMeetEveryWorld) {
   EXPECT_TRUE(std::equal(one.contact_shape_b.begin(), one.contact_shape_b.begin() + 40, two.contact_shape_b.begin()));
 }
 
+// worlds alike have their boxes and overlapping pairs found a group of kLanes at a time: each world
+// of a batch finds the contacts it finds alone (a world alone is a group of one, on the scalar path),
+// bit for bit. The batch mixes worlds of one robot with a copy whose ball is larger (alike, not the
+// same size: its sizes are read per world) and a robot of one shape fewer (not alike: a group apart)
+TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
+  auto robot = [](Scalar radius, bool capsule) {
+    ModelBuilder world;
+    world.add_ground_plane();
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<Scalar> u(-0.25, 0.25);
+    for (int k = 0; k < 7; ++k) {
+      Transform x{Vec3(u(rng), 0.2 + std::abs(u(rng)), u(rng))};
+      x.q = Quat(1 + u(rng), u(rng), u(rng), u(rng)).normalized();
+      const int body = world.add_body(RigidBody::from_sphere(1, 0.1), x);
+      if (k % 3 == 0) world.add_shape_sphere(body, radius);
+      if (k % 3 == 1) world.add_shape_box(body, Vec3(0.12, 0.08, 0.1));
+      if (k % 3 == 2 && (capsule || k < 5)) world.add_shape_capsule(body, 0.06, 0.1);
+    }
+    return world;
+  };
+  const ModelBuilder kinds[3] = {robot(0.15, true), robot(0.2, true), robot(0.15, false)};
+  const int kind_of[13] = {0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 2, 0, 0};
+  ModelBuilder builder;
+  for (const int k : kind_of) builder.add_builder(kinds[k], Transform{}, -1);
+  const Model model = builder.finalize();
+  ASSERT_EQ(model.world_count, 13);
+  // each world's bodies moved apart a little, differently, so that each world meets its own pairs
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<Scalar> u(-0.06, 0.06);
+  State state = model.state();
+  for (int b = 0; b < model.body_count; ++b)
+    for (int k = 0; k < 3; ++k) state.body_q[7 * b + k] += u(rng);
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(state, contacts);
+  int body0 = 0, shape0 = 0, checked = 0;
+  for (int w = 0; w < model.world_count; ++w) {
+    ModelBuilder one;
+    one.add_builder(kinds[kind_of[w]]);
+    const Model alone = one.finalize();
+    State s = alone.state();
+    std::copy_n(&state.body_q[7 * body0], 7 * alone.body_count, s.body_q.begin());
+    CollisionPipeline p(alone);
+    Contacts c = p.contacts();
+    p.collide(s, c);
+    // the batch's contacts of world w, in their order
+    std::vector<int> mine;
+    for (int k = 0; k < contacts.contact_count; ++k)
+      if (model.shape_world[contacts.contact_shape_a[k]] == w) mine.push_back(k);
+    ASSERT_EQ(static_cast<int>(mine.size()), c.contact_count) << "world " << w;
+    for (int k = 0; k < c.contact_count; ++k) {
+      const int m = mine[k];
+      EXPECT_EQ(contacts.contact_shape_a[m] - shape0, c.contact_shape_a[k]) << "world " << w << " contact " << k;
+      EXPECT_EQ(contacts.contact_shape_b[m] - shape0, c.contact_shape_b[k]) << "world " << w << " contact " << k;
+      EXPECT_EQ(contacts.contact_feature[m], c.contact_feature[k]);
+      EXPECT_EQ(contacts.contact_depth[m], c.contact_depth[k]) << "world " << w << " contact " << k;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(contacts.contact_point[3 * m + i], c.contact_point[3 * k + i]) << "world " << w << " contact " << k;
+        EXPECT_EQ(contacts.contact_normal[3 * m + i], c.contact_normal[3 * k + i]) << "world " << w << " contact " << k;
+      }
+    }
+    checked += c.contact_count;
+    body0 += alone.body_count;
+    shape0 += alone.shape_count;
+  }
+  EXPECT_EQ(checked, contacts.contact_count);
+  EXPECT_GT(checked, 13 * 4);
+}
+
 TEST(CollisionPipelineErrors, BadOptions) {
   ModelBuilder builder;
   builder.add_body(RigidBody());

@@ -159,5 +159,70 @@ TEST(Collide, BoxBoxFeaturesAreDistinctWithinAPair) {
   EXPECT_GT(multi, 500);  // face contacts, clipped, were seen
 }
 
+// a random pose [p, q] (q unit, [x y z w]) and a shape's sizes
+void random_pose(std::mt19937& rng, Scalar* x) {
+  std::normal_distribution<Scalar> g;
+  const Quat q = Quat(g(rng), g(rng), g(rng), g(rng)).normalized();
+  Transform{Vec3(g(rng), g(rng), g(rng)), q}.to_array(x);
+}
+
+constexpr BoundsKind kKinds[] = {BoundsKind::Plane, BoundsKind::Sphere, BoundsKind::Box, BoundsKind::Capsule};
+
+TEST(ShapeBounds, InLanesEqualTheirTwinBitForBit) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<Scalar> size(0.01, 2);
+  for (int trial = 0; trial < 200; ++trial) {
+    Lanes<Scalar> body[7], local[7], scale[3], pose[2][7], lower[2][3], upper[2][3];
+    for (int l = 0; l < kLanes<Scalar>; ++l) {
+      Scalar b[7], x[7];
+      random_pose(rng, b);
+      random_pose(rng, x);
+      for (int k = 0; k < 7; ++k) body[k][l] = b[k], local[k][l] = x[k];
+      for (int k = 0; k < 3; ++k) scale[k][l] = size(rng);
+    }
+    const BoundsKind kind = kKinds[trial % 4];
+    shape_bounds(kind, body, local, scale, 0.01, pose[0], lower[0], upper[0]);
+    shape_bounds_lanes_reference(kind, body, local, scale, 0.01, pose[1], lower[1], upper[1]);
+    for (int l = 0; l < kLanes<Scalar>; ++l) {
+      for (int k = 0; k < 7; ++k) EXPECT_EQ(pose[0][k][l], pose[1][k][l]) << "trial " << trial;
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(lower[0][k][l], lower[1][k][l]) << "trial " << trial;
+        EXPECT_EQ(upper[0][k][l], upper[1][k][l]) << "trial " << trial;
+      }
+    }
+  }
+}
+
+// the pose is the product of the transforms; the bounds hold the shape and touch it on every side:
+// the box's corners, the capsule's end spheres, the sphere, measured against Eigen's rotation
+TEST(ShapeBounds, AreThePosesProductAndTheShapesTightBox) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Scalar> size(0.01, 2);
+  for (int trial = 0; trial < 400; ++trial) {
+    Scalar b[7], x[7], p[7], lower[3], upper[3];
+    random_pose(rng, b);
+    random_pose(rng, x);
+    const Scalar scale[3] = {size(rng), size(rng), size(rng)}, margin = 0.01;
+    const BoundsKind kind = kKinds[trial % 4];
+    shape_bounds(kind, b, x, scale, margin, p, lower, upper);
+    const Transform expected = Transform::from_array(b) * Transform::from_array(x), pose = Transform::from_array(p);
+    EXPECT_LT((pose.p - expected.p).norm(), 1e-14) << "trial " << trial;
+    EXPECT_LT((pose.q.coeffs() - expected.q.coeffs()).norm(), 1e-15) << "trial " << trial;
+    const Mat3 R = expected.rotation();
+    Vec3 extent = Vec3::Zero();  // the farthest the shape reaches from its origin along each axis
+    if (kind == BoundsKind::Sphere) extent.setConstant(scale[0]);
+    if (kind == BoundsKind::Capsule) extent = (R.col(1) * scale[1]).cwiseAbs() + Vec3::Constant(scale[0]);
+    if (kind == BoundsKind::Box)
+      for (int v = 0; v < 8; ++v) {
+        const Vec3 corner((v & 1 ? 1 : -1) * scale[0], (v & 2 ? 1 : -1) * scale[1], (v & 4 ? 1 : -1) * scale[2]);
+        extent = extent.cwiseMax((R * corner).cwiseAbs());
+      }
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(lower[k], expected.p[k] - extent[k] - margin, 1e-13) << "trial " << trial << " axis " << k;
+      EXPECT_NEAR(upper[k], expected.p[k] + extent[k] + margin, 1e-13) << "trial " << trial << " axis " << k;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace novaphy
