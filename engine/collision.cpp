@@ -178,7 +178,7 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
   constexpr int L = kLanes<Scalar>;
   const int first = group_first_[g], count = group_first_[g + 1] - first;
   const int n = static_cast<int>(world_others_[first].size());
-  const int* group_body = &group_body_[group_body_start_[g]];
+  const int* group_body = group_body_.data() + group_body_start_[g];
   scratch.lanes.resize(n);
   for (int i = 0; i < n; ++i) {
     // shape i of each world
@@ -319,7 +319,7 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     group_boxes(state, g, scratch);
     for (int l = 0; l < count; ++l) {
       lane_boxes(l, scratch);
-      world(first + l, scratch, &scratch.hits[l * world_others_[first].size()]);
+      world(first + l, scratch, scratch.hits.data() + l * world_others_[first].size());
     }
   });
   find_contacts(static_cast<int>(shared_others_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
