@@ -100,19 +100,36 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
       if (same) group_same_[g] |= std::uint64_t{1} << i;
     }
   }
+  group_plane_start_.assign(1, 0);
+  for (size_t g = 0; g + 1 < group_first_.size(); ++g) {
+    const int first = group_first_[g];
+    if (group_first_[g + 1] - first > 1)
+      for (const int code : plane_order(first)) {
+        std::uint64_t shapes = 0;
+        for (size_t i = 0; i < world_others_[first].size(); ++i)
+          if (may_collide(plane_of(first, code), world_others_[first][i])) shapes |= std::uint64_t{1} << i;
+        group_plane_.push_back(code);
+        group_plane_shapes_.push_back(shapes);
+      }
+    group_plane_start_.push_back(static_cast<int>(group_plane_.size()));
+  }
   // a plane on no body stays where the model put it; those on bodies move
   plane_pose_.resize(model.shape_count);
+  plane_normal_.resize(model.shape_count);
   for (const int p : planes_) {
-    if (model.shape_body[p] >= 0)
+    if (model.shape_body[p] >= 0) {
       moving_planes_.push_back(p);
-    else
-      plane_pose_[p] = Transform::from_array(&model.shape_transform[7 * p]);
+      continue;
+    }
+    plane_pose_[p] = Transform::from_array(&model.shape_transform[7 * p]);
+    plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();
   }
   shared_boxes_.resize(shared_others_.size());
 }
 
 bool CollisionPipeline::alike(int v, int w) const {
-  // both test their pairs by masks, the same masks, over shapes of the same types, each on a body or not
+  // both test their pairs by masks, the same masks, over shapes of the same types, each on a body or not;
+  // they meet planes in the same order, each the same shapes
   const std::vector<int>&a = world_others_[v], &b = world_others_[w];
   if (world_pair_start_[v] < 0 || world_pair_start_[w] < 0 || a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
@@ -120,7 +137,22 @@ bool CollisionPipeline::alike(int v, int w) const {
         (model_.shape_body[a[i]] < 0) != (model_.shape_body[b[i]] < 0) ||
         world_pairs_[world_pair_start_[v] + i] != world_pairs_[world_pair_start_[w] + i])
       return false;
+  const std::vector<int> order = plane_order(v);
+  if (order != plane_order(w)) return false;
+  for (const int code : order)
+    for (size_t i = 0; i < a.size(); ++i)
+      if (may_collide(plane_of(v, code), a[i]) != may_collide(plane_of(w, code), b[i])) return false;
   return true;
+}
+
+std::vector<int> CollisionPipeline::plane_order(int w) const {
+  const std::vector<int>& own = world_planes_[w];
+  std::vector<int> order;
+  for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
+    const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
+    order.push_back(take_own ? static_cast<int>(i++) : -1 - static_cast<int>(j++));
+  }
+  return order;
 }
 
 Contacts CollisionPipeline::contacts() const {
@@ -221,6 +253,29 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
   }
 }
 
+void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
+  using V = Lanes<Scalar>;
+  constexpr int L = kLanes<Scalar>;
+  const int first = group_first_[g], count = group_first_[g + 1] - first;
+  const int start = group_plane_start_[g], planes = group_plane_start_[g + 1] - start;
+  scratch.plane_hits.assign(static_cast<size_t>(L) * planes, 0);
+  for (int k = 0; k < planes; ++k) {
+    V origin[3], normal[3];
+    for (int l = 0; l < L; ++l) {
+      const int p = plane_of(first + (l < count ? l : 0), group_plane_[start + k]);
+      for (int m = 0; m < 3; ++m) origin[m][l] = plane_pose_[p].p[m], normal[m][l] = plane_normal_[p][m];
+    }
+    for (std::uint64_t m = group_plane_shapes_[start + k]; m != 0; m &= m - 1) {
+      const int i = __builtin_ctzll(m);
+      const ShapeLanes& X = scratch.lanes[i];
+      const IntLanes<Scalar> hit = plane_box_distance(origin, normal, X.lower, X.upper) <= 0;
+      if (!any_lane<Scalar>(hit)) continue;
+      for (int l = 0; l < count; ++l)
+        if (hit[l]) scratch.plane_hits[l * planes + k] |= std::uint64_t{1} << i;
+    }
+  }
+}
+
 void CollisionPipeline::lane_boxes(int l, Scratch& scratch) const {
   const int n = static_cast<int>(scratch.lanes.size());
   if (static_cast<int>(scratch.boxes.size()) < n) scratch.boxes.resize(n);
@@ -259,7 +314,10 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // against its shapes. Worlds alike go a group at a time: their boxes and their pairs' overlaps in
   // lanes (group_boxes), then each world as above. Then the shapes of no world against each other, and
   // every plane against them. Groups of worlds (and shared shapes, and planes) spread over threads
-  for (const int p : moving_planes_) plane_pose_[p] = box(state, p).pose;
+  for (const int p : moving_planes_) {
+    plane_pose_[p] = box(state, p).pose;
+    plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();
+  }
   for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
   auto overlap = [](const Box& a, const Box& b) {
     return (b.lower.x() <= a.upper.x()) & (a.lower.x() <= b.upper.x()) & (b.lower.y() <= a.upper.y()) &
@@ -302,6 +360,7 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
     }
     for (size_t i = 0; i < shared_others_.size(); ++i)
       for (int j = 0; j < n; ++j) test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out);
+    if (hits) return;  // (its group's planes follow)
     // the world's planes and the shared ones, in index order
     const std::vector<int>& own = world_planes_[w];
     for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
@@ -317,9 +376,20 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
       return;
     }
     group_boxes(state, g, scratch);
+    group_planes(g, scratch);
+    const int* code = group_plane_.data() + group_plane_start_[g];
+    const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
     for (int l = 0; l < count; ++l) {
+      const std::vector<int>& shapes = world_others_[first + l];
       lane_boxes(l, scratch);
-      world(first + l, scratch, scratch.hits.data() + l * world_others_[first].size());
+      world(first + l, scratch, scratch.hits.data() + l * shapes.size());
+      for (int k = 0; k < planes; ++k) {
+        const int p = plane_of(first + l, code[k]);
+        for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
+          const int i = __builtin_ctzll(m);
+          narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found);
+        }
+      }
     }
   });
   find_contacts(static_cast<int>(shared_others_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
@@ -336,11 +406,9 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
 void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes, int count,
                                       std::vector<Found>& out) const {
   const Transform& X = plane_pose_[p];
-  const Vec3 n = X.q * Vec3::UnitY();
   for (int i = 0; i < count; ++i) {
     const Box& b = boxes[i];
-    const Scalar distance =
-        n.dot(0.5 * (b.lower + b.upper) - X.p) - 0.5 * (b.upper - b.lower).cwiseAbs().dot(n.cwiseAbs());
+    const Scalar distance = plane_box_distance(X.p.data(), plane_normal_[p].data(), b.lower.data(), b.upper.data());
     if (distance <= 0 && may_collide(p, shapes[i])) narrow_phase(p, X, shapes[i], b.pose, out);
   }
 }

@@ -98,8 +98,16 @@ class CollisionPipeline {
   void group_boxes(const State& state, int g, Scratch& scratch) const;
   // lane l's boxes from scratch.lanes into scratch.boxes
   void lane_boxes(int l, Scratch& scratch) const;
-  // whether worlds v and w can be found together (group_boxes)
+  // the planes of group g against its worlds' shapes, in lanes (scratch.lanes): for each of the group's
+  // planes, in the order its worlds meet them (group_plane_), the shapes that may reach it, into
+  // scratch.plane_hits ([lane][plane]: a bit for each shape)
+  void group_planes(int g, Scratch& scratch) const;
+  // whether worlds v and w can be found together (group_boxes, group_planes)
   bool alike(int v, int w) const;
+  // world w's planes, its own and those of no world, in index order (the order it meets them): k >= 0
+  // its k-th own plane, -1 - j the j-th of no world
+  std::vector<int> plane_order(int w) const;
+  int plane_of(int w, int code) const { return code >= 0 ? world_planes_[w][code] : shared_planes_[-1 - code]; }
   // shapes a < b at those poses
   void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
@@ -130,15 +138,23 @@ class CollisionPipeline {
   // bit j set where it may collide with the world's shape j after it
   std::vector<int> world_pair_start_;
   std::vector<std::uint64_t> world_pairs_;
-  std::vector<int> group_first_;                    // the first world of each group found together, then world_count
-  std::vector<int> group_body_start_;               // [group] where its bodies start in group_body_ (-1: a world alone)
-  std::vector<int> group_body_;                     // [shape of the group's worlds][lane] the shape's body, or -1
-  std::vector<std::uint64_t> group_same_;           // [group] a bit per shape the same in all its worlds
+  std::vector<int> group_first_;  // the first world of each group found together, then world_count
+  // per group of several worlds: where its bodies start in group_body_ (-1: a world alone); per shape of
+  // its worlds and lane, the shape's body or -1; a bit per shape the same in all its worlds
+  std::vector<int> group_body_start_;
+  std::vector<int> group_body_;
+  std::vector<std::uint64_t> group_same_;
+  // [group] where its planes start in group_plane_, then the end; per plane of a group: its code
+  // (plane_order) and a bit per shape may_collide lets meet it
+  std::vector<int> group_plane_start_;
+  std::vector<int> group_plane_;
+  std::vector<std::uint64_t> group_plane_shapes_;
   std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
   std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch
   std::vector<Box> shared_boxes_;      // [shared_others_]
   std::vector<Transform> plane_pose_;  // [shape] of the planes
+  std::vector<Vec3> plane_normal_;     // [shape] of the planes, their normals (+Y) in the world
   std::vector<int> previous_order_;    // previous contacts by key, when a contact is not where it was
   // per thread: the contacts it found, the boxes of the world it is at, of the group of worlds it is at
   // and their pairs' overlaps
@@ -146,7 +162,7 @@ class CollisionPipeline {
     std::vector<Found> found;
     std::vector<Box> boxes;
     std::vector<ShapeLanes> lanes;
-    std::vector<std::uint64_t> hits;
+    std::vector<std::uint64_t> hits, plane_hits;
   };
   std::vector<Scratch> scratch_;
 };

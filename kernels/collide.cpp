@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
 namespace novaphy {
 
@@ -380,12 +379,6 @@ int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, 
 template <typename V>
 void shape_bounds(BoundsKind kind, const V* body, const V* local, const V* scale, Scalar margin, V* pose, V* lower,
                   V* upper) {
-  auto abs = [](const V& x) {
-    if constexpr (std::is_same_v<V, Scalar>)
-      return std::abs(x);
-    else
-      return lane_abs<Scalar>(x);
-  };
   const V ax = body[3], ay = body[4], az = body[5], aw = body[6];
   const V bx = local[3], by = local[4], bz = local[5], bw = local[6];
   // p = R(body) local.p + body.p, rotating by t = 2 a x v: v + aw t + a x t
@@ -411,12 +404,12 @@ void shape_bounds(BoundsKind kind, const V* body, const V* local, const V* scale
                          {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
                          {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
       for (int i = 0; i < 3; ++i)
-        extent[i] = abs(R[i][0]) * scale[0] + abs(R[i][1]) * scale[1] + abs(R[i][2]) * scale[2];
+        extent[i] = bounds_abs(R[i][0]) * scale[0] + bounds_abs(R[i][1]) * scale[1] + bounds_abs(R[i][2]) * scale[2];
       break;
     }
     case BoundsKind::Capsule: {  // the segment's half along R's second column, and the radius
       const V column[3] = {2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)};
-      for (int i = 0; i < 3; ++i) extent[i] = abs(column[i]) * scale[1] + scale[0];
+      for (int i = 0; i < 3; ++i) extent[i] = bounds_abs(column[i]) * scale[1] + scale[0];
       break;
     }
   }

@@ -27,6 +27,21 @@ void shape_bounds_lanes_reference(BoundsKind kind, const Lanes<Scalar>* body, co
                                   const Lanes<Scalar>* scale, Scalar margin, Lanes<Scalar>* pose, Lanes<Scalar>* lower,
                                   Lanes<Scalar>* upper);
 
+inline Scalar bounds_abs(Scalar x) { return std::abs(x); }
+inline Lanes<Scalar> bounds_abs(const Lanes<Scalar>& x) { return lane_abs<Scalar>(x); }
+
+// the signed distance from the plane through p with unit normal n to the nearest point of the box
+// [lower, upper] (<= 0: the box reaches the plane); V as in shape_bounds, one formula for both
+template <typename V>
+inline V plane_box_distance(const V* p, const V* n, const V* lower, const V* upper) {
+  V distance = n[0] * (Scalar(0.5) * (lower[0] + upper[0]) - p[0]), reach = bounds_abs(n[0]) * (upper[0] - lower[0]);
+  for (int k = 1; k < 3; ++k) {
+    distance += n[k] * (Scalar(0.5) * (lower[k] + upper[k]) - p[k]);
+    reach += bounds_abs(n[k]) * (upper[k] - lower[k]);
+  }
+  return distance - Scalar(0.5) * reach;
+}
+
 struct ContactPoint {
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitY();

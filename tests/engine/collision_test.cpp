@@ -295,10 +295,11 @@ TEST(CollisionPipeline, ShapesOfNoWorldMeetEveryWorld) {
   EXPECT_TRUE(std::equal(one.contact_shape_b.begin(), one.contact_shape_b.begin() + 40, two.contact_shape_b.begin()));
 }
 
-// worlds alike have their boxes and overlapping pairs found a group of kLanes at a time: each world
-// of a batch finds the contacts it finds alone (a world alone is a group of one, on the scalar path),
-// bit for bit. The batch mixes worlds of one robot with a copy whose ball is larger (alike, not the
-// same size: its sizes are read per world) and a robot of one shape fewer (not alike: a group apart)
+// worlds alike have their boxes, overlapping pairs and planes found a group of kLanes at a time: each
+// world of a batch finds the contacts it finds alone (a world alone is a group of one, on the scalar
+// path), bit for bit. The batch mixes worlds of one robot with a copy whose ball is larger (alike, not
+// the same size: its sizes are read per world) and a robot of one shape fewer (not alike: a group
+// apart); each world has its floor, and a tilted plane of no world cuts through them all
 TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   auto robot = [](Scalar radius, bool capsule) {
     ModelBuilder world;
@@ -319,6 +320,8 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   const int kind_of[13] = {0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 2, 0, 0};
   ModelBuilder builder;
   for (const int k : kind_of) builder.add_builder(kinds[k], Transform{}, -1);
+  const Vec3 tilted = Vec3(0.3, 1, 0.1).normalized();
+  builder.add_plane(tilted, 0.3);
   const Model model = builder.finalize();
   ASSERT_EQ(model.world_count, 13);
   // each world's bodies moved apart a little, differently, so that each world meets its own pairs
@@ -330,11 +333,14 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   pipeline.collide(state, contacts);
-  int body0 = 0, shape0 = 0, checked = 0;
+  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0;
   for (int w = 0; w < model.world_count; ++w) {
     ModelBuilder one;
     one.add_builder(kinds[kind_of[w]]);
+    one.add_plane(tilted, 0.3);
     const Model alone = one.finalize();
+    const int own_shapes = alone.shape_count - 1;  // the tilted plane last in both
+    auto in_alone = [&](int s) { return s == model.shape_count - 1 ? own_shapes : s - shape0; };
     State s = alone.state();
     std::copy_n(&state.body_q[7 * body0], 7 * alone.body_count, s.body_q.begin());
     CollisionPipeline p(alone);
@@ -343,12 +349,14 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
     // the batch's contacts of world w, in their order
     std::vector<int> mine;
     for (int k = 0; k < contacts.contact_count; ++k)
-      if (model.shape_world[contacts.contact_shape_a[k]] == w) mine.push_back(k);
+      if (std::max(model.shape_world[contacts.contact_shape_a[k]], model.shape_world[contacts.contact_shape_b[k]]) == w)
+        mine.push_back(k);
     ASSERT_EQ(static_cast<int>(mine.size()), c.contact_count) << "world " << w;
     for (int k = 0; k < c.contact_count; ++k) {
       const int m = mine[k];
-      EXPECT_EQ(contacts.contact_shape_a[m] - shape0, c.contact_shape_a[k]) << "world " << w << " contact " << k;
-      EXPECT_EQ(contacts.contact_shape_b[m] - shape0, c.contact_shape_b[k]) << "world " << w << " contact " << k;
+      EXPECT_EQ(in_alone(contacts.contact_shape_a[m]), c.contact_shape_a[k]) << "world " << w << " contact " << k;
+      EXPECT_EQ(in_alone(contacts.contact_shape_b[m]), c.contact_shape_b[k]) << "world " << w << " contact " << k;
+      tilted_plane += c.contact_shape_a[k] == own_shapes;
       EXPECT_EQ(contacts.contact_feature[m], c.contact_feature[k]);
       EXPECT_EQ(contacts.contact_depth[m], c.contact_depth[k]) << "world " << w << " contact " << k;
       for (int i = 0; i < 3; ++i) {
@@ -358,10 +366,11 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
     }
     checked += c.contact_count;
     body0 += alone.body_count;
-    shape0 += alone.shape_count;
+    shape0 += own_shapes;
   }
   EXPECT_EQ(checked, contacts.contact_count);
   EXPECT_GT(checked, 13 * 4);
+  EXPECT_GT(tilted_plane, 13);
 }
 
 TEST(CollisionPipelineErrors, BadOptions) {
