@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 #include <set>
 
@@ -221,6 +222,31 @@ TEST(ShapeBounds, AreThePosesProductAndTheShapesTightBox) {
       EXPECT_NEAR(lower[k], expected.p[k] - extent[k] - margin, 1e-13) << "trial " << trial << " axis " << k;
       EXPECT_NEAR(upper[k], expected.p[k] + extent[k] + margin, 1e-13) << "trial " << trial << " axis " << k;
     }
+  }
+}
+
+// the distance to a box's nearest point is the least of its corners' distances; in lanes, each lane's
+// is the scalar one bit for bit
+TEST(ShapeBounds, PlaneBoxDistanceIsTheNearestCornersAndTheSameInLanes) {
+  std::mt19937 rng(8);
+  std::normal_distribution<Scalar> g;
+  for (int trial = 0; trial < 50; ++trial) {
+    Lanes<Scalar> origin[3], normal[3], lower[3], upper[3];
+    Scalar each[kLanes<Scalar>];
+    for (int l = 0; l < kLanes<Scalar>; ++l) {
+      const Vec3 p(g(rng), g(rng), g(rng)), n = Vec3(g(rng), g(rng), g(rng)).normalized();
+      const Vec3 center(g(rng), g(rng), g(rng)), half = Vec3(g(rng), g(rng), g(rng)).cwiseAbs();
+      const Vec3 lo = center - half, up = center + half;
+      Scalar nearest = std::numeric_limits<Scalar>::infinity();
+      for (int v = 0; v < 8; ++v)
+        nearest = std::min(nearest,
+                           n.dot(Vec3(v & 1 ? up.x() : lo.x(), v & 2 ? up.y() : lo.y(), v & 4 ? up.z() : lo.z()) - p));
+      each[l] = plane_box_distance(p.data(), n.data(), lo.data(), up.data());
+      EXPECT_NEAR(each[l], nearest, 1e-14) << "trial " << trial;
+      for (int k = 0; k < 3; ++k) origin[k][l] = p[k], normal[k][l] = n[k], lower[k][l] = lo[k], upper[k][l] = up[k];
+    }
+    const Lanes<Scalar> lanes = plane_box_distance(origin, normal, lower, upper);
+    for (int l = 0; l < kLanes<Scalar>; ++l) EXPECT_EQ(lanes[l], each[l]) << "trial " << trial << " lane " << l;
   }
 }
 
