@@ -68,8 +68,8 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
       world_pairs_.push_back(mask);
     }
   }
-  // consecutive worlds alike, up to kLanes<Scalar> of them, have their boxes and pairs' overlaps found
-  // together, a world per lane
+  // consecutive worlds alike, up to kLanes<Scalar> of them, have their boxes, their pairs' overlaps and
+  // their planes' reach found together, a world per lane
   for (int w = 0; w < model.world_count;) {
     int end = w + 1;
     while (end < model.world_count && end - w < kLanes<Scalar> && alike(w, end)) ++end;
@@ -311,9 +311,10 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // them. Then per world, its shapes' boxes into the thread's scratch (in cache while used): its pairs
   // (those its masks allow whose bounds overlap, in index order; a world of many shapes sweeps and
   // prunes along x), the shapes of no world against its shapes, then its planes and the shared ones
-  // against its shapes. Worlds alike go a group at a time: their boxes and their pairs' overlaps in
-  // lanes (group_boxes), then each world as above. Then the shapes of no world against each other, and
-  // every plane against them. Groups of worlds (and shared shapes, and planes) spread over threads
+  // against its shapes. Worlds alike go a group at a time: their boxes, their pairs' overlaps and their
+  // planes' reach in lanes (group_boxes, group_planes), then each world's narrow phase in that order.
+  // Then the shapes of no world against each other, and every plane against them. Groups of worlds (and
+  // shared shapes, and planes) spread over threads
   for (const int p : moving_planes_) {
     plane_pose_[p] = box(state, p).pose;
     plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();

@@ -1,5 +1,6 @@
-// CollisionPipeline: broad phase (sweep and prune per world, planes against their world) and the
-// narrow-phase kernels of kernels/collide, writing into a Contacts buffer allocated once.
+// CollisionPipeline: broad phase (masked pairs or sweep and prune per world, planes against their world;
+// worlds alike a group at a time, a world per lane) and the narrow-phase kernels of kernels/collide,
+// writing into a Contacts buffer allocated once.
 #pragma once
 
 #include <cstdint>

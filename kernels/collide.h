@@ -1,4 +1,5 @@
-// Narrow phase: contact points between pairs of primitive shapes (reference kernels).
+// The broad phase's shape bounds and plane distances, for one shape or a world per lane (first below);
+// the narrow phase: contact points between pairs of primitive shapes (reference kernels).
 // Every function writes the points of shape a against shape b within `margin` of touching:
 //   normal  unit, pointing from a to b
 //   depth   penetration (> 0 overlapping, < 0 a gap smaller than the margin)
@@ -27,6 +28,7 @@ void shape_bounds_lanes_reference(BoundsKind kind, const Lanes<Scalar>* body, co
                                   const Lanes<Scalar>* scale, Scalar margin, Lanes<Scalar>* pose, Lanes<Scalar>* lower,
                                   Lanes<Scalar>* upper);
 
+// |x| of one number or of every lane
 inline Scalar bounds_abs(Scalar x) { return std::abs(x); }
 inline Lanes<Scalar> bounds_abs(const Lanes<Scalar>& x) { return lane_abs<Scalar>(x); }
 
