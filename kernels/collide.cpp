@@ -390,7 +390,8 @@ void shape_bounds(BoundsKind kind, const V* body, const V* local, const V* scale
   const V x = aw * bx + ax * bw + ay * bz - az * by, y = aw * by - ax * bz + ay * bw + az * bx,
           z = aw * bz + ax * by - ay * bx + az * bw, w = aw * bw - ax * bx - ay * by - az * bz;
   pose[3] = x, pose[4] = y, pose[5] = z, pose[6] = w;
-  // the rotation's entries |R_ij| where the extent needs them
+  // how far the shape reaches from its origin along each world axis (a box's and a capsule's through the
+  // entries of the rotation, R = R(x, y, z, w) of the unit quaternion)
   V extent[3];
   switch (kind) {
     case BoundsKind::Plane:
