@@ -243,9 +243,7 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
     for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
       const int j = __builtin_ctzll(m);
       const ShapeLanes& B = scratch.lanes[j];
-      const IntLanes<Scalar> hit = (B.lower[0] <= A.upper[0]) & (A.lower[0] <= B.upper[0]) &
-                                   (B.lower[1] <= A.upper[1]) & (A.lower[1] <= B.upper[1]) &
-                                   (B.lower[2] <= A.upper[2]) & (A.lower[2] <= B.upper[2]);
+      const IntLanes<Scalar> hit = boxes_overlap(A.lower, A.upper, B.lower, B.upper);
       if (!any_lane<Scalar>(hit)) continue;
       for (int l = 0; l < count; ++l)
         if (hit[l]) scratch.hits[l * n + i] |= std::uint64_t{1} << j;
@@ -321,8 +319,7 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   }
   for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
   auto overlap = [](const Box& a, const Box& b) {
-    return (b.lower.x() <= a.upper.x()) & (a.lower.x() <= b.upper.x()) & (b.lower.y() <= a.upper.y()) &
-           (a.lower.y() <= b.upper.y()) & (b.lower.z() <= a.upper.z()) & (a.lower.z() <= b.upper.z());
+    return boxes_overlap(a.lower.data(), a.upper.data(), b.lower.data(), b.upper.data());
   };
   auto test_pair = [&](int a, const Box& A, int b, const Box& B, std::vector<Found>& out) {
     if (!overlap(A, B) || !may_collide(a, b)) return;

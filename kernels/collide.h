@@ -32,6 +32,13 @@ void shape_bounds_lanes_reference(BoundsKind kind, const Lanes<Scalar>* body, co
 inline Scalar bounds_abs(Scalar x) { return std::abs(x); }
 inline Lanes<Scalar> bounds_abs(const Lanes<Scalar>& x) { return lane_abs<Scalar>(x); }
 
+// whether the boxes [la, ua] and [lb, ub] overlap (touching counts): a bool, or a mask per lane
+template <typename V>
+inline auto boxes_overlap(const V* la, const V* ua, const V* lb, const V* ub) {
+  return (lb[0] <= ua[0]) & (la[0] <= ub[0]) & (lb[1] <= ua[1]) & (la[1] <= ub[1]) & (lb[2] <= ua[2]) &
+         (la[2] <= ub[2]);
+}
+
 // the signed distance from the plane through p with unit normal n to the nearest point of the box
 // [lower, upper] (<= 0: the box reaches the plane); V as in shape_bounds, one formula for both
 template <typename V>
