@@ -190,7 +190,10 @@ double steal_seconds() {
 // fraction of a second, and each round gives its own ratios; the counters are the medians over rounds of
 // each engine's robot-steps/s and of the ratios NovaPhy / MuJoCo on all threads and all threads / one.
 // A run is at least 20 ms: MuJoCo's of k_mujoco steps, NovaPhy's of as many steps as take about as long,
-// each after one step not timed (what the engine's data need to be back in cache after the other's run)
+// each after as many steps not timed as it times: as long as the run, for both engines alike (the engine's
+// data back in cache after the other's run, and a core the other left idle awake again: after one step
+// not timed, ~1.3 ms of NovaPhy's, its first timed steps after MuJoCo's run on one thread took up to ~10x
+// their time)
 void BM_PairedStep(benchmark::State& bm) {
   using Clock = std::chrono::steady_clock;
   const SceneSpec& spec = kScenes[bm.range(0)];
@@ -200,7 +203,7 @@ void BM_PairedStep(benchmark::State& bm) {
   NovaPhyWorlds nova_all(spec, kWorlds, all, precision), nova_one(spec, kWorlds, 1, precision);
   MujocoWorlds mujoco(kScenes[kMujocoScene[bm.range(0)]], kWorlds);
   auto seconds = [](auto&& run, int steps) {
-    run();
+    for (int k = 0; k < steps; ++k) run();
     const Clock::time_point start = Clock::now();
     for (int k = 0; k < steps; ++k) run();
     return std::chrono::duration<double>(Clock::now() - start).count();
