@@ -8,6 +8,7 @@
 #include "engine/error.h"
 #include "engine/parallel.h"
 #include "kernels/collide.h"
+#include "kernels/lane_transpose.h"
 
 namespace novaphy {
 
@@ -80,37 +81,39 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
   // per group of several: each shape's body in each lane (-1: none; the first world's again in lanes
   // past the group's), and a bit per shape whose local pose and size are the same in all its worlds
   // (read once: a replicated robot's), where group_boxes reads the model's arrays from the first world
-  // only (a collide after a step finds little of them in cache)
+  // only (a collide after a step finds little of them in cache); the runs of bodies its lanes' shapes
+  // lie in (group_run_), and its planes
   const int L = kLanes<Scalar>;
-  group_body_start_.assign(group_first_.size() - 1, -1);
-  group_same_.assign(group_first_.size() - 1, 0);
-  for (size_t g = 0; g + 1 < group_first_.size(); ++g) {
-    const int first = group_first_[g], count = group_first_[g + 1] - first;
-    if (count == 1) continue;
-    const std::vector<int>& shapes = world_others_[first];
-    group_body_start_[g] = static_cast<int>(group_body_.size());
-    for (size_t i = 0; i < shapes.size(); ++i) {
-      bool same = true;
-      for (int l = 0; l < L; ++l) {
-        const int a = shapes[i], s = world_others_[first + (l < count ? l : 0)][i];
-        group_body_.push_back(model.shape_body[s]);
-        for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
-        for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
-      }
-      if (same) group_same_[g] |= std::uint64_t{1} << i;
-    }
-  }
+  const int groups = static_cast<int>(group_first_.size()) - 1;
+  group_body_start_.assign(groups, -1);
+  group_same_.assign(groups, 0);
+  group_run_.assign(groups, {});
   group_plane_start_.assign(1, 0);
-  for (size_t g = 0; g + 1 < group_first_.size(); ++g) {
-    const int first = group_first_[g];
-    if (group_first_[g + 1] - first > 1)
-      for (const int code : plane_order(first)) {
-        std::uint64_t shapes = 0;
-        for (size_t i = 0; i < world_others_[first].size(); ++i)
-          if (may_collide(plane_of(first, code), world_others_[first][i])) shapes |= std::uint64_t{1} << i;
-        group_plane_.push_back(code);
-        group_plane_shapes_.push_back(shapes);
+  for (int g = 0; g < groups; ++g) {
+    const int first = group_first_[g], count = group_first_[g + 1] - first;
+    if (count > 1) {
+      const std::vector<int>& shapes = world_others_[first];
+      const int n = static_cast<int>(shapes.size());
+      group_body_start_[g] = static_cast<int>(group_body_.size());
+      for (int i = 0; i < n; ++i) {
+        bool same = true;
+        for (int l = 0; l < L; ++l) {
+          const int a = shapes[i], s = world_others_[first + (l < count ? l : 0)][i];
+          group_body_.push_back(model.shape_body[s]);
+          for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
+          for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
+        }
+        if (same) group_same_[g] |= std::uint64_t{1} << i;
       }
+      group_runs(g);
+      for (const int code : plane_order(first)) {
+        std::uint64_t reach = 0;
+        for (int i = 0; i < n; ++i)
+          if (may_collide(plane_of(first, code), shapes[i])) reach |= std::uint64_t{1} << i;
+        group_plane_.push_back(code);
+        group_plane_shapes_.push_back(reach);
+      }
+    }
     group_plane_start_.push_back(static_cast<int>(group_plane_.size()));
   }
   // a plane on no body stays where the model put it; those on bodies move
@@ -143,6 +146,33 @@ bool CollisionPipeline::alike(int v, int w) const {
     for (size_t i = 0; i < a.size(); ++i)
       if (may_collide(plane_of(v, code), a[i]) != may_collide(plane_of(w, code), b[i])) return false;
   return true;
+}
+
+void CollisionPipeline::group_runs(int g) {
+  // each lane's run starts at the lowest body its shapes sit on; a run serves when every lane's shapes
+  // sit at the same places in it and it is at most twice as long as the shapes are many (otherwise, as
+  // where a world's bodies lie among other worlds', its shapes' bodies are read number by number)
+  constexpr int L = kLanes<Scalar>;
+  const int n = static_cast<int>(world_others_[group_first_[g]].size());
+  const int* body = group_body_.data() + group_body_start_[g];
+  BodyRun run;
+  std::vector<int> local(n, -1);
+  for (int l = 0; l < L; ++l) {
+    run.first[l] = -1;
+    for (int i = 0; i < n; ++i)
+      if (body[L * i + l] >= 0 && (run.first[l] < 0 || body[L * i + l] < run.first[l])) run.first[l] = body[L * i + l];
+  }
+  for (int i = 0; i < n; ++i) {
+    if (body[L * i] < 0) continue;  // (alike: no lane has a body for it)
+    local[i] = body[L * i] - run.first[0];
+    for (int l = 1; l < L; ++l)
+      if (body[L * i + l] - run.first[l] != local[i]) return;
+    run.length = std::max(run.length, local[i] + 1);
+  }
+  if (run.length == 0 || run.length > 2 * n) return;
+  group_run_[g] = run;
+  group_local_.resize(static_cast<size_t>(group_body_start_[g] / L + n), -1);
+  std::copy(local.begin(), local.end(), group_local_.begin() + group_body_start_[g] / L);
 }
 
 std::vector<int> CollisionPipeline::plane_order(int w) const {
@@ -212,13 +242,27 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
   const int n = static_cast<int>(world_others_[first].size());
   const int* group_body = group_body_.data() + group_body_start_[g];
   scratch.lanes.resize(n);
+  // the lanes' runs of bodies moved into lanes at once (a tiled transpose), where the group has them
+  const BodyRun& run = group_run_[g];
+  const int* place = run.length > 0 ? &group_local_[group_body_start_[g] / L] : nullptr;
+  if (run.length > 0) {
+    const Scalar* rows[L];
+    for (int l = 0; l < L; ++l) rows[l] = &state.body_q[7 * run.first[l]];
+    scratch.body_q.resize(7 * run.length);
+    lanes_from_rows<Scalar>(rows, 7 * run.length, scratch.body_q.data());
+  }
   for (int i = 0; i < n; ++i) {
     // shape i of each world
-    V body[7], local[7], scale[3];
-    for (int l = 0; l < L; ++l) {
-      const int b = group_body[L * i + l];
-      const Scalar* x = b < 0 ? kIdentity : &state.body_q[7 * b];
-      for (int k = 0; k < 7; ++k) body[k][l] = x[k];
+    V gathered[7], local[7], scale[3];
+    const V* body = gathered;
+    if (place && place[i] >= 0) {
+      body = &scratch.body_q[7 * place[i]];
+    } else {
+      for (int l = 0; l < L; ++l) {
+        const int b = group_body[L * i + l];
+        const Scalar* x = b < 0 ? kIdentity : &state.body_q[7 * b];
+        for (int k = 0; k < 7; ++k) gathered[k][l] = x[k];
+      }
     }
     if (group_same_[g] >> i & 1) {
       const int s = world_others_[first][i];

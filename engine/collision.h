@@ -103,6 +103,8 @@ class CollisionPipeline {
   // planes, in the order its worlds meet them (group_plane_), the shapes that may reach it, into
   // scratch.plane_hits ([lane][plane]: a bit for each shape)
   void group_planes(int g, Scratch& scratch) const;
+  // group g's runs of bodies into group_run_ and group_local_, where its worlds have them
+  void group_runs(int g);
   // whether worlds v and w can be found together (group_boxes, group_planes)
   bool alike(int v, int w) const;
   // world w's planes, its own and those of no world, in index order (the order it meets them): k >= 0
@@ -145,6 +147,15 @@ class CollisionPipeline {
   std::vector<int> group_body_start_;
   std::vector<int> group_body_;
   std::vector<std::uint64_t> group_same_;
+  // per group of several worlds whose shapes' bodies lie in a run of bodies each, at the same places in
+  // every run (a replicated robot's): its runs' length (0: no such runs) and each lane's first body; per
+  // shape of the group (from group_body_start_ / kLanes), its body's place in the run, or -1
+  struct BodyRun {
+    int length = 0;
+    int first[kLanes<Scalar>] = {};
+  };
+  std::vector<BodyRun> group_run_;
+  std::vector<int> group_local_;
   // [group] where its planes start in group_plane_, then the end; per plane of a group: its code
   // (plane_order) and a bit per shape may_collide lets meet it
   std::vector<int> group_plane_start_;
@@ -163,6 +174,7 @@ class CollisionPipeline {
     std::vector<Found> found;
     std::vector<Box> boxes;
     std::vector<ShapeLanes> lanes;
+    std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (group_run_)
     std::vector<std::uint64_t> hits, plane_hits;
   };
   std::vector<Scratch> scratch_;

@@ -298,26 +298,36 @@ TEST(CollisionPipeline, ShapesOfNoWorldMeetEveryWorld) {
 // worlds alike have their boxes, overlapping pairs and planes found a group of kLanes at a time: each
 // world of a batch finds the contacts it finds alone (a world alone is a group of one, on the scalar
 // path), bit for bit. The batch mixes worlds of one robot with a copy whose ball is larger (alike, not
-// the same size: its sizes are read per world) and a robot of one shape fewer (not alike: a group
-// apart); each world has its floor, and a tilted plane of no world cuts through them all
+// the same size: its sizes are read per world), a robot of one shape fewer (not alike: a group apart)
+// and one whose shapes sit on its bodies in reverse order (alike, but its group has no common run of
+// bodies: read number by number); each world has its floor and a box on no body, and a tilted plane of
+// no world cuts through them all
 TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
-  auto robot = [](Scalar radius, bool capsule) {
+  auto robot = [](Scalar radius, bool capsule, bool reversed) {
     ModelBuilder world;
     world.add_ground_plane();
+    ShapeOptions step;  // a step in the floor, on no body, that the lowest bodies reach
+    step.xform.p = Vec3(0.1, 0, 0);
+    world.add_shape_box(-1, Vec3(0.15, 0.25, 0.15), step);
     std::mt19937 rng(9);
     std::uniform_real_distribution<Scalar> u(-0.25, 0.25);
+    int body[7];
     for (int k = 0; k < 7; ++k) {
       Transform x{Vec3(u(rng), 0.2 + std::abs(u(rng)), u(rng))};
       x.q = Quat(1 + u(rng), u(rng), u(rng), u(rng)).normalized();
-      const int body = world.add_body(RigidBody::from_sphere(1, 0.1), x);
-      if (k % 3 == 0) world.add_shape_sphere(body, radius);
-      if (k % 3 == 1) world.add_shape_box(body, Vec3(0.12, 0.08, 0.1));
-      if (k % 3 == 2 && (capsule || k < 5)) world.add_shape_capsule(body, 0.06, 0.1);
+      body[k] = world.add_body(RigidBody::from_sphere(1, 0.1), x);
+    }
+    for (int k = 0; k < 7; ++k) {
+      const int b = body[reversed ? 6 - k : k];
+      if (k % 3 == 0) world.add_shape_sphere(b, radius);
+      if (k % 3 == 1) world.add_shape_box(b, Vec3(0.12, 0.08, 0.1));
+      if (k % 3 == 2 && (capsule || k < 5)) world.add_shape_capsule(b, 0.06, 0.1);
     }
     return world;
   };
-  const ModelBuilder kinds[3] = {robot(0.15, true), robot(0.2, true), robot(0.15, false)};
-  const int kind_of[13] = {0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 2, 0, 0};
+  const ModelBuilder kinds[4] = {robot(0.15, true, false), robot(0.2, true, false), robot(0.15, false, false),
+                                 robot(0.15, true, true)};
+  const int kind_of[13] = {0, 0, 0, 1, 0, 0, 0, 0, 0, 3, 2, 0, 0};
   ModelBuilder builder;
   for (const int k : kind_of) builder.add_builder(kinds[k], Transform{}, -1);
   const Vec3 tilted = Vec3(0.3, 1, 0.1).normalized();
@@ -333,7 +343,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   pipeline.collide(state, contacts);
-  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0;
+  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0;
   for (int w = 0; w < model.world_count; ++w) {
     ModelBuilder one;
     one.add_builder(kinds[kind_of[w]]);
@@ -357,6 +367,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
       EXPECT_EQ(in_alone(contacts.contact_shape_a[m]), c.contact_shape_a[k]) << "world " << w << " contact " << k;
       EXPECT_EQ(in_alone(contacts.contact_shape_b[m]), c.contact_shape_b[k]) << "world " << w << " contact " << k;
       tilted_plane += c.contact_shape_a[k] == own_shapes;
+      step_box += c.contact_shape_a[k] == 1 || c.contact_shape_b[k] == 1;  // (after the floor: shape 1)
       EXPECT_EQ(contacts.contact_feature[m], c.contact_feature[k]);
       EXPECT_EQ(contacts.contact_depth[m], c.contact_depth[k]) << "world " << w << " contact " << k;
       for (int i = 0; i < 3; ++i) {
@@ -371,6 +382,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   EXPECT_EQ(checked, contacts.contact_count);
   EXPECT_GT(checked, 13 * 4);
   EXPECT_GT(tilted_plane, 13);
+  EXPECT_GT(step_box, 13);
 }
 
 TEST(CollisionPipelineErrors, BadOptions) {
