@@ -104,8 +104,8 @@ def step_tables(path):
     if paired:
         rounds = int(next(iter(paired.values()))["iterations"])
         lines += ["", f"Side by side at 4096 worlds (BM_PairedStep): {rounds} rounds, each timing in turn NovaPhy on all "
-                  "threads, NovaPhy on one, MuJoCo on all and MuJoCo on one (the order rotating), each run after one "
-                  "step not timed; medians over the rounds of robot-steps/s and of each round's ratios. Steal: the share of the "
+                  "threads, NovaPhy on one, MuJoCo on all and MuJoCo on one (the order rotating), each run after as "
+                  "many steps not timed as it times; medians over the rounds of robot-steps/s and of each round's ratios. Steal: the share of the "
                   "cores' time the host gave to other guests meanwhile (Linux's steal time), which a step of two threads "
                   "that meet at barriers feels more than one:", "",
                   "| scene | precision | NovaPhy | MuJoCo | ratio | NovaPhy 1 → all threads | MuJoCo 1 → all threads "
