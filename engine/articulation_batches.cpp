@@ -58,7 +58,7 @@ class Batches final : public ArticulationBatches {
     std::vector<int> q_off, qd_off;  // per slot: the articulation's first coordinate and dof
     std::vector<int> body;           // per slot: its link bodies, then its welded bodies
     // per body of a world (links, then welds): its place among the world's bodies as the model numbers
-    // them (a welded body's number falls between its links'), where its rows are staged
+    // them (a welded body's number falls between its links'), where its rows are written
     std::vector<int> body_place;
     std::vector<std::uint8_t> contiguous;  // per block: its worlds' bodies, each world's in one run, one after another
     int world_count = 0;
@@ -215,13 +215,10 @@ class Batches final : public ArticulationBatches {
     for (const Group& G : groups_) packed = std::max<std::size_t>(packed, G.topo.packed_size());
     lane_factor_.assign(work_.size(), LaneFactor{-1, 0, std::vector<Scalar>(packed)});
     row_work_.resize(work_.size());
-    int most_bodies = 0;
-    for (const Group& G : groups_) most_bodies = std::max(most_bodies, G.bodies());
     int most_dofs = 0;
     for (const Group& G : groups_) most_dofs = std::max(most_dofs, G.topo.dof_count);
     output_.resize(work_.size());
     for (Output& out : output_) {
-      out.stage.resize(static_cast<size_t>(7) * most_bodies * W);
       out.S.resize(static_cast<size_t>(6) * most_dofs);
       out.H.resize(packed);
     }
@@ -359,8 +356,7 @@ class Batches final : public ArticulationBatches {
     for (const Group& G : groups_) n += G.contiguous.size();
     n += limit_cell_.size() * sizeof(int);
     for (const LaneFactor& copy : lane_factor_) n += copy.L.size() * sizeof(Scalar);
-    for (const Output& out : output_)
-      n += out.stage.size() * sizeof(Scalar) + (out.S.size() + out.H.size()) * sizeof(V);
+    for (const Output& out : output_) n += (out.S.size() + out.H.size()) * sizeof(V);
     for (const auto& per_thread : work_)
       for (const BatchWork<T>& w : per_thread)
         for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
@@ -695,12 +691,10 @@ class Batches final : public ArticulationBatches {
   // body_q and body_qd of block b's worlds where `written` has their lane, from the coordinates q and the
   // velocities w.qd (lanes): the kinematics in the thread's scratch (the block's own o stays that of the
   // step; the motion subspaces are not written out). With `stream`, a block whose worlds' bodies follow
-  // each other, all written, is staged and streamed around the caches
+  // each other, all written, is written around the caches
   void store_block(Group& G, int b, BatchWork<T>& w, const V* q, const IntLanes<T>& written, State& out, bool stream) {
     const BatchTopology<T>& topo = G.topo;
-    Output& scratch = output_[omp_get_thread_num()];
-    std::vector<Scalar>& out_stage = scratch.stage;
-    V* o = scratch.origin;
+    V* o = output_[omp_get_thread_num()].origin;
     batch_kinematics(topo, q, w, o);
     batch_subspace_velocity(topo, o, w.qd.data(), w);
     const int n = G.links(), nb = G.bodies(), lanes = lanes_in(G, b);
@@ -741,17 +735,16 @@ class Batches final : public ArticulationBatches {
     for (int l = 0; l < lanes; ++l) all &= written[l] != 0;
     if (G.contiguous[b]) {
       // the block's worlds' bodies follow each other: each world's rows of body_q, then of body_qd, are
-      // written at once, or with `stream` staged and streamed out one array at a time (a stage about
-      // half the size, more of it still in the core's nearest caches when it is written: measured
-      // 1.01-1.04x the step of a stage for both at 4096 worlds)
-      const bool staged = stream && all;
+      // written at once, with `stream` (and every lane written) around the caches
       auto write = [&](const V* x, int width, std::vector<Scalar>& field) {
         Scalar* first = field.data() + width * (body[0] - place[0]);
-        Scalar* dst = staged ? out_stage.data() : first;
+        if (stream && all) {
+          stream_rows_from_lanes<T>(x, width * nb, lanes, first);
+          return;
+        }
         Scalar* rows[W];
-        for (int l = 0; l < W; ++l) rows[l] = dst + width * nb * (l < lanes ? l : 0);
+        for (int l = 0; l < W; ++l) rows[l] = first + width * nb * (l < lanes ? l : 0);
         rows_from_lanes<T>(x, width * nb, store, rows);
-        if (staged) stream_copy(dst, first, width * nb * lanes);
       };
       write(x_q, 7, out.body_q);
       write(x_qd, 6, out.body_qd);
@@ -966,10 +959,9 @@ class Batches final : public ArticulationBatches {
   std::vector<Group> groups_;
   std::vector<std::pair<int, int>> blocks_;  // (group, block) in order
   std::vector<Slot> slot_;                   // per articulation
-  // per thread: store_bodies' scratch (a block's body_q or body_qd span staged, its S and o), also
-  // step()'s S and o, and the factor step() makes where no later step reuses it
+  // per thread: store_bodies' scratch (its S and o), also step()'s S and o, and the factor step() makes
+  // where no later step reuses it
   struct Output {
-    std::vector<Scalar> stage;
     std::vector<V> S, H;
     V origin[3];
   };

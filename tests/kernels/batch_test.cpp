@@ -175,21 +175,32 @@ void expect_twins_agree(double bound) {
 // full inertias) the worst seen, in eps times the largest entry (float64 / float32): poses 7 / 9,
 // bias forces 32 / 27, H by CRBA 29 / 15, H by the tiled product 30 / 15, solve residual 20 / 8; the
 // stated bound is 64
-// the streamed copy against its twin std::copy: every length to a few vectors past a cache line, at
-// every alignment of the destination a double can have; nothing outside the span written
-TEST(StreamCopy, EqualsStdCopyAtEveryAlignment) {
-  std::vector<double> src(64), expected(96), dst(96);
-  for (size_t k = 0; k < src.size(); ++k) src[k] = std::sin(1.0 + k);
-  for (int offset = 0; offset < 8; ++offset)
-    for (int n = 0; n <= 40; ++n) {
-      std::fill(expected.begin(), expected.end(), -1.0);
-      std::fill(dst.begin(), dst.end(), -1.0);
-      std::copy(src.begin() + 3, src.begin() + 3 + n, expected.begin() + offset);
-      stream_copy(src.data() + 3, dst.data() + offset, n);
-      stream_fence();
-      ASSERT_EQ(std::memcmp(dst.data(), expected.data(), dst.size() * sizeof(double)), 0)
-          << n << " doubles to offset " << offset;
-    }
+// the streamed rows against their twin, bit for bit: rows shorter and longer than a vector, every count
+// of lanes, every alignment of the destination a double can have; nothing outside the rows written
+template <typename T>
+void expect_streamed_rows_equal_their_twin() {
+  constexpr int W = kLanes<T>;
+  for (const int count : {1, 2, 3, 5, 7, 8, 9, 13, 16, 17, 78, 91}) {
+    std::vector<Lanes<T>> in(count);
+    for (int k = 0; k < count; ++k)
+      for (int l = 0; l < W; ++l) in[k][l] = static_cast<T>(std::sin(1.0 + k * W + l) * 1e3);
+    std::vector<double> expected(count * W + 16), dst(expected.size());
+    for (int lanes = 1; lanes <= W; ++lanes)
+      for (int offset = 0; offset < 8; ++offset) {
+        std::fill(expected.begin(), expected.end(), -1.0);
+        std::fill(dst.begin(), dst.end(), -1.0);
+        stream_rows_from_lanes_reference<T>(in.data(), count, lanes, expected.data() + offset);
+        stream_rows_from_lanes<T>(in.data(), count, lanes, dst.data() + offset);
+        stream_fence();
+        ASSERT_EQ(std::memcmp(dst.data(), expected.data(), dst.size() * sizeof(double)), 0)
+            << count << " numbers of " << lanes << " lanes to offset " << offset;
+      }
+  }
+}
+
+TEST(StreamRowsFromLanes, EqualsItsTwinInBothPrecisions) {
+  expect_streamed_rows_equal_their_twin<double>();
+  expect_streamed_rows_equal_their_twin<float>();
 }
 
 // inside the scope a product below FLT_MIN is zero and a subnormal operand counts as zero; after it,
