@@ -113,7 +113,7 @@ def test_settings_mirror_the_constructor_and_are_writable():
     assert solver.settings.num_iterations == 50 and solver.settings.linear_slop == 0.002
     s.pgs_tolerance = 1e-5
     assert solver.settings.pgs_tolerance == 1e-5
-    assert s.stream_body_output_above == 8 << 20
+    assert s.stream_body_output_above == 2 << 20
     s.stream_body_output_above = 0
     assert solver.settings.stream_body_output_above == 0
     for name in ["erp", "cfm", "warmstarting_factor", "restitution_threshold", "use_warmstarting"]:
