@@ -171,10 +171,6 @@ void expect_twins_agree(double bound) {
   EXPECT_LT(worst_solve, bound) << "factor and solve residual";
 }
 
-// over 30 random trees of 2..10 links (every joint type, rotated frames, offset centres of mass,
-// full inertias) the worst seen, in eps times the largest entry (float64 / float32): poses 7 / 9,
-// bias forces 32 / 27, H by CRBA 29 / 15, H by the tiled product 30 / 15, solve residual 20 / 8; the
-// stated bound is 64
 // the streamed rows against their twin, bit for bit: rows shorter and longer than a vector, every count
 // of lanes, every alignment of the destination a double can have; nothing outside the rows written
 template <typename T>
@@ -247,6 +243,10 @@ void expect_any_lane_is_some_lane_set() {
 TEST(Lanes, AnyLaneIsTrueExactlyWhenSomeLaneIsSetFloat64) { expect_any_lane_is_some_lane_set<double>(); }
 TEST(Lanes, AnyLaneIsTrueExactlyWhenSomeLaneIsSetFloat32) { expect_any_lane_is_some_lane_set<float>(); }
 
+// over 30 random trees of 2..10 links (every joint type, rotated frames, offset centres of mass,
+// full inertias) the worst seen, in eps times the largest entry (float64 / float32): poses 7 / 9,
+// bias forces 32 / 27, H by CRBA 29 / 15, H by the tiled product 30 / 15, solve residual 20 / 8; the
+// stated bound is 64
 TEST(BatchKernels, Float64LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<double>(64); }
 TEST(BatchKernels, Float32LanesEqualTheScalarKernelsWithin64Eps) { expect_twins_agree<float>(64); }
 
