@@ -11,6 +11,7 @@
 
 #include <chrono>
 
+#include "bench/bench_scenes.h"
 #include "engine/mjcf_import.h"
 #include "engine/shard.h"
 #include "engine/solver_featherstone.h"
@@ -101,15 +102,8 @@ void BM_UnusedFeatures(benchmark::State& bm) {
 // pgs_tolerance 1e-5, at the margin in mm (the argument); counters: microseconds a world, contacts a
 // world and the robots' mean base height after the run
 void BM_Margin(benchmark::State& bm) {
-  ModelBuilder robot, batch;
-  ImportOptions options;
-  options.static_shapes = true;
-  import_mjcf(robot, NOVAPHY_SCENE_DIR "/quadruped.xml", options);
-  batch.set_gravity(robot.gravity());
-  batch.set_precision(Precision::Float32);
   constexpr int kWorlds = 4096;
-  batch.replicate(robot, kWorlds);
-  const Model model = batch.finalize();
+  const Model model = replicated_mjcf(NOVAPHY_SCENE_DIR "/quadruped.xml", kWorlds, Precision::Float32, true);
   CollisionOptions collision;
   collision.margin = 1e-3 * static_cast<Scalar>(bm.range(0));
   collision.num_threads = 1;
@@ -129,12 +123,10 @@ void BM_Margin(benchmark::State& bm) {
   const auto t0 = std::chrono::steady_clock::now();
   for (auto _ : bm) step();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  double z = 0;
-  for (int a = 0; a < model.articulation_count; ++a) z += state.joint_q[model.articulation(a).q_begin() + 2];
   bm.SetItemsProcessed(bm.iterations() * kWorlds);
   bm.counters["us_per_world"] = 1e6 * seconds / (static_cast<double>(bm.iterations()) * kWorlds);
   bm.counters["contacts_per_world"] = static_cast<double>(contacts.contact_count) / kWorlds;
-  bm.counters["base_height"] = z / model.articulation_count;
+  bm.counters["base_height"] = mean_base_height(model, state);
 }
 
 BENCHMARK(BM_Stages)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_scenes.h"
 #include "engine/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 
@@ -52,17 +53,6 @@ void label(benchmark::State& bm, int worlds) {
   bm.counters["precision"] = static_cast<double>(bm.range(3));
 }
 
-Model replicated_scene(const SceneSpec& spec, int worlds, Precision precision) {
-  ModelBuilder robot, batch;
-  ImportOptions options;
-  options.static_shapes = spec.floor;
-  import_mjcf(robot, spec.path, options);
-  batch.set_gravity(robot.gravity());
-  batch.set_precision(precision);
-  batch.replicate(robot, worlds);
-  return batch.finalize();
-}
-
 CollisionOptions collision_options(int threads) {
   CollisionOptions options;
   options.num_threads = threads;
@@ -81,7 +71,7 @@ SolverFeatherstoneSettings solver_settings(const SceneSpec& spec, int threads) {
 struct NovaPhyWorlds {
   NovaPhyWorlds(const SceneSpec& spec, int worlds, int threads, Precision precision)
       : floor(spec.floor),
-        model(replicated_scene(spec, worlds, precision)),
+        model(replicated_mjcf(spec.path, worlds, precision, spec.floor)),
         pipeline(model, collision_options(threads)),
         contacts(pipeline.contacts()),
         solver(model, solver_settings(spec, threads)),
@@ -94,11 +84,7 @@ struct NovaPhyWorlds {
     solver.step(state, state, control, contacts, kDt);
   }
   // the floor scenes' robots still standing: their base's mean height
-  double base_height() const {
-    double z = 0;
-    for (int a = 0; a < model.articulation_count; ++a) z += state.joint_q[model.articulation(a).q_begin() + 2];
-    return z / model.articulation_count;
-  }
+  double base_height() const { return mean_base_height(model, state); }
   bool floor;
   Model model;
   CollisionPipeline pipeline;
