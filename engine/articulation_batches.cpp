@@ -909,8 +909,9 @@ class Batches final : public ArticulationBatches {
         done);
   }
 
-  // a thread's rows of one block (solve_rows); grows to the most rows a block has had
-  struct RowWork {
+  // a thread's rows of one block (solve_rows); grows to the most rows a block has had. On cache lines of
+  // its own, as LaneFactor: each block writes `dofs`
+  struct alignas(64) RowWork {
     int dofs = 0;
     std::vector<RowKind> kind;
     std::vector<int> normal;
@@ -946,7 +947,7 @@ class Batches final : public ArticulationBatches {
   };
 
   // a world's factor copied out of its block (solve_mass), per thread
-  struct LaneFactor {
+  struct alignas(64) LaneFactor {
     int articulation = -1;
     std::uint64_t step = 0;
     std::vector<Scalar> L;
