@@ -68,7 +68,7 @@ struct SolverFeatherstoneSettings {
   // the batched blocks write body_q and body_qd around the caches (non-temporal stores, which do not
   // read in the lines they overwrite) when the step's data, the state's arrays and the solver's, exceed
   // this many bytes; below it the output stays in cache for whatever reads it next (0: always). The
-  // default is where streaming started to pay on this machine (2 MB of L2 a core): streamed against
+  // default is where streaming started to pay on a Sapphire Rapids guest (2 MB of L2 a core): streamed against
   // stored, 512 and 1024 quadrupeds (2.4 and 4.7 MB) 1.03-1.05x and 1.08-1.19x, 256 humanoid.xml robots
   // (2.2 MB) 0.98-1.10x, 64 quadrupeds (0.3 MB) 0.95-0.99x
   std::int64_t stream_body_output_above = std::int64_t{2} << 20;
