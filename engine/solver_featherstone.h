@@ -68,9 +68,11 @@ struct SolverFeatherstoneSettings {
   // the batched blocks write body_q and body_qd around the caches (non-temporal stores, which do not
   // read in the lines they overwrite) when the step's data, the state's arrays and the solver's, exceed
   // this many bytes; below it the output stays in cache for whatever reads it next (0: always). The
-  // default is where streaming started to pay on a Sapphire Rapids guest (2 MB of L2 a core): streamed against
-  // stored, 512 and 1024 quadrupeds (2.4 and 4.7 MB) 1.03-1.05x and 1.08-1.19x, 256 humanoid.xml robots
-  // (2.2 MB) 0.98-1.10x, 64 quadrupeds (0.3 MB) 0.95-0.99x
+  // default is where streaming started to pay on a Sapphire Rapids guest (2 MB of L2 a core): streamed
+  // against stored, 512 and 1024 quadrupeds (2.4 and 4.7 MB) 1.03-1.05x and 1.08-1.19x, 256 humanoid.xml
+  // robots (2.2 MB) 0.98-1.10x, 64 quadrupeds (0.3 MB) 0.95-0.99x. Not on every machine: on a Zen 5
+  // guest (1 MiB L2 a core, 32 MiB L3) streaming paid only past the L3 (float32 quadrupeds: 2.7-28 MB
+  // 0.87-0.93x, 37.5 MB 0.98x, 74.6 MB 1.20x; tools/stream_threshold.py measures it)
   std::int64_t stream_body_output_above = std::int64_t{2} << 20;
 
   // throws Error naming the first setting out of range
