@@ -278,6 +278,60 @@ void expect_many_solves_equal_batch_solve() {
   }
 }
 
+// batch_factor's arithmetic one row at a time, downwards, on the plain ancestor lists: L, L^T y = x, and
+// the lowest dof whose pivot is not positive
+template <typename T>
+IntLanes<T> factor_row_by_row(const BatchTopology<T>& topo, Lanes<T>* H, Lanes<T>* x) {
+  IntLanes<T> bad = IntLanes<T>{} - 1;
+  auto at = [&](int i, int j) -> Lanes<T>& { return H[topo.row_start[i] + j]; };
+  for (int c = topo.dof_count - 1; c >= 0; --c) {
+    const int* a = topo.ancestors.data() + topo.ancestor_start[c];
+    const int n = topo.ancestor_start[c + 1] - topo.ancestor_start[c];
+    const Lanes<T> d = at(c, c);
+    bad = (d > 0) ? bad : IntLanes<T>{} + c;
+    const Lanes<T> inv = 1 / lane_sqrt<T>(d);
+    at(c, c) = inv;
+    for (int s = 0; s < n; ++s) at(c, a[s]) *= inv;
+    const Lanes<T> y = x[c] * inv;
+    x[c] = y;
+    for (int s = 0; s < n; ++s) x[a[s]] -= at(c, a[s]) * y;
+    for (int s = 0; s < n; ++s)  // a[s]'s ancestors are a[0 .. s)
+      for (int u = 0; u <= s; ++u) at(a[s], a[u]) -= at(c, a[s]) * at(c, a[u]);
+  }
+  return bad;
+}
+
+// batch_factor (rows in chain groups, each group's outer products in one pass) equals the factor one row
+// at a time bit for bit, on random trees: L, x and the dof reported for a pivot that is not positive (some
+// lanes' diagonals made negative at a random dof: the rows of its ancestors then go NaN)
+template <typename T>
+void expect_factor_equals_row_by_row() {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 40; ++trial) {
+    Block<T> block(test::random_builder_tree(rng, 2 + trial % 12), rng);
+    block.run();
+    const int nv = block.art.dof_count();
+    if (nv == 0) continue;
+    std::vector<Lanes<T>> L = block.H, x(nv);
+    for (int k = 0; k < nv; ++k)
+      for (int l = 0; l < Block<T>::W; ++l) x[k][l] = static_cast<T>(u(rng));
+    if (trial % 2 == 1) {
+      const int k = static_cast<int>(rng() % nv);
+      for (int l = 0; l < Block<T>::W; l += 3) L[block.topo.row_start[k] + k][l] = -1;
+    }
+    std::vector<Lanes<T>> L_ref = L, x_ref = x;
+    const IntLanes<T> bad = batch_factor(block.topo, L.data(), x.data());
+    const IntLanes<T> bad_ref = factor_row_by_row(block.topo, L_ref.data(), x_ref.data());
+    for (int l = 0; l < Block<T>::W; ++l) EXPECT_EQ(bad[l], bad_ref[l]) << "trial " << trial << " lane " << l;
+    EXPECT_EQ(std::memcmp(L.data(), L_ref.data(), L.size() * sizeof(Lanes<T>)), 0) << "trial " << trial << ": L";
+    EXPECT_EQ(std::memcmp(x.data(), x_ref.data(), x.size() * sizeof(Lanes<T>)), 0) << "trial " << trial << ": x";
+  }
+}
+
+TEST(BatchKernels, Float64FactorEqualsTheFactorOneRowAtATimeBitForBit) { expect_factor_equals_row_by_row<double>(); }
+TEST(BatchKernels, Float32FactorEqualsTheFactorOneRowAtATimeBitForBit) { expect_factor_equals_row_by_row<float>(); }
+
 // the runs list each dof's ancestors in order, as maximal stretches of consecutive dofs (the factor and
 // the solves walk them in place of the ancestor list)
 TEST(BatchTopology, AncestorRunsAreTheAncestorsInMaximalStretches) {
