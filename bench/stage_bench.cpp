@@ -100,6 +100,12 @@ void BM_UnusedFeatures(benchmark::State& bm) {
   bm.SetLabel(labels[variant]);
 }
 
+// items per second and the counter us_per_world: `seconds` spent in the benchmark's loop, `worlds` a step
+void count_worlds(benchmark::State& bm, double seconds, int worlds) {
+  bm.SetItemsProcessed(bm.iterations() * worlds);
+  bm.counters["us_per_world"] = 1e6 * seconds / (static_cast<double>(bm.iterations()) * worlds);
+}
+
 // what the collision margin costs: collide + step of 4096 float32 standing quadrupeds on one thread,
 // pgs_tolerance 1e-5, at the margin in mm (the argument); counters: microseconds a world, contacts a
 // world and the robots' mean base height after the run
@@ -124,9 +130,7 @@ void BM_Margin(benchmark::State& bm) {
   for (int k = 0; k < 100; ++k) step();  // onto the floor
   const auto t0 = std::chrono::steady_clock::now();
   for (auto _ : bm) step();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  bm.SetItemsProcessed(bm.iterations() * kWorlds);
-  bm.counters["us_per_world"] = 1e6 * seconds / (static_cast<double>(bm.iterations()) * kWorlds);
+  count_worlds(bm, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), kWorlds);
   bm.counters["contacts_per_world"] = static_cast<double>(contacts.contact_count) / kWorlds;
   bm.counters["base_height"] = mean_base_height(model, state);
 }
@@ -140,11 +144,13 @@ void BM_RandomisedParams(benchmark::State& bm) {
   const bool randomised = bm.range(0) == 1;
   Model model = replicated_mjcf(NOVAPHY_SCENE_DIR "/quadruped.xml", kWorlds,
                                 bm.range(1) == 1 ? Precision::Float32 : Precision::Float64, false);
-  const int bodies = model.body_count / kWorlds;
-  for (int b = 0; randomised && b < model.body_count; ++b) {
-    const Scalar scale = 1 + 0.4 * std::sin(1.7 * (b / bodies));
-    model.body_mass[b] *= scale;
-    for (int k = 0; k < 9; ++k) model.body_inertia[9 * b + k] *= scale;
+  const int bodies = model.body_count / kWorlds;  // a world's
+  if (randomised) {
+    for (int b = 0; b < model.body_count; ++b) {
+      const Scalar scale = 1 + 0.4 * std::sin(1.7 * (b / bodies));
+      model.body_mass[b] *= scale;
+      for (int k = 0; k < 9; ++k) model.body_inertia[9 * b + k] *= scale;
+    }
   }
   SolverFeatherstoneSettings settings;
   settings.num_threads = 1;
@@ -155,9 +161,7 @@ void BM_RandomisedParams(benchmark::State& bm) {
   for (int k = 0; k < 20; ++k) solver.step(state, state, control, contacts, 0.005);
   const auto t0 = std::chrono::steady_clock::now();
   for (auto _ : bm) solver.step(state, state, control, contacts, 0.005);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  bm.SetItemsProcessed(bm.iterations() * kWorlds);
-  bm.counters["us_per_world"] = 1e6 * seconds / (static_cast<double>(bm.iterations()) * kWorlds);
+  count_worlds(bm, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), kWorlds);
   bm.counters["solver_bytes"] = static_cast<double>(solver.memory_bytes());
 }
 
