@@ -12,6 +12,8 @@
 // above the floor, add four speculative contacts a robot (the README gives both speeds)
 #include <benchmark/benchmark.h>
 #include <omp.h>
+#include <pthread.h>
+#include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +21,7 @@
 #include <cmath>
 #include <fstream>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -169,22 +172,62 @@ double steal_seconds() {
   return stat ? field[7] / static_cast<double>(sysconf(_SC_CLK_TCK)) : 0;
 }
 
-// The targets' figures side by side: at 4096 worlds, each iteration (a round) times four runs of steps in
-// turn, their order rotating from round to round: NovaPhy on all threads, NovaPhy on one, MuJoCo on all,
-// MuJoCo on one (NovaPhy's two runs on two copies of the worlds, each with its own pipeline's thread
-// count; both copies take the same steps). A slow spell of the machine then falls on all four within a
-// fraction of a second, and each round gives its own ratios; the counters are the medians over rounds of
-// each engine's robot-steps/s and of the ratios NovaPhy / MuJoCo on all threads and all threads / one.
+// the CPUs the one-thread runs are pinned to in turn: the first of each OpenMP place (OMP_PLACES), or else
+// each CPU this thread may run on
+std::vector<int> one_thread_cpus() {
+  std::vector<int> cpus;
+  for (int p = 0; p < omp_get_num_places(); ++p) {
+    std::vector<int> ids(omp_get_place_num_procs(p));
+    if (ids.empty()) continue;
+    omp_get_place_proc_ids(p, ids.data());
+    cpus.push_back(ids[0]);
+  }
+  cpu_set_t mask;
+  if (cpus.empty() && sched_getaffinity(0, sizeof(mask), &mask) == 0)
+    for (int c = 0; c < CPU_SETSIZE; ++c)
+      if (CPU_ISSET(c, &mask)) cpus.push_back(c);
+  return cpus;
+}
+
+// f() with the calling thread on `cpu` alone, then its CPU mask as it was; false (f not run) where the
+// system refuses the CPU
+template <typename F>
+bool on_cpu(int cpu, F&& f) {
+  cpu_set_t before, only;
+  CPU_ZERO(&only);
+  CPU_SET(cpu, &only);
+  if (pthread_getaffinity_np(pthread_self(), sizeof(before), &before) != 0 ||
+      pthread_setaffinity_np(pthread_self(), sizeof(only), &only) != 0)
+    return false;
+  f();
+  pthread_setaffinity_np(pthread_self(), sizeof(before), &before);
+  return true;
+}
+
+// The targets' figures side by side: at 4096 worlds, each iteration (a round) times runs of steps in
+// turn, their order rotating from round to round: NovaPhy on all threads, NovaPhy on one thread pinned to
+// each core in turn, MuJoCo on all, MuJoCo on one pinned to each core (NovaPhy's runs on two copies of the
+// worlds, each with its own pipeline's thread count; both copies take the same steps). A slow spell of the
+// machine then falls on all of them within a second or two, and each round gives its own ratios; the
+// counters are the medians over rounds of each engine's robot-steps/s and of the ratios NovaPhy / MuJoCo on
+// all threads and all threads / one thread on the first core (the speed-ups). The cores' own speeds: a
+// guest's vCPUs can step one thread's work at unequal speeds (the host's other guests on their cores), and
+// no team beats its cores' one-thread speeds added; core_spread is the slowest core's one-thread rate over
+// the fastest's, core_use the team's rate over the one-thread rates on its cores added (1: all threads
+// together lose nothing to each other), both per round, for either engine.
 // A run is at least 20 ms: MuJoCo's of k_mujoco steps, NovaPhy's of as many steps as take about as long,
 // each after as many steps not timed as it times: as long as the run, for both engines alike (the engine's
 // data back in cache after the other's run, and a core the other left idle awake again: after one step
 // not timed, ~1.3 ms of NovaPhy's, its first timed steps after MuJoCo's run on one thread took up to ~10x
-// their time)
+// their time; the idle OpenMP threads stop spinning meanwhile, so a pinned run has its core alone: not with
+// OMP_WAIT_POLICY=active)
 void BM_PairedStep(benchmark::State& bm) {
   using Clock = std::chrono::steady_clock;
   const SceneSpec& spec = kScenes[bm.range(0)];
   constexpr int kWorlds = 4096;
   const int all = omp_get_num_procs();
+  const std::vector<int> cpus = one_thread_cpus();
+  const int cores = static_cast<int>(cpus.size());
   const Precision precision = bm.range(1) == 1 ? Precision::Float32 : Precision::Float64;
   NovaPhyWorlds nova_all(spec, kWorlds, all, precision), nova_one(spec, kWorlds, 1, precision);
   MujocoWorlds mujoco(kScenes[kMujocoScene[bm.range(0)]], kWorlds);
@@ -202,25 +245,39 @@ void BM_PairedStep(benchmark::State& bm) {
   const double nova_step = seconds(both_novaphy, 1) / 2;
   const int k_mujoco = std::max(1, static_cast<int>(std::ceil(0.02 / mujoco_step)));
   const int k_nova = std::max(1, static_cast<int>(std::lround(k_mujoco * mujoco_step / nova_step)));
-  std::vector<double> rate[4];  // robot-steps/s: NovaPhy all, NovaPhy one, MuJoCo all, MuJoCo one
+  // a round's runs: 0 NovaPhy on all threads, 1 + c NovaPhy on one thread on core c, 1 + cores MuJoCo on
+  // all, 2 + cores + c MuJoCo on one on core c
+  const int runs = 2 + 2 * cores;
+  std::vector<std::vector<double>> rate(runs);  // robot-steps/s
   const double steal_before = steal_seconds();
   const Clock::time_point start = Clock::now();
-  std::vector<double> ratio, nova_speedup, mujoco_speedup;
+  std::vector<double> ratio, speedup[2], core_use[2], core_spread[2];
   int round = 0;
   for (auto _ : bm) {
-    double r[4];
-    for (int turn = 0; turn < 4; ++turn) {
-      const int run = (turn + round) % 4;
-      const int steps = run < 2 ? k_nova : k_mujoco;
-      const double t = run == 0   ? seconds([&] { nova_all.step(); }, steps)
-                       : run == 1 ? seconds([&] { nova_one.step(); }, steps)
-                                  : seconds([&] { mujoco.step(run == 2 ? all : 1); }, steps);
+    std::vector<double> r(runs);
+    for (int turn = 0; turn < runs; ++turn) {
+      const int run = (turn + round) % runs, engine = run / (1 + cores), core = run % (1 + cores) - 1;
+      const int steps = engine == 0 ? k_nova : k_mujoco;
+      auto step = [&] {
+        if (engine == 1) return mujoco.step(core < 0 ? all : 1);
+        return core < 0 ? nova_all.step() : nova_one.step();
+      };
+      double t = 0;
+      if (core < 0)
+        t = seconds(step, steps);
+      else if (!on_cpu(cpus[core], [&] { t = seconds(step, steps); }))
+        return bm.SkipWithError(("cannot pin a thread to CPU " + std::to_string(cpus[core])).c_str());
       r[run] = static_cast<double>(kWorlds) * steps / t;
       rate[run].push_back(r[run]);
     }
-    ratio.push_back(r[0] / r[2]);
-    nova_speedup.push_back(r[0] / r[1]);
-    mujoco_speedup.push_back(r[2] / r[3]);
+    ratio.push_back(r[0] / r[1 + cores]);
+    for (int engine = 0; engine < 2; ++engine) {
+      const double* one = &r[engine * (1 + cores) + 1];
+      const double team = one[-1];
+      speedup[engine].push_back(team / one[0]);
+      core_use[engine].push_back(team / std::accumulate(one, one + cores, 0.0));
+      core_spread[engine].push_back(*std::min_element(one, one + cores) / *std::max_element(one, one + cores));
+    }
     ++round;
   }
   // the share of the cores' time the machine's host gave to others while the rounds ran
@@ -235,13 +292,18 @@ void BM_PairedStep(benchmark::State& bm) {
   bm.counters["precision"] = static_cast<double>(bm.range(1));
   bm.counters["worlds"] = kWorlds;
   bm.counters["threads"] = all;
+  bm.counters["cores"] = cores;
   bm.counters["novaphy_all"] = median(rate[0]);
   bm.counters["novaphy_one"] = median(rate[1]);
-  bm.counters["mujoco_all"] = median(rate[2]);
-  bm.counters["mujoco_one"] = median(rate[3]);
+  bm.counters["mujoco_all"] = median(rate[1 + cores]);
+  bm.counters["mujoco_one"] = median(rate[2 + cores]);
   bm.counters["ratio"] = median(ratio);
-  bm.counters["novaphy_speedup"] = median(nova_speedup);
-  bm.counters["mujoco_speedup"] = median(mujoco_speedup);
+  const char* const name[] = {"novaphy", "mujoco"};
+  for (int engine = 0; engine < 2; ++engine) {
+    bm.counters[std::string(name[engine]) + "_speedup"] = median(speedup[engine]);
+    bm.counters[std::string(name[engine]) + "_core_use"] = median(core_use[engine]);
+    bm.counters[std::string(name[engine]) + "_core_spread"] = median(core_spread[engine]);
+  }
   bm.counters["novaphy_steps"] = k_nova;
   bm.counters["mujoco_steps"] = k_mujoco;
 }

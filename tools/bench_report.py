@@ -104,16 +104,21 @@ def step_tables(path):
     if paired:
         rounds = int(next(iter(paired.values()))["iterations"])
         lines += ["", f"Side by side at 4096 worlds (BM_PairedStep): {rounds} rounds, each timing in turn NovaPhy on all "
-                  "threads, NovaPhy on one, MuJoCo on all and MuJoCo on one (the order rotating), each run after as "
-                  "many steps not timed as it times; medians over the rounds of robot-steps/s and of each round's ratios. Steal: the share of the "
-                  "cores' time the host gave to other guests meanwhile (Linux's steal time), which a step of two threads "
-                  "that meet at barriers feels more than one:", "",
-                  "| scene | precision | NovaPhy | MuJoCo | ratio | NovaPhy 1 → all threads | MuJoCo 1 → all threads "
-                  "| steal |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+                  "threads, NovaPhy on one thread pinned to each core, MuJoCo on all and MuJoCo on one pinned to each "
+                  "core (the order rotating), each run after as many steps not timed as it times; medians over the "
+                  "rounds of robot-steps/s and of each round's ratios. 1 → all: all threads over one thread on the "
+                  "first core. Cores: the slowest core's one-thread rate over the fastest's (NovaPhy's; MuJoCo's), "
+                  "two threads reach at most 1 + that times the fastest core's one thread; use: all threads over the one-thread rates on "
+                  "the cores added (1: the threads lose nothing to each other). Steal: the share of the cores' time "
+                  "the host gave to other guests meanwhile (Linux's steal time):", "",
+                  "| scene | precision | NovaPhy | MuJoCo | ratio | NovaPhy 1 → all | MuJoCo 1 → all "
+                  "| cores | NovaPhy use | MuJoCo use | steal |", "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
         for (scene, precision), e in sorted(paired.items()):
             lines.append(f"| {STEP_SCENES[scene]} | {PRECISION[precision]} | {float(e['novaphy_all']):,.0f} "
                          f"| {float(e['mujoco_all']):,.0f} | {float(e['ratio']):.1f}x "
                          f"| {float(e['novaphy_speedup']):.2f}x | {float(e['mujoco_speedup']):.2f}x "
+                         f"| {float(e['novaphy_core_spread']):.2f}; {float(e['mujoco_core_spread']):.2f} "
+                         f"| {float(e['novaphy_core_use']):.2f} | {float(e['mujoco_core_use']):.2f} "
                          f"| {100 * float(e['steal']):.0f} % |")
     lines += ["", "Memory per world at 4096 worlds, bytes: the solver's (batched blocks, scalar scratch, step vectors)",
               "plus the State's arrays, against the State's arrays plus H and its factor:", "",
