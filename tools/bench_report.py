@@ -43,6 +43,11 @@ def median(entries, key):
     return statistics.median(float(e[key]) for e in entries)
 
 
+def cell(entry, key):
+    """A counter to two places, or a dash where the run predates it (BM_PairedStep's per-core counters)."""
+    return f"{float(entry[key]):.2f}" if key in entry else "–"
+
+
 def step_tables(path):
     grouped, context = runs(path)
     rate = {}  # (engine, scene, precision, worlds, threads) -> robot-steps/s
@@ -117,8 +122,8 @@ def step_tables(path):
             lines.append(f"| {STEP_SCENES[scene]} | {PRECISION[precision]} | {float(e['novaphy_all']):,.0f} "
                          f"| {float(e['mujoco_all']):,.0f} | {float(e['ratio']):.1f}x "
                          f"| {float(e['novaphy_speedup']):.2f}x | {float(e['mujoco_speedup']):.2f}x "
-                         f"| {float(e['novaphy_core_spread']):.2f}; {float(e['mujoco_core_spread']):.2f} "
-                         f"| {float(e['novaphy_core_use']):.2f} | {float(e['mujoco_core_use']):.2f} "
+                         f"| {cell(e, 'novaphy_core_spread')}; {cell(e, 'mujoco_core_spread')} "
+                         f"| {cell(e, 'novaphy_core_use')} | {cell(e, 'mujoco_core_use')} "
                          f"| {100 * float(e['steal']):.0f} % |")
     lines += ["", "Memory per world at 4096 worlds, bytes: the solver's (batched blocks, scalar scratch, step vectors)",
               "plus the State's arrays, against the State's arrays plus H and its factor:", "",
