@@ -228,6 +228,7 @@ void BM_PairedStep(benchmark::State& bm) {
   const int all = omp_get_num_procs();
   const std::vector<int> cpus = one_thread_cpus();
   const int cores = static_cast<int>(cpus.size());
+  if (cores == 0) return bm.SkipWithError("no CPU to pin the one-thread runs to");
   const Precision precision = bm.range(1) == 1 ? Precision::Float32 : Precision::Float64;
   NovaPhyWorlds nova_all(spec, kWorlds, all, precision), nova_one(spec, kWorlds, 1, precision);
   MujocoWorlds mujoco(kScenes[kMujocoScene[bm.range(0)]], kWorlds);
