@@ -273,8 +273,7 @@ void BM_PairedStep(benchmark::State& bm) {
     }
     ratio.push_back(r[0] / r[1 + cores]);
     for (int engine = 0; engine < 2; ++engine) {
-      const double* one = &r[engine * (1 + cores) + 1];
-      const double team = one[-1];
+      const double team = r[engine * (1 + cores)], *one = &r[engine * (1 + cores) + 1];
       speedup[engine].push_back(team / one[0]);
       core_use[engine].push_back(team / std::accumulate(one, one + cores, 0.0));
       core_spread[engine].push_back(*std::min_element(one, one + cores) / *std::max_element(one, one + cores));
