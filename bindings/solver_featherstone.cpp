@@ -1,9 +1,37 @@
 // novaphy.solvers.SolverFeatherstone with the seed's keyword arguments mirrored into solver.settings.
 #include "engine/solver_featherstone.h"
 
+#include <limits>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
 #include "bindings/bindings.h"
 
 namespace novaphy::python {
+
+namespace {
+
+// a setting's accepted range as the docs write it ("" for a bool or an enum)
+template <typename T, typename Low, typename High>
+std::string setting_range(Low lowest, High highest) {
+  if constexpr (std::is_same_v<T, bool> || std::is_enum_v<T>) {
+    return "";
+  } else {
+    std::ostringstream os;
+    os.precision(17);
+    const bool unbounded =
+        static_cast<T>(highest) == std::numeric_limits<T>::max() ||
+        (std::numeric_limits<T>::has_infinity && static_cast<T>(highest) == std::numeric_limits<T>::infinity());
+    if (unbounded)
+      os << ">= " << lowest;
+    else
+      os << "[" << lowest << ", " << highest << "]";
+    return os.str();
+  }
+}
+
+}  // namespace
 
 void bind_solver_featherstone(py::module_& m) {
   using Settings = SolverFeatherstoneSettings;
@@ -11,51 +39,26 @@ void bind_solver_featherstone(py::module_& m) {
       .value("Raise", DivergencePolicy::Raise, "step raises and writes nothing")
       .value("Flag", DivergencePolicy::Flag, "the articulation keeps its previous state; solver.diverged marks it")
       .value("Reset", DivergencePolicy::Reset, "the articulation restarts from the model's joint_q0 at rest");
-  py::class_<Settings>(m, "SolverFeatherstoneSettings", "Every knob of SolverFeatherstone; checked at each step.")
-      .def(py::init<>())
-      .def_readwrite("num_iterations", &Settings::num_iterations, "PGS sweeps per step.")
-      .def_readwrite("linear_slop", &Settings::linear_slop, "Penetration (m) the position correction leaves alone.")
-      .def_readwrite("erp", &Settings::erp, "Share of the penetration beyond the slop removed per step, in [0, 1].")
-      .def_readwrite("cfm", &Settings::cfm, "Constraint force mixing: softens every constraint row.")
-      .def_readwrite("pgs_tolerance", &Settings::pgs_tolerance,
-                     "Stop the PGS sweeps once one sweep changed no row's velocity by more than this (m/s, "
-                     "rad/s), per world; 0: once one sweep changed no impulse at all (a fixed point).")
-      .def_readwrite("warmstarting_factor", &Settings::warmstarting_factor, "Share of last step's impulses reused.")
-      .def_readwrite("restitution_threshold", &Settings::restitution_threshold, "Approach speed below which no bounce.")
-      .def_readwrite("use_warmstarting", &Settings::use_warmstarting)
-      .def_readwrite("angular_damping", &Settings::angular_damping,
-                     "Rotational dof velocities are scaled by (1 - angular_damping * dt) each step.")
-      .def_readwrite("update_mass_matrix_interval", &Settings::update_mass_matrix_interval,
-                     "Recompute and refactor the mass matrix every N steps.")
-      .def_readwrite("friction_smoothing", &Settings::friction_smoothing,
-                     "0: box friction per tangent (direction snaps to the tangent axes); 1: circular cone "
-                     "(friction opposes the slip direction smoothly); between: a blend.")
-      .def_readwrite("use_tile_gemm", &Settings::use_tile_gemm, "Mass matrix as sum J^T I J instead of CRBA.")
-      .def_readwrite("fuse_cholesky", &Settings::fuse_cholesky, "Factor and forward-substitute in one pass.")
-      .def_readwrite("aba_min_dofs", &Settings::aba_min_dofs,
-                     "Articulations with at least this many dofs use ABA (O(n), refactored every step) instead "
-                     "of CRBA + Cholesky.")
-      .def_readwrite("coriolis_implicitness", &Settings::coriolis_implicitness,
-                     "0: explicit Coriolis forces; 0.5: linearised midpoint (energy kept to second order); 1: "
-                     "linearised backward Euler. Above 0 the dense path with an LU each step, O(n^3).")
-      .def_readwrite("weld_fixed_joints", &Settings::weld_fixed_joints,
-                     "Merge bodies held by Fixed joints into their parent's link so they cost nothing in the dynamics "
-                     "(read when the solver is made).")
-      .def_readwrite("use_batch_kernels", &Settings::use_batch_kernels,
-                     "Step articulations that share joints, frames and axes (replicated worlds) a SIMD block of "
-                     "worlds at a time, in the model's precision; off: the scalar kernels for all.")
-      .def_readwrite("stream_body_output_above", &Settings::stream_body_output_above,
-                     "Write body_q and body_qd around the caches (non-temporal stores) when the step's data, the "
-                     "state's arrays and the solver's, exceed this many bytes (0: always).")
-      .def_readwrite("profile_stages", &Settings::profile_stages,
-                     "Accumulate each stage's wall time into solver.stage_seconds; the batched blocks then run each "
-                     "stage over all blocks in turn rather than a block's whole step at a time (same arithmetic).")
-      .def_readwrite("num_threads", &Settings::num_threads,
-                     "OpenMP threads over articulations (0: all available); results are bit-identical for any count.")
-      .def_readwrite("on_divergence", &Settings::on_divergence,
-                     "DivergencePolicy for an articulation whose state went non-finite or too fast.")
-      .def_readwrite("divergence_speed", &Settings::divergence_speed,
-                     "A dof speed (m/s, rad/s) beyond which an articulation counts as diverged.");
+  py::class_<Settings> settings(m, "SolverFeatherstoneSettings",
+                                "Every knob of SolverFeatherstone (docs/settings.md); checked at each step.");
+  settings.def(py::init<>());
+#define NOVAPHY_BIND_SETTING(type, name, value, lowest, highest, unit, doc) \
+  settings.def_readwrite(#name, &Settings::name, doc);
+  NOVAPHY_SOLVER_SETTINGS(NOVAPHY_BIND_SETTING)
+#undef NOVAPHY_BIND_SETTING
+  settings.def_static(
+      "fields",
+      [] {
+        py::list fields;
+#define NOVAPHY_DESCRIBE_SETTING(type, name, value, lowest, highest, unit, doc)                                  \
+  fields.append(py::dict(py::arg("name") = #name, py::arg("type") = #type, py::arg("default") = Settings{}.name, \
+                         py::arg("range") = setting_range<type>(lowest, highest), py::arg("unit") = unit,        \
+                         py::arg("doc") = doc));
+        NOVAPHY_SOLVER_SETTINGS(NOVAPHY_DESCRIBE_SETTING)
+#undef NOVAPHY_DESCRIBE_SETTING
+        return fields;
+      },
+      "The settings table: per setting its name, C++ type, default, accepted range, unit and doc.");
 
   py::class_<JointSupportMatrix>(m, "JointSupportMatrix", "Which joint types a solver enforces.")
       .def("supports", &JointSupportMatrix::supports, py::arg("joint"))

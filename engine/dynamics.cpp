@@ -137,9 +137,7 @@ VecX batched_forward_dynamics(const Model& model, const State& state, const Cont
                                 model.body_com, std::vector<int>(model.joint_dof_count, -1), model.precision);
   VecX qdd = VecX::Zero(model.joint_dof_count);
   std::vector<int> failure(model.articulation_count, -1);
-  ArticulationBatches::DynamicsOptions options;
-  options.wrenches = wrenches;
-  batches->dynamics(state, control, tau.data(), 0, options, nullptr, qdd.data(), failure.data(), 1);
+  batches->accelerations(state, control, tau.data(), wrenches, qdd.data(), failure.data());
   for (int a = 0; a < model.articulation_count; ++a)
     if (failure[a] >= 0) fail_not_positive_definite(model, art[a], failure[a] - art[a].qd_begin());
   return qdd;

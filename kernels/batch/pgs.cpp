@@ -1,4 +1,4 @@
-#include "kernels/batch_pgs.h"
+#include "kernels/batch/pgs.h"
 
 #include <limits>
 

@@ -1,8 +1,6 @@
-// Lane PGS (kernels/batch_pgs) against its reference twin, the scalar pgs_solve in double, lane by
+// Lane PGS (kernels/batch/pgs) against its reference twin, the scalar pgs_solve in double, lane by
 // lane: each lane its own random rows, some of them absent in some lanes. Bounds are in units of the
 // precision's epsilon times the largest entry: 64 eps (the worst seen, float32 over 15 sweeps, is 7 eps).
-#include "kernels/batch_pgs.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -10,6 +8,8 @@
 #include <limits>
 #include <random>
 #include <vector>
+
+#include "kernels/batch/pgs.h"
 
 namespace novaphy {
 namespace {

@@ -1,0 +1,296 @@
+// The Rows stage of one block: its worlds' joint-limit rows and contact rows (the parts of
+// engine/parts/rows.h in lanes), swept by batch_pgs_solve, the impulses kept for the next step. A lane's
+// absent rows are masked, so a world's result does not depend on its block-mates.
+#include <chrono>
+
+#include "engine/batch_blocks.h"
+
+namespace novaphy {
+
+template <typename T>
+void RowWork<T>::resize(int rows_, int dofs_, int slots) {
+  dofs = dofs_;
+  if (static_cast<int>(kind.size()) < rows_) {
+    kind.resize(rows_);
+    normal.resize(rows_);
+    active.resize(rows_);
+    nonzero_begin.resize(rows_);
+    nonzero_end.resize(rows_);
+    limit_row.resize(rows_);
+    for (auto* x : {&target, &mu, &inv_mass, &lambda}) x->resize(rows_);
+  }
+  for (auto* x : {&J, &z})
+    if (x->size() < static_cast<size_t>(rows_) * dofs) x->resize(static_cast<size_t>(rows_) * dofs);
+  if (contact.size() < static_cast<size_t>(slots) * kLanes<T>) contact.resize(static_cast<size_t>(slots) * kLanes<T>);
+  if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
+  for (auto* x : {&coef, &qd_in})
+    if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
+  if (static_cast<int>(point.size()) < 3 * dofs) point.resize(3 * dofs);
+}
+
+template <typename T>
+std::size_t RowWork<T>::bytes() const {
+  return (J.size() + z.size() + target.size() + mu.size() + inv_mass.size() + lambda.size() + coef.size() +
+          qd_in.size() + point.size() + frame.size()) *
+             sizeof(V) +
+         active.size() * sizeof(IntLanes<T>) +
+         (limit_row.size() + contact.size() + normal.size() + nonzero_begin.size() + nonzero_end.size()) * sizeof(int) +
+         kind.size() * sizeof(RowKind);
+}
+
+namespace {
+
+template <typename T>
+using V = Lanes<T>;
+
+// a new row of R (J and M^-1 J^T not yet written), on in the lanes `on`, starting from `warm`
+template <typename T>
+int add_row(RowWork<T>& R, RowKind kind, const IntLanes<T>& on, const V<T>& target, const V<T>& warm) {
+  const int r = R.rows++;
+  R.kind[r] = kind;
+  R.normal[r] = -1;
+  R.active[r] = on;
+  R.target[r] = target;
+  R.lambda[r] = on ? warm : V<T>{};
+  R.mu[r] = V<T>{};
+  R.nonzero_begin[r] = R.dofs;
+  R.nonzero_end[r] = 0;
+  return r;
+}
+
+// the rows of the limited dofs in dof order, J = +-e_k, in the lanes `mine` whose joint would cross a limit
+template <typename T>
+void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const StepContext& step, const BatchWork<T>& w,
+                    const IntLanes<T>& mine, RowWork<T>& R) {
+  const BatchTopology<T>& topo = G.topo;
+  const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count;
+  const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
+  const V<T>* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
+  const Scalar* kept = step.limit_impulse + G.impulse_base + static_cast<size_t>(b) * 2 * nl * kLanes<T>;
+  for (int m = 0; m < nl; ++m) {
+    const int k = G.limited[m];
+    const V<T> q = w.q[topo.coord_of_dof[k]];
+    for (int side = 0; side < 2; ++side) {
+      const T sign = side == 0 ? 1 : -1;
+      const V<T> gap = sign * (q - limit[2 * m + side]);
+      const IntLanes<T> on = mine & finite(limit[2 * m + side]) & limit_row_on(gap, sign * w.qd[k], dt);
+      R.limit_row[2 * m + side] = -1;
+      if (!any_lane<T>(on)) continue;
+      const V<T> warm = limit_row_warm_start(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), step.rows);
+      const int r = add_row(R, RowKind::Unilateral, on, limit_row_target(gap, step.rows, dt), warm);
+      R.limit_row[2 * m + side] = r;
+      V<T>* J = R.J_row(r);
+      V<T>* z = R.z_row(r);
+      std::fill(J, J + nv, V<T>{});
+      J[k] = on ? V<T>{} + sign : V<T>{};
+      R.nonzero_begin[r] = k;
+      R.nonzero_end[r] = k + 1;
+      batch_solve_unit(topo, H, k, z);
+      for (int j = 0; j < nv; ++j) z[j] *= sign;
+    }
+  }
+}
+
+// slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, depth,
+// mu, restitution, the previous impulse), its links (b, a) per lane; returns the lanes that have one, and in
+// `uniform` the lane whose links every other such lane shares (-2: none does)
+template <typename T>
+IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* listed, const Lanes<T>* o,
+                          const StepContext& step, RowWork<T>& R, V<T>* n, V<T>* p, V<T>* in, int (*link)[2],
+                          int* uniform) {
+  const Contacts& C = *step.contacts;
+  const ContactLists& lists = step.lists;
+  IntLanes<T> on{};
+  *uniform = -1;
+  for (int l = 0; l < kLanes<T>; ++l) {
+    const int c = t < listed[l] ? lists.list[lists.start[G.arts[b * kLanes<T> + l]] + t] : -1;
+    R.contact[t * kLanes<T> + l] = c;
+    if (c < 0) continue;
+    on[l] = -1;
+    for (int m = 0; m < 3; ++m) {
+      n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
+      p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
+    }
+    in[0][l] = static_cast<T>(C.contact_depth[c]);
+    in[1][l] = static_cast<T>(lists.mu[c]);
+    in[2][l] = static_cast<T>(lists.restitution[c]);
+    if (const Scalar* P = C.previous(c))
+      for (int m = 0; m < 3; ++m) in[3 + m][l] = static_cast<T>(P[m]);
+    link[l][0] = lists.link_b[c];
+    link[l][1] = lists.link_a[c];
+    if (*uniform == -1) *uniform = l;
+    if (*uniform >= 0 && (link[l][0] != link[*uniform][0] || link[l][1] != link[*uniform][1])) *uniform = -2;
+  }
+  return on;
+}
+
+// R.coef_k: +1 for the dofs on body b's path, -1 on body a's (the relative velocity is b's point's minus
+// a's), set for all lanes at once where they share their links; returns the range of dofs some lane has
+template <typename T>
+std::pair<int, int> contact_paths(const BatchTopology<T>& topo, const IntLanes<T>& on, const int (*link)[2],
+                                  int uniform, RowWork<T>& R) {
+  const int nv = topo.dof_count;
+  for (int j = 0; j < nv; ++j) R.coef[j] = V<T>{};
+  auto add_paths = [&](int l, auto&& add) {
+    for (int side = 0; side < 2; ++side) {
+      if (link[l][side] < 0) continue;
+      for (int e = topo.link_dof_start[link[l][side]]; e < topo.link_dof_start[link[l][side] + 1]; ++e)
+        add(topo.link_dofs[e], side == 0 ? T(1) : T(-1));
+    }
+  };
+  if (uniform >= 0) {
+    const V<T> one = on ? V<T>{} + 1 : V<T>{};
+    add_paths(uniform, [&](int j, T sign) { R.coef[j] += sign * one; });
+  } else {
+    for (int l = 0; l < kLanes<T>; ++l)
+      if (on[l]) add_paths(l, [&](int j, T sign) { R.coef[j][l] += sign; });
+  }
+  int begin = nv, end = 0;
+  for (int j = 0; j < nv; ++j)
+    if (any_lane<T>(R.coef[j] != 0)) {
+      begin = std::min(begin, j);
+      end = j + 1;
+    }
+  return {begin, end};
+}
+
+// slot t's normal row and two friction rows
+template <typename T>
+void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, const BlockKinematics<T>& kin,
+                      const StepContext& step, RowWork<T>& R) {
+  const BatchTopology<T>& topo = G.topo;
+  const int nv = topo.dof_count;
+  V<T> n[3] = {}, p[3] = {}, in[6] = {};  // depth, mu, restitution, previous impulse [3]
+  int link[kLanes<T>][2];
+  int uniform;
+  const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
+  const auto [begin, end] = contact_paths(topo, on, link, uniform, R);
+  V<T>* d = &R.frame[9 * t];
+  contact_frame<T>(n, d);
+  V<T> warm[3];
+  contact_warm_start(in + 3, d, step.rows, warm);
+  // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
+  V<T>* u = R.point.data();
+  for (int j = 0; j < nv; ++j) {
+    const V<T>* s6 = kin.S + 6 * j;
+    u[3 * j] = s6[3] + s6[1] * p[2] - s6[2] * p[1];
+    u[3 * j + 1] = s6[4] + s6[2] * p[0] - s6[0] * p[2];
+    u[3 * j + 2] = s6[5] + s6[0] * p[1] - s6[1] * p[0];
+  }
+  const int first = R.rows;
+  for (int e = 0; e < 3; ++e) {
+    const int r = add_row(R, e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V<T>{}, warm[e]);
+    V<T>* J = R.J_row(r);
+    // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
+    const V<T>* de = d + 3 * e;
+    for (int j = 0; j < nv; ++j) J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
+    std::copy(J, J + nv, R.z_row(r));
+    R.normal[r] = first;
+    R.nonzero_begin[r] = begin;
+    R.nonzero_end[r] = end;
+  }
+  batch_solve_many(topo, kin.H, end, R.z_row(first), 3, nv);
+  V<T> v_approach{};
+  for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
+  R.target[first] = contact_normal_target(in[0], v_approach, in[2], step.rows, splat<V<T>>(static_cast<T>(step.dt)));
+  R.mu[first + 1] = in[1];
+}
+
+// the sweeps over the block's rows
+template <typename T>
+void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
+  BatchRows<T> rows;
+  rows.count = R.rows;
+  rows.dofs = nv;
+  rows.kind = R.kind.data();
+  rows.normal = R.normal.data();
+  rows.J = R.J.data();
+  rows.nonzero_begin = R.nonzero_begin.data();
+  rows.nonzero_end = R.nonzero_end.data();
+  rows.MinvJT = R.z.data();
+  rows.target = R.target.data();
+  rows.mu = R.mu.data();
+  rows.active = R.active.data();
+  rows.inv_mass = R.inv_mass.data();
+  rows.lambda = R.lambda.data();
+  batch_pgs_solve(rows, pgs, qd);
+}
+
+// the impulses kept for warm starting: limits per dof and side, contacts as world vectors on body b
+template <typename T>
+void keep_impulses(const BatchGroup<T>& G, int b, int slots, const IntLanes<T>& mine, const StepContext& step,
+                   const RowWork<T>& R) {
+  const int nl = static_cast<int>(G.limited.size());
+  Scalar* kept = step.limit_impulse + G.impulse_base + static_cast<size_t>(b) * 2 * nl * kLanes<T>;
+  for (int m = 0; m < 2 * nl; ++m) {
+    const int r = R.limit_row[m];
+    const V<T> x = r >= 0 ? limit_impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
+    doubles_from_lanes<T>(x, mine, kept + m * kLanes<T>);
+  }
+  for (int t = 0; t < slots; ++t) {
+    V<T> P[3];
+    contact_impulse_kept(&R.lambda[R.rows - 3 * (slots - t)], &R.frame[9 * t], P);
+    for (int l = 0; l < kLanes<T>; ++l) {
+      const int c = R.contact[t * kLanes<T> + l];
+      if (c < 0) continue;
+      for (int m = 0; m < 3; ++m) step.contacts->contact_impulse[3 * c + m] = P[m][l];
+    }
+  }
+}
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point* mark) {
+  const Clock::time_point now = Clock::now();
+  const double s = std::chrono::duration<double>(now - *mark).count();
+  *mark = now;
+  return s;
+}
+
+}  // namespace
+
+template <typename T>
+void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const StepContext& step, BatchWork<T>& w,
+                RowWork<T>& R, bool carried, bool carry_on, RowPhaseSeconds* phases) {
+  constexpr int W = kLanes<T>;
+  const int nl = static_cast<int>(G.limited.size()), nv = G.topo.dof_count, lanes = G.lanes_in(b);
+  const int* qd_off = &G.qd_off[b * W];
+  // the lanes whose rows are solved here (the others' are the islands'), each one's contacts, their most
+  IntLanes<T> mine{};
+  int listed[W] = {}, slots = 0;
+  for (int l = 0; l < lanes; ++l) {
+    const int a = G.arts[b * W + l];
+    if (step.touched && step.touched[a]) continue;
+    mine[l] = -1;
+    listed[l] = step.lists.start[a + 1] - step.lists.start[a];
+    slots = std::max(slots, listed[l]);
+  }
+  if (!any_lane<T>(mine) || (nl == 0 && slots == 0)) {
+    if (carried && !carry_on) scatter_lanes<T>(qd_off, w.qd.data(), nv, real_lanes(G, b), step.qd);
+    return;
+  }
+  if (!carried) {
+    gather_lanes<T>(&G.q_off[b * W], step.in->joint_q.data(), G.topo.coord_count, w.q.data());
+    gather_lanes<T>(qd_off, step.qd, nv, w.qd.data());
+  }
+  Clock::time_point mark = phases ? Clock::now() : Clock::time_point{};
+  R.resize(2 * nl + 3 * slots, nv, slots);
+  R.rows = 0;
+  add_limit_rows(G, b, kin.H, step, w, mine, R);
+  if (phases) phases->limits += seconds_since(&mark);
+  if (slots > 0) gather_lanes<T>(qd_off, step.in->joint_qd.data(), nv, R.qd_in.data());
+  for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);
+  if (phases) phases->contacts += seconds_since(&mark);
+  sweep(R, nv, step.rows.pgs, w.qd.data());
+  keep_impulses(G, b, slots, mine, step, R);
+  if (phases) phases->sweeps += seconds_since(&mark);
+  if (!carry_on) scatter_lanes<T>(qd_off, w.qd.data(), nv, carried ? real_lanes(G, b) : mine, step.qd);
+}
+
+template struct RowWork<float>;
+template struct RowWork<double>;
+template void block_rows(const BatchGroup<float>&, int, const BlockKinematics<float>&, const StepContext&,
+                         BatchWork<float>&, RowWork<float>&, bool, bool, RowPhaseSeconds*);
+template void block_rows(const BatchGroup<double>&, int, const BlockKinematics<double>&, const StepContext&,
+                         BatchWork<double>&, RowWork<double>&, bool, bool, RowPhaseSeconds*);
+
+}  // namespace novaphy

@@ -1,0 +1,189 @@
+#include "engine/island_rows.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "engine/parallel.h"
+
+namespace novaphy {
+
+IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& art, const ArticulationIndex& index,
+                       const std::vector<int>& limited_joints, const std::vector<int>& limited_start,
+                       const std::vector<int>& limit_cell)
+    : model_(model),
+      art_(art),
+      index_(index),
+      limited_joints_(limited_joints),
+      limited_start_(limited_start),
+      limit_cell_(limit_cell) {
+  limit_row_.assign(2 * static_cast<size_t>(model.joint_dof_count), -1);
+}
+
+void IslandRows::begin(const std::vector<const StepRoute*>& route) {
+  route_ = &route;
+  row_count_ = 0;
+  pool_size_ = 0;
+}
+
+int IslandRows::begin_row(int art_a, int art_b, RowKind kind, Scalar target) {
+  if (row_count_ == static_cast<int>(rows_.size())) rows_.resize(std::max<size_t>(64, 2 * rows_.size()));
+  PgsRow& row = rows_[row_count_];
+  row = PgsRow{};
+  row.kind = kind;
+  row.target = target;
+  row.side_count = 0;
+  for (const int a : {art_b, art_a}) {
+    if (a < 0 || (row.side_count == 1 && a == art_b)) continue;
+    const int s = row.side_count++;
+    row.dof_begin[s] = art_[a].qd_begin();
+    row.dof_count[s] = art_[a].dof_count();
+    row.pool[s] = pool_size_;
+    pool_size_ += row.dof_count[s];
+  }
+  if (pool_size_ > static_cast<int>(J_.size())) {
+    J_.resize(2 * pool_size_);
+    MinvJT_.resize(2 * pool_size_);
+  }
+  for (int s = 0; s < row.side_count; ++s) std::fill_n(J_.begin() + row.pool[s], row.dof_count[s], 0);
+  return row_count_++;
+}
+
+Scalar* IslandRows::row_jacobian(int r, int art) {
+  PgsRow& row = rows_[r];
+  for (int s = 0; s < row.side_count; ++s)
+    if (row.dof_begin[s] == art_[art].qd_begin()) return J_.data() + row.pool[s];
+  return nullptr;
+}
+
+int IslandRows::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind) {
+  const int art_a = index_.moving(body_a), art_b = index_.moving(body_b);
+  const int r = begin_row(art_a, art_b, kind, 0);
+  if (art_b >= 0) (*route_)[art_b]->point_jacobian(art_b, index_.body_link[body_b], p, d, 1, row_jacobian(r, art_b));
+  if (art_a >= 0) (*route_)[art_a]->point_jacobian(art_a, index_.body_link[body_a], p, d, -1, row_jacobian(r, art_a));
+  return r;
+}
+
+void IslandRows::finish_row(int r, Scalar cfm) {
+  PgsRow& row = rows_[r];
+  Scalar W = 0;
+  for (int s = 0; s < row.side_count; ++s) {
+    Scalar* z = MinvJT_.data() + row.pool[s];
+    const Scalar* J = J_.data() + row.pool[s];
+    std::copy(J, J + row.dof_count[s], z);
+    const int a = index_.dof_articulation[row.dof_begin[s]];
+    (*route_)[a]->solve_mass(a, z);
+    for (int k = 0; k < row.dof_count[s]; ++k) W += J[k] * z[k];
+  }
+  row.inv_mass = W + cfm > 1e-12 ? 1 / (W + cfm) : 0;
+}
+
+void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>& articulations) {
+  const Scalar dt = step.dt;
+  for (const int a : articulations)
+    for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
+      const int j = limited_joints_[m], g = model_.joint_qd_start[j];
+      const Scalar q = step.in->joint_q[model_.joint_q_start[j]];
+      for (int side = 0; side < 2; ++side) {
+        limit_row_[2 * g + side] = -1;
+        const Scalar sign = side == 0 ? 1 : -1;
+        const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
+        const Scalar gap = sign * (q - limit);
+        if (!std::isfinite(limit) || !limit_row_on(gap, sign * step.qd[g], dt)) continue;
+        const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, dt));
+        row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
+        rows_[r].lambda = limit_row_warm_start(step.limit_impulse[limit_cell_[2 * m + side]], step.rows);
+        limit_row_[2 * g + side] = r;
+      }
+    }
+}
+
+void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int>& contacts) {
+  const Contacts& C = *step.contacts;
+  if (static_cast<int>(contact_row_.size()) < C.contact_count) contact_row_.resize(C.contact_count);
+  const Scalar zero[3] = {0, 0, 0};
+  for (const int c : contacts) {
+    const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
+    const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
+    const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
+    Scalar d[9];
+    contact_frame(&C.contact_normal[3 * c], d);
+    const int rn = add_row(ba, bb, p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
+    const int r1 = add_row(ba, bb, p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
+    add_row(ba, bb, p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
+    rows_[r1].normal = rn;
+    rows_[r1].mu = contact_friction(model_, sa, sb);
+    const Scalar v_approach = row_velocity(rows_[rn], J_, step.in->joint_qd.data());
+    rows_[rn].target =
+        contact_normal_target(C.contact_depth[c], v_approach, contact_restitution(model_, sa, sb), step.rows, step.dt);
+    Scalar warm[3];
+    const Scalar* previous = C.previous(c);
+    contact_warm_start(previous ? previous : zero, d, step.rows, warm);
+    for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
+    contact_row_[c] = rn;
+  }
+}
+
+void IslandRows::group_islands() {
+  // articulations joined by rows (union-find), then each island's rows in row order, a counting sort
+  const int n = static_cast<int>(art_.size());
+  island_parent_.resize(n);
+  std::iota(island_parent_.begin(), island_parent_.end(), 0);
+  auto find = [&](int a) {
+    while (island_parent_[a] != a) a = island_parent_[a] = island_parent_[island_parent_[a]];
+    return a;
+  };
+  auto art_of = [&](const PgsRow& row, int side) { return index_.dof_articulation[row.dof_begin[side]]; };
+  for (int r = 0; r < row_count_; ++r)
+    if (rows_[r].side_count == 2) {
+      const int x = find(art_of(rows_[r], 0)), y = find(art_of(rows_[r], 1));
+      island_parent_[std::max(x, y)] = std::min(x, y);
+    }
+  island_of_row_.resize(row_count_);
+  for (int r = 0; r < row_count_; ++r)
+    island_of_row_[r] = rows_[r].side_count > 0 ? find(art_of(rows_[r], 0)) : 0;  // a row of no dofs does nothing
+  island_start_.assign(n + 1, 0);
+  for (int r = 0; r < row_count_; ++r) ++island_start_[island_of_row_[r] + 1];
+  for (int i = 0; i < n; ++i) island_start_[i + 1] += island_start_[i];
+  fill_.assign(island_start_.begin(), island_start_.end() - 1);
+  island_rows_.resize(row_count_);
+  for (int r = 0; r < row_count_; ++r) island_rows_[fill_[island_of_row_[r]]++] = r;
+}
+
+void IslandRows::solve(const StepContext& step, const std::vector<int>& articulations, const std::vector<int>& contacts,
+                       int threads) {
+  if (row_count_ > 0) {
+    group_islands();
+    const int n = static_cast<int>(art_.size());
+    parallel_for(std::min(threads, n), n, [&](int island) {
+      const int begin = island_start_[island], count = island_start_[island + 1] - begin;
+      const int* order = island_rows_.data() + begin;
+      for (int k = 0; k < count; ++k) finish_row(order[k], step.rows.pgs.cfm);
+      for (int k = 0; k < count; ++k) apply_impulse(rows_[order[k]], MinvJT_, rows_[order[k]].lambda, step.qd);
+      pgs_solve(rows_, order, count, J_, MinvJT_, step.rows.pgs, step.qd);
+    });
+  }
+  // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
+  for (const int c : contacts) {
+    Scalar d[9], lambda[3], P[3];
+    contact_frame(&step.contacts->contact_normal[3 * c], d);
+    for (int e = 0; e < 3; ++e) lambda[e] = rows_[contact_row_[c] + e].lambda;
+    contact_impulse_kept(lambda, d, P);
+    std::copy_n(P, 3, &step.contacts->contact_impulse[3 * c]);
+  }
+  for (const int a : articulations)
+    for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
+      const int g = model_.joint_qd_start[limited_joints_[m]];
+      for (int side = 0; side < 2; ++side) {
+        const int r = limit_row_[2 * g + side];
+        step.limit_impulse[limit_cell_[2 * m + side]] = limit_impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+      }
+    }
+}
+
+std::size_t IslandRows::bytes() const {
+  return (J_.size() + MinvJT_.size()) * sizeof(Scalar) + rows_.size() * sizeof(PgsRow) +
+         (limit_row_.size() + contact_row_.size()) * sizeof(int);
+}
+
+}  // namespace novaphy

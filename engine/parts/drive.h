@@ -1,0 +1,32 @@
+// The implicit joint-space forces of one dof: its damper, spring and PD drive, evaluated at the end of
+// the step (semi-implicit Euler with the stiff terms implicit), so that
+//   (H + dt D + dt^2 K) qdd = tau - bias - D qd + kd (v_t - qd) - K_s (q_end - q_ref) + ke (q_t - q_end)
+// with D = damping + kd, K = stiffness + ke, q_end = q + dt qd. Written once over the number type
+// (engine/parts/number.h) for the dense route and the blocks.
+#pragma once
+
+#include "engine/parts/number.h"
+
+namespace novaphy {
+
+template <typename V>
+struct DofDrive {
+  V damping, kd, target_vel;  // the damper and the velocity drive
+  V stiffness, q_ref;         // the spring (a dof with a coordinate: Revolute, Prismatic)
+  V ke, target_pos;           // the position drive (likewise)
+};
+
+// rhs += the dof's forces at the end of the step, given its bias force and, for a dof with a coordinate,
+// q (nullptr: none); returns the diagonal dt D + dt^2 K they add to H
+template <typename V>
+inline V add_dof_forces(const DofDrive<V>& d, const V& bias, const V& qd, const V* q, const V& dt, V& rhs) {
+  rhs += -bias - d.damping * qd + d.kd * (d.target_vel - qd);
+  V diagonal = dt * (d.damping + d.kd);
+  if (!q) return diagonal;
+  const V q_end = *q + dt * qd;
+  rhs += -d.stiffness * (q_end - d.q_ref) + d.ke * (d.target_pos - q_end);
+  diagonal += dt * dt * (d.stiffness + d.ke);
+  return diagonal;
+}
+
+}  // namespace novaphy

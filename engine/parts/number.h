@@ -1,0 +1,83 @@
+// The number types a part of the step is written over: a plain Scalar for one articulation on the dense
+// route, or Lanes<T> for a block of worlds, one per lane. A part uses only arithmetic, comparisons and
+// the few operations below, so one text serves both: a world steps by the same formula on either route.
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include "kernels/lanes.h"
+#include "kernels/spatial.h"
+
+namespace novaphy {
+
+template <typename V>
+struct NumberTraits {  // a plain number: one world
+  using Element = V;
+  using Mask = bool;
+  static constexpr int lanes = 1;
+};
+template <>
+struct NumberTraits<Lanes<float>> {
+  using Element = float;
+  using Mask = IntLanes<float>;
+  static constexpr int lanes = kLanes<float>;
+};
+template <>
+struct NumberTraits<Lanes<double>> {
+  using Element = double;
+  using Mask = IntLanes<double>;
+  static constexpr int lanes = kLanes<double>;
+};
+
+template <typename V>
+using Mask = typename NumberTraits<V>::Mask;
+template <typename V>
+using Element = typename NumberTraits<V>::Element;
+
+// m ? a : b, lane by lane
+template <typename V>
+inline V select(const Mask<V>& m, const V& a, const V& b) {
+  return m ? a : b;
+}
+
+// |x|; a NaN stays a NaN
+template <typename V>
+inline V magnitude(const V& x) {
+  return x < 0 ? -x : x;
+}
+
+// finite: |x| <= the largest number (false for inf and NaN)
+template <typename V>
+inline Mask<V> finite(const V& x) {
+  return magnitude(x) <= std::numeric_limits<Element<V>>::max();
+}
+
+// lane l of x (x itself for a plain number)
+template <typename V>
+inline Element<V> lane(const V& x, int l) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    static_cast<void>(l);
+    return x;
+  } else {
+    return x[l];
+  }
+}
+template <typename V>
+inline bool lane_set(const Mask<V>& m, int l) {
+  if constexpr (std::is_same_v<Mask<V>, bool>) {
+    static_cast<void>(l);
+    return m;
+  } else {
+    return m[l] != 0;
+  }
+}
+
+// a number of every lane equal to x
+template <typename V>
+inline V splat(Element<V> x) {
+  return V{} + x;
+}
+
+}  // namespace novaphy

@@ -1,0 +1,110 @@
+// The constraint rows of the step, each written once over the number type (engine/parts/number.h) and
+// composed by both row builders (the blocks' lanes and the islands of articulations): their targets,
+// warm starts and the impulses kept for the next step. A row drives J qd towards its target; sweeps
+// (kernels/pgs, kernels/batch/pgs) clamp its impulse.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/model.h"
+#include "engine/parts/number.h"
+#include "kernels/batch/pgs.h"
+#include "kernels/pgs.h"
+
+namespace novaphy {
+
+// what every row reads of the solver's settings
+struct RowParams {
+  PgsSettings pgs;  // the sweeps: iterations, cfm, friction cone, tolerance
+  Scalar erp = 0.2, linear_slop = 0.001, warmstarting_factor = 0.85, restitution_threshold = 0.2;
+  bool use_warmstarting = true;
+};
+
+// ---- joint limits: one row per side of a Revolute or Prismatic joint's range. With sign +1 for the
+// lower limit and -1 for the upper, gap = sign (q - limit) >= 0 inside the range and the row keeps
+// sign qd >= target
+
+// the side's row is on this step: the joint would cross its limit within the step
+template <typename V>
+inline Mask<V> limit_row_on(const V& gap, const V& signed_qd, const V& dt) {
+  return gap + dt * signed_qd < 0;
+}
+
+// close a gap in one step; push a penetration beyond the slop out at erp / dt
+template <typename V>
+inline V limit_row_target(const V& gap, const RowParams& p, const V& dt) {
+  const V depth = -gap - static_cast<Element<V>>(p.linear_slop);
+  const V zero{};
+  return select<V>(gap >= 0, -gap / dt, static_cast<Element<V>>(p.erp) * select<V>(depth > 0, depth, zero) / dt);
+}
+
+// the impulse a side's row starts from: a share of the last step's
+template <typename V>
+inline V limit_row_warm_start(const V& kept, const RowParams& p) {
+  return p.use_warmstarting ? static_cast<Element<V>>(p.warmstarting_factor) * kept : V{};
+}
+
+// the impulse kept for the next step: 0 where the row was off or its impulse is not finite
+template <typename V>
+inline V limit_impulse_kept(const V& lambda, const Mask<V>& on) {
+  return select<V>(on & finite(lambda), lambda, V{});
+}
+
+// ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame
+
+// friction and restitution of a contact between shapes a and b
+inline Scalar contact_friction(const Model& model, int a, int b) {
+  return std::sqrt(model.shape_mu[a] * model.shape_mu[b]);
+}
+inline Scalar contact_restitution(const Model& model, int a, int b) {
+  return std::max(model.shape_restitution[a], model.shape_restitution[b]);
+}
+
+// d [9] = the unit normal n [3], then the tangents t1 and t2
+inline void contact_frame(const Scalar* n, Scalar* d) {
+  Vec3 t1, t2;
+  contact_tangents(Vec3(n[0], n[1], n[2]), &t1, &t2);
+  for (int m = 0; m < 3; ++m) d[m] = n[m], d[3 + m] = t1[m], d[6 + m] = t2[m];
+}
+template <typename T>
+inline void contact_frame(const Lanes<T>* n, Lanes<T>* d) {
+  lane_tangents<T>(n, d);
+}
+
+// the normal row's target: push the penetration beyond the slop out at erp / dt, let a gap close in one
+// step; a contact that closes within this step faster than the restitution threshold bounces at
+// -restitution times its approach speed (v_approach: J qd of the normal row at the step's start)
+template <typename V>
+inline V contact_normal_target(const V& depth, const V& v_approach, const V& restitution, const RowParams& p,
+                               const V& dt) {
+  using E = Element<V>;
+  const E slop = static_cast<E>(p.linear_slop);
+  const V zero{};
+  const V target =
+      select<V>(depth > slop, static_cast<E>(p.erp) * (depth - slop) / dt, select<V>(depth < 0, depth, zero) / dt);
+  const V bounce = -restitution * v_approach;
+  const Mask<V> closing = (v_approach < -static_cast<E>(p.restitution_threshold)) & (depth - v_approach * dt >= 0);
+  return select<V>(closing & (bounce > target), bounce, target);
+}
+
+// the rows' starting impulses warm [3] (normal, t1, t2): the last step's impulse `previous` [3] (a world
+// vector; 0 for a new contact) along this step's frame d [9], a share of it, never pulling along the normal
+template <typename V>
+inline void contact_warm_start(const V* previous, const V* d, const RowParams& p, V* warm) {
+  const V share = splat<V>(p.use_warmstarting ? static_cast<Element<V>>(p.warmstarting_factor) : 0);
+  for (int e = 0; e < 3; ++e)
+    warm[e] = share * (previous[0] * d[3 * e] + previous[1] * d[3 * e + 1] + previous[2] * d[3 * e + 2]);
+  warm[0] = select<V>(warm[0] > 0, warm[0], V{});
+}
+
+// the impulse kept for the next step, a world vector P [3] on body b from the rows' impulses lambda [3]
+// and the frame d [9]; 0 where it is not finite
+template <typename V>
+inline void contact_impulse_kept(const V* lambda, const V* d, V* P) {
+  for (int m = 0; m < 3; ++m) P[m] = lambda[0] * d[m] + lambda[1] * d[3 + m] + lambda[2] * d[6 + m];
+  const Mask<V> ok = finite(P[0]) & finite(P[1]) & finite(P[2]);
+  for (int m = 0; m < 3; ++m) P[m] = select<V>(ok, P[m], V{});
+}
+
+}  // namespace novaphy

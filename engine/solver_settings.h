@@ -1,0 +1,75 @@
+// The settings of SolverFeatherstone as one field table: each line gives a setting's type, name,
+// default, the range step() accepts, its unit and what it does. The table declares the struct, checks
+// it (check()), binds it to Python (bindings/solver_featherstone.cpp, hence the type stub) and writes the
+// reference table (docs/settings.md, by tools/make_settings_doc.py); adding a setting is adding a line.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "kernels/spatial.h"
+
+namespace novaphy {
+
+// what step does with an articulation whose state went non-finite or too fast
+enum class DivergencePolicy : int { Raise = 0, Flag = 1, Reset = 2 };
+
+inline constexpr Scalar kUnbounded = std::numeric_limits<Scalar>::infinity();
+inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
+
+// X(type, name, default, lowest, highest, unit, doc); a bool or an enum has no range (0, 0)
+#define NOVAPHY_SOLVER_SETTINGS(X)                                                                                    \
+  X(int, num_iterations, 20, 0, kIntUnbounded, "", "PGS sweeps per step, at most.")                                   \
+  X(Scalar, pgs_tolerance, 0, 0, 1e6, "m/s, rad/s",                                                                   \
+    "Stop the PGS sweeps of a world once one sweep changed no row's velocity by more than this; 0: once one sweep "   \
+    "changed no impulse at all (a fixed point).")                                                                     \
+  X(Scalar, linear_slop, 0.001, 0, 1e3, "m", "Penetration the position correction leaves alone.")                     \
+  X(Scalar, erp, 0.2, 0, 1, "", "Share of the penetration beyond the slop removed per step.")                         \
+  X(Scalar, cfm, 1e-6, 0, 1e6, "", "Constraint force mixing: softens every constraint row.")                          \
+  X(Scalar, warmstarting_factor, 0.85, 0, 1, "", "Share of the last step's impulses a row starts from.")              \
+  X(Scalar, restitution_threshold, 0.2, 0, 1e6, "m/s", "Approach speed below which contacts do not bounce.")          \
+  X(bool, use_warmstarting, true, 0, 0, "", "Rows start from a share of the last step's impulses.")                   \
+  X(Scalar, angular_damping, 0.05, 0, kUnbounded, "1/s",                                                              \
+    "Rotational dof velocities are scaled by (1 - angular_damping dt) each step.")                                    \
+  X(int, update_mass_matrix_interval, 1, 1, kIntUnbounded, "", "Recompute and refactor H every N steps.")             \
+  X(Scalar, friction_smoothing, 1.0, 0, 1, "",                                                                        \
+    "0: box friction per tangent (the direction snaps to the tangent axes); 1: circular cone (friction opposes the "  \
+    "slip smoothly); between: a blend.")                                                                              \
+  X(bool, use_tile_gemm, false, 0, 0, "", "H as the tiled product sum J_i^T I_i J_i instead of CRBA.")                \
+  X(bool, fuse_cholesky, true, 0, 0, "", "Factor H and forward-substitute in one pass.")                              \
+  X(int, aba_min_dofs, 32, 0, kIntUnbounded, "",                                                                      \
+    "Articulations of at least this many dofs take the dense route with ABA's O(n) factor and solves (refactored "    \
+    "every step) instead of CRBA and the LTL factor.")                                                                \
+  X(Scalar, coriolis_implicitness, 0, 0, 1, "",                                                                       \
+    "0: explicit Coriolis forces; 0.5: linearised midpoint (energy kept to second order); 1: linearised backward "    \
+    "Euler. Above 0 every articulation takes the dense route with an LU of M + theta dt C each step, O(n^3).")        \
+  X(int, num_threads, 0, 0, kIntUnbounded, "",                                                                        \
+    "OpenMP threads (0: all available); results are bit-identical for any count.")                                    \
+  X(bool, profile_stages, false, 0, 0, "",                                                                            \
+    "Accumulate each stage's wall time into stage_seconds; the blocks then run a stage over all blocks before the "   \
+    "next (the same arithmetic as a block's whole step at a time).")                                                  \
+  X(bool, weld_fixed_joints, true, 0, 0, "",                                                                          \
+    "Merge bodies held by Fixed joints into their parent's link, so they cost nothing in the dynamics (read when "    \
+    "the solver is made).")                                                                                           \
+  X(bool, use_batch_kernels, true, 0, 0, "",                                                                          \
+    "Step articulations that share joints, frames and axes (replicated worlds) a SIMD block of worlds at a time in "  \
+    "the model's precision; off: every articulation takes the dense route.")                                          \
+  X(DivergencePolicy, on_divergence, DivergencePolicy::Flag, 0, 0, "",                                                \
+    "What step does with an articulation whose state went non-finite or too fast: Raise (nothing written), Flag "     \
+    "(it keeps its previous state; diverged() marks it) or Reset (it restarts from joint_q0 at rest).")               \
+  X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A dof speed beyond which an articulation diverged.") \
+  X(std::int64_t, stream_body_output_above, std::int64_t{2} << 20, 0, std::numeric_limits<std::int64_t>::max(),       \
+    "bytes",                                                                                                          \
+    "The blocks write body_q and body_qd around the caches (non-temporal stores) when the step's data, the state's "  \
+    "arrays and the solver's, exceed this (0: always); tools/stream_threshold.py finds a machine's.")
+
+struct SolverFeatherstoneSettings {
+#define NOVAPHY_DECLARE_SETTING(type, name, value, lowest, highest, unit, doc) type name = value;
+  NOVAPHY_SOLVER_SETTINGS(NOVAPHY_DECLARE_SETTING)
+#undef NOVAPHY_DECLARE_SETTING
+
+  // throws Error naming the first setting out of its range
+  void check() const;
+};
+
+}  // namespace novaphy

@@ -1,0 +1,135 @@
+#include "kernels/batch/topology.h"
+
+#include <algorithm>
+
+#include "kernels/batch/lane_math.h"
+
+namespace novaphy {
+
+using namespace lane_math;
+
+template <typename T>
+BatchTopology<T>::BatchTopology(const ArticulationView& art) {
+  const int n = art.link_count();
+  link.resize(n);
+  coord_count = art.coord_count();
+  dof_count = art.dof_count();
+  dof_parent.assign(dof_count, -1);
+  coord_of_dof.assign(dof_count, -1);
+  std::vector<int> last_dof(n, -1);  // deepest dof at or above each link
+  for (int i = 0; i < n; ++i) {
+    Link& L = link[i];
+    L.type = art.type(i);
+    L.parent = art.parent(i);
+    L.q_start = art.q_start(i);
+    L.qd_start = art.qd_start(i);
+    L.dof = art.dof(i);
+    int up = L.parent < 0 ? -1 : last_dof[L.parent];
+    for (int k = 0; k < L.dof; ++k) {
+      dof_parent[L.qd_start + k] = up;
+      up = L.qd_start + k;
+    }
+    last_dof[i] = up;
+    if (L.type == JointType::Revolute || L.type == JointType::Prismatic) coord_of_dof[L.qd_start] = L.q_start;
+
+    const Transform Xp = art.X_p(i), Xc = art.X_c(i), Xci = Xc.inverse();
+    const Vec3 a = art.axis(i);
+    const Mat3 Rp = Xp.rotation();
+    const Vec3 b = Xci.p;
+    auto quat = [](const Quat& q, T* out) { out[0] = q.x(), out[1] = q.y(), out[2] = q.z(), out[3] = q.w(); };
+    const Quat P0 = Xp.q * Xci.q;
+    const Quat P1 = Xp.q * Quat(0, a.x(), a.y(), a.z()) * Xci.q;
+    quat(P0, L.P0);
+    quat(P1, L.P1);
+    quat(Xp.q, L.Qp);
+    quat(Xci.q, L.Qci);
+    const Mat3 Rc = Xc.rotation();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        L.Rp[3 * r + c] = static_cast<T>(Rp(r, c)), L.Rc[3 * r + c] = static_cast<T>(Rc(r, c));
+    const Vec3 T0 = Xp.p + Rp * b;
+    Vec3 T1 = Vec3::Zero(), T2 = Vec3::Zero();
+    if (L.type == JointType::Revolute) T1 = Rp * a.cross(b), T2 = Rp * a.cross(a.cross(b));
+    if (L.type == JointType::Prismatic) T1 = Rp * a;
+    const Vec3 ac = Rc * a;
+    copy_n(Xp.p.data(), 3, L.tp);
+    copy_n(T0.data(), 3, L.T0);
+    copy_n(T1.data(), 3, L.T1);
+    copy_n(T2.data(), 3, L.T2);
+    copy_n(b.data(), 3, L.b);
+    copy_n(Xc.p.data(), 3, L.tc);
+    copy_n(ac.data(), 3, L.ac);
+  }
+  ancestor_start.assign(1, 0);
+  row_start.resize(dof_count);
+  for (int k = 0; k < dof_count; ++k) {
+    const size_t first = ancestors.size();
+    for (int j = dof_parent[k]; j >= 0; j = dof_parent[j]) ancestors.push_back(j);
+    std::reverse(ancestors.begin() + first, ancestors.end());
+    ancestor_start.push_back(static_cast<int>(ancestors.size()));
+    row_start[k] = packed_index(k, 0);
+  }
+  run_start.assign(1, 0);
+  for (int k = 0; k < dof_count; ++k) {
+    for (int p = ancestor_start[k]; p < ancestor_start[k + 1]; ++p) {
+      const bool extends = static_cast<int>(ancestor_runs.size()) > run_start[k] &&
+                           ancestor_runs.back().dof + ancestor_runs.back().count == ancestors[p];
+      if (extends)
+        ++ancestor_runs.back().count;
+      else
+        ancestor_runs.push_back({ancestors[p], 1});
+    }
+    run_start.push_back(static_cast<int>(ancestor_runs.size()));
+  }
+  link_dof_start.assign(1, 0);
+  for (int i = 0; i < n; ++i) {
+    const int d = last_dof[i];
+    if (d >= 0) {
+      link_dofs.insert(link_dofs.end(), ancestors.begin() + ancestor_start[d],
+                       ancestors.begin() + ancestor_start[d + 1]);
+      link_dofs.push_back(d);
+    }
+    link_dof_start.push_back(static_cast<int>(link_dofs.size()));
+  }
+}
+
+template <typename T>
+void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, V<T>* data) {
+  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  V<T>* x = data;
+  for (int i = 0; i < n; ++i) {
+    const int b = art.body(i);
+    x[i][lane] = static_cast<T>(art.body_mass[b]);
+    for (int m = 0; m < 3; ++m) x[n + 3 * i + m][lane] = static_cast<T>(art.body_com[3 * b + m]);
+    const int order[6] = {0, 4, 8, 1, 2, 5};  // xx yy zz xy xz yz of the row-major 3x3
+    for (int m = 0; m < 6; ++m) x[4 * n + 6 * i + m][lane] = static_cast<T>(art.body_inertia[9 * b + order[m]]);
+  }
+  for (int k = 0; k < nv; ++k) {
+    const int g = art.qd_begin() + k;
+    x[10 * n + k][lane] = static_cast<T>(art.joint_armature[g]);
+    x[10 * n + nv + k][lane] = static_cast<T>(art.joint_damping[g]);
+    x[10 * n + 2 * nv + k][lane] = static_cast<T>(art.joint_stiffness[g]);
+    const int c = topo.coord_of_dof[k];  // spring rest positions of the one-coordinate joints
+    x[10 * n + 3 * nv + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
+  }
+}
+
+template <typename T>
+void BatchWork<T>::resize(const BatchTopology<T>& topo) {
+  const size_t n = topo.link.size();
+  Q.resize(4 * n), p.resize(3 * n), R.resize(9 * n);
+  v.resize(6 * n), a.resize(6 * n), f.resize(6 * n), I.resize(10 * n), vrel.resize(3 * n);
+  q.resize(topo.coord_count), qd.resize(topo.dof_count), x.resize(topo.dof_count), tau.resize(topo.dof_count);
+  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(4 * topo.dof_count);
+  IJ.resize(6 * (topo.dof_count + 1));
+}
+
+#define NOVAPHY_INSTANTIATE(T)      \
+  template struct BatchTopology<T>; \
+  template struct BatchWork<T>;     \
+  template void batch_set_params(const BatchTopology<T>&, const ArticulationView&, int, Lanes<T>*);
+NOVAPHY_INSTANTIATE(float)
+NOVAPHY_INSTANTIATE(double)
+#undef NOVAPHY_INSTANTIATE
+
+}  // namespace novaphy

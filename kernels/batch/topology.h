@@ -1,0 +1,113 @@
+// Batched kernels: one articulation topology, one world per SIMD lane (AoSoA: a block holds
+// kLanes<T> worlds and every per-world quantity is one Lanes<T> per component). Templated on the
+// precision (float or double): one code path for both. Their reference twins are the scalar
+// kernels fk, rnea, crba and cholesky; tests/kernels/batch_test.cpp compares them.
+// This file: the topology a batch shares, its per-world parameters and a block's scratch.
+//
+// Spatial quantities here are in world axes about a point o per world (the root link's origin),
+// so no Plücker transforms are needed between links: a composite inertia is a sum, H_kj = s_j . (I_k s_k).
+// An inertia is kept as 10 numbers (m, h = m c, J = rotational inertia about o); H is packed lower
+// triangular and factored H = L^T L in place with the tree's sparsity (Featherstone's LTL, RBDA 6.5):
+// entry (k, j) is only touched when dof j is dof k or one of its ancestors, so a quadruped's legs
+// cost nothing against each other.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "kernels/articulation.h"
+#include "kernels/lanes.h"
+
+namespace novaphy {
+
+// the joints, frames and axes every world of a batch shares, in precision T
+template <typename T>
+struct BatchTopology {
+  struct Link {
+    JointType type = JointType::Fixed;
+    int parent = -1;
+    int q_start = 0, qd_start = 0, dof = 0;
+    T P0[4], P1[4];         // rotation in the parent link [x, y, z, w]: Revolute cos(q/2) P0 + sin(q/2) P1, else P0
+    T Qp[4], Qci[4];        // rotations of X_p and of X_c^-1 (Ball, Free)
+    T Rp[9];                // rotation of X_p, row-major
+    T tp[3];                // translation of X_p
+    T T0[3], T1[3], T2[3];  // translation in the parent: Revolute T0 + sin q T1 + (1 - cos q) T2, Prismatic T0 + q T1
+    T b[3];                 // translation of X_c^-1 (Ball, Free)
+    T tc[3];                // origin of the child joint frame in the link
+    T Rc[9];                // axes of the child joint frame in the link (rotation of X_c, row-major)
+    T ac[3];                // joint axis in link coordinates (Revolute, Prismatic)
+  };
+  std::vector<Link> link;
+  std::vector<int> dof_parent;    // per dof: the next dof up the tree, -1 past the root
+  std::vector<int> coord_of_dof;  // per dof: its coordinate for Revolute / Prismatic joints, else -1
+  // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
+  // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
+  std::vector<int> ancestor_start, ancestors, row_start;
+  // the same ancestors as runs of consecutive dofs (a chain's dofs are numbered in a row), per dof k
+  // ancestor_runs[run_start[k] .. run_start[k + 1]): the factor and the solves walk a run of a row as
+  // one dense stretch, without an index per entry
+  struct Run {
+    int dof, count;
+  };
+  std::vector<int> run_start;
+  std::vector<Run> ancestor_runs;
+  // per link i: the dofs that move it (its ancestors' and its own) ascending, link_dofs[link_dof_start[i] ..
+  // link_dof_start[i + 1]): the nonzero columns of its Jacobian, which batch_mass_matrix_gemm multiplies
+  std::vector<int> link_dof_start, link_dofs;
+  int coord_count = 0;
+  int dof_count = 0;
+
+  explicit BatchTopology(const ArticulationView& art);
+  int packed_size() const { return dof_count * (dof_count + 1) / 2; }
+};
+
+// H's packed lower triangle: entry (i, j), j <= i
+inline int packed_index(int i, int j) { return i * (i + 1) / 2 + j; }
+
+// one block's per-world parameters (read from the model when the solver is made)
+template <typename T>
+struct BatchParams {
+  const Lanes<T>* mass;       // [link]
+  const Lanes<T>* com;        // [link][3] body frame
+  const Lanes<T>* inertia;    // [link][6] xx yy zz xy xz yz about the centre of mass, body frame
+  const Lanes<T>* armature;   // [dof]
+  const Lanes<T>* damping;    // [dof]
+  const Lanes<T>* stiffness;  // [dof]
+  const Lanes<T>* q_ref;      // [dof] spring rest position (Revolute, Prismatic)
+};
+
+// BatchParams over one buffer of batch_param_count lanes (mass, com, inertia, armature, damping,
+// stiffness, q_ref in that order), and lane `lane` of it filled from an articulation's model arrays
+template <typename T>
+int batch_param_count(const BatchTopology<T>& topo) {
+  return 10 * static_cast<int>(topo.link.size()) + 4 * topo.dof_count;
+}
+template <typename T>
+BatchParams<T> batch_params(const BatchTopology<T>& topo, const Lanes<T>* data) {
+  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  return {
+      data, data + n, data + 4 * n, data + 10 * n, data + 10 * n + nv, data + 10 * n + 2 * nv, data + 10 * n + 3 * nv};
+}
+template <typename T>
+void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, Lanes<T>* data);
+
+// one block's kinematics and per-link work, sized for a topology (a thread's scratch)
+template <typename T>
+struct BatchWork {
+  std::vector<Lanes<T>> Q, p, R;   // [link][4], [link][3], [link][9]: link pose in the world
+  std::vector<Lanes<T>> v, a, f;   // [link][6] velocity, acceleration, force about o
+  std::vector<Lanes<T>> I;         // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
+  std::vector<Lanes<T>> vrel;      // [link][3] Free joints: linear velocity in the parent, world axes
+  std::vector<Lanes<T>> q, qd, x;  // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
+  std::vector<Lanes<T>> q_next;    // [coord] coordinates after the step
+  std::vector<Lanes<T>> tau;       // [dof] bias forces
+  std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
+  std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
+  std::vector<Lanes<T>> drive;     // [4][dof] PD drive gains and targets: kd, target velocity, ke, target position
+  std::vector<Lanes<T>> bodies;    // [body][13] body_q and body_qd on their way out (sized by the owner)
+  std::vector<Lanes<T>> IJ;        // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
+
+  void resize(const BatchTopology<T>& topo);
+};
+
+}  // namespace novaphy
