@@ -158,15 +158,14 @@ class Batches final : public ArticulationBatches {
     const BatchGroup<T>& G = groups_[s.group];
     const V* S = G.block_S(s.block);
     const V* o = &G.origin[3 * s.block];
-    const Vec3 r = p - Vec3(o[0][s.lane], o[1][s.lane], o[2][s.lane]);
-    const Vec3 rxd = r.cross(d);
+    const Scalar r[3] = {p.x() - o[0][s.lane], p.y() - o[1][s.lane], p.z() - o[2][s.lane]};
     const auto& topo = G.topo;
     for (int i = link; i >= 0; i = topo.link[i].parent)
       for (int k = topo.link[i].qd_start; k < topo.link[i].qd_start + topo.link[i].dof; ++k) {
-        const V* s6 = S + 6 * k;
-        const Scalar ang = rxd.x() * s6[0][s.lane] + rxd.y() * s6[1][s.lane] + rxd.z() * s6[2][s.lane];
-        const Scalar lin = d.x() * s6[3][s.lane] + d.y() * s6[4][s.lane] + d.z() * s6[5][s.lane];
-        J[k] += sign * (lin + ang);
+        Scalar s6[6], u[3];
+        for (int m = 0; m < 6; ++m) s6[m] = S[6 * k + m][s.lane];
+        point_velocity(s6, r, u);
+        J[k] += sign * (d.x() * u[0] + d.y() * u[1] + d.z() * u[2]);
       }
   }
 

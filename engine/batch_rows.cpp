@@ -171,12 +171,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   contact_warm_start(in + 3, d, step.rows, warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
-  for (int j = 0; j < nv; ++j) {
-    const V<T>* s6 = kin.S + 6 * j;
-    u[3 * j] = s6[3] + s6[1] * p[2] - s6[2] * p[1];
-    u[3 * j + 1] = s6[4] + s6[2] * p[0] - s6[0] * p[2];
-    u[3 * j + 2] = s6[5] + s6[0] * p[1] - s6[1] * p[0];
-  }
+  for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);
   const int first = R.rows;
   for (int e = 0; e < 3; ++e) {
     const int r = add_row(R, e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V<T>{}, warm[e]);

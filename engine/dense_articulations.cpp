@@ -5,6 +5,7 @@
 #include "engine/dynamics.h"
 #include "engine/parts/drive.h"
 #include "engine/parts/guard.h"
+#include "engine/parts/rows.h"
 #include "engine/parts/wrench.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
@@ -221,13 +222,15 @@ void DenseArticulations::solve_mass(int a, Scalar* x) const {
 }
 
 void DenseArticulations::point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const {
-  // J qd = d . (velocity of the body-fixed point at p) = sum over ancestor dofs of d . S_lin + (p x d) . S_ang
+  // J qd = d . (the velocity of the body-fixed point p), a sum over the dofs that move the link
   const ArticulationView& art = art_[a];
   const MatX& S = scratch_[a].S_world;
-  const Vec3 pxd = p.cross(d);
   for (int i = link; i >= 0; i = art.parent(i))
-    for (int k = art.qd_start(i); k < art.qd_start(i) + art.dof(i); ++k)
-      J[k] += sign * (d.dot(S.col(k).tail<3>()) + pxd.dot(S.col(k).head<3>()));
+    for (int k = art.qd_start(i); k < art.qd_start(i) + art.dof(i); ++k) {
+      Scalar u[3];
+      point_velocity(S.col(k).data(), p.data(), u);
+      J[k] += sign * (d.x() * u[0] + d.y() * u[1] + d.z() * u[2]);
+    }
 }
 
 std::size_t DenseArticulations::bytes() const {

@@ -10,10 +10,9 @@ namespace novaphy {
 // f(i) for i in [0, count) on `threads` threads, then done() once on each thread. The first seven eighths
 // of i go by a static schedule (thread t runs their t-th run: the same i, and their data in its caches,
 // at every call); the last eighth is dealt out a few at a time to whichever thread is free, so that a
-// thread the machine slows down does not keep the others waiting at the end (measured: up to 7 % more
-// steps/s at two threads on a Sapphire Rapids guest's two vCPUs; none at one). f must not depend on which thread
-// runs i. One thread runs the loop without a parallel region (one costs more than a short loop: 0.35 us
-// here), unless this runs inside another region, where only a region of its own numbers its thread 0,
+// thread the machine slows down does not keep the others waiting at the end. f must not depend on which
+// thread runs i. One thread runs the loop without a parallel region (one costs more than a short loop),
+// unless this runs inside another region, where only a region of its own numbers its thread 0,
 // which per-thread scratch is indexed by. Each thread makes a Scope before its share and destroys it after
 // done() (a mode the thread keeps while it runs f, such as SubnormalsAsZero: set once a call, not once an i)
 struct NoScope {};

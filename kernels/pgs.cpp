@@ -65,7 +65,7 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
       const Scalar limit = row.mu * rows[row.normal].lambda;
       const Scalar l1 = row.lambda + step(row), l2 = second.lambda + step(second);
       const Scalar box1 = std::clamp(l1, -limit, limit), box2 = std::clamp(l2, -limit, limit);
-      // (std::hypot's guard against overflow took a tenth of the standing quadruped's step)
+      // (not std::hypot: its guard against overflow costs more than the rest of the pair's update)
       const Scalar norm = std::sqrt(l1 * l1 + l2 * l2);
       const Scalar scale = norm > limit ? limit / norm : 1;
       const Scalar s = settings.friction_smoothing;

@@ -3,9 +3,9 @@
 // overwritten, and evicts the data the next block needs; a non-temporal store writes whole lines
 // without reading them. stream_rows_from_lanes writes a block's lanes out as its worlds' rows, one
 // after another, so: each vector of the destination gathered from the lanes, converted and stored
-// (measured against transposing the lanes into a staged copy and streaming that: 1.05-1.13x the
-// contact-free robots' step at 4096 worlds). Its twin, stream_rows_from_lanes_reference, writes one
-// number at a time with ordinary stores (and is what a target without gathers gets).
+// (rather than transposing the lanes into a staged copy and streaming that). Its twin,
+// stream_rows_from_lanes_reference, writes one number at a time with ordinary stores (and is what a target without
+// gathers gets).
 #pragma once
 
 #include <cstddef>

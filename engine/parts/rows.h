@@ -72,6 +72,15 @@ inline void contact_frame(const Lanes<T>* n, Lanes<T>* d) {
   lane_tangents<T>(n, d);
 }
 
+// u [3]: the velocity of the point p [3] moved by the motion s [6] ([angular; linear], about the point p
+// is measured from); a contact row's Jacobian entry for that motion along a direction d is d . u
+template <typename V>
+inline void point_velocity(const V* s, const V* p, V* u) {
+  u[0] = s[3] + s[1] * p[2] - s[2] * p[1];
+  u[1] = s[4] + s[2] * p[0] - s[0] * p[2];
+  u[2] = s[5] + s[0] * p[1] - s[1] * p[0];
+}
+
 // the normal row's target: push the penetration beyond the slop out at erp / dt, let a gap close in one
 // step; a contact that closes within this step faster than the restitution threshold bounces at
 // -restitution times its approach speed (v_approach: J qd of the normal row at the step's start)
