@@ -324,11 +324,11 @@ void ModelBuilder::replicate(const ModelBuilder& other, int world_count, const V
   }
 }
 
-Model ModelBuilder::finalize() const {
+std::vector<ModelBuilder::JointRecord> ModelBuilder::articulated_joints(int& articulation_count) const {
   // articulations: explicit ones keep their joints; the others follow their parent's
   // articulation or start a new one at a root; bodies without a joint get a Free joint each
   std::vector<JointRecord> joints = joints_;
-  int articulation_count = articulation_count_;
+  articulation_count = articulation_count_;
   for (JointRecord& joint : joints) {
     if (joint.articulation >= 0) continue;
     joint.articulation = joint.parent < 0 ? articulation_count++ : joints[body_joint_[joint.parent]].articulation;
@@ -338,23 +338,12 @@ Model ModelBuilder::finalize() const {
     joints.push_back(free_joint(b));
     joints.back().articulation = articulation_count++;
   }
+  return joints;
+}
 
+void ModelBuilder::lay_out_joints(const std::vector<JointRecord>& joints, Model& model) const {
   // articulations must be contiguous runs of joints; number them in joint order
-  std::vector<int> articulation_id(articulation_count, -1);
-  Model model;
-  model.body_count = body_count();
-  model.joint_count = static_cast<int>(joints.size());
-  model.shape_count = shape_count();
-  model.articulation_count = articulation_count;
-  model.actuator_count = actuator_count();
-  for (const JointRecord& joint : joints) {
-    model.joint_coord_count += joint_coord_count(joint.type);
-    model.joint_dof_count += joint_dof_count(joint.type);
-  }
-  model.gravity = gravity_;
-  model.precision = precision_;
-  model.allocate();
-
+  std::vector<int> articulation_id(model.articulation_count, -1);
   std::vector<int> child_joint(body_count(), -1);
   int q = 0, qd = 0, next_articulation = 0;
   for (int j = 0; j < model.joint_count; ++j) {
@@ -380,38 +369,43 @@ Model ModelBuilder::finalize() const {
     joint.options.child_xform.to_array(&model.joint_X_c[7 * j]);
     Eigen::Map<Vec3>(&model.joint_axis[3 * j]) = joint.options.dof.axis;
     model.joint_name.push_back(joint.options.name);
-
-    const JointDofConfig& dof = joint.options.dof;
-    for (int k = 0; k < joint_dof_count(joint.type); ++k) {
-      model.joint_armature[qd + k] = dof.armature;
-      model.joint_damping[qd + k] = dof.damping;
-      model.joint_stiffness[qd + k] = dof.stiffness;
-      model.joint_limit_lower[qd + k] = dof.limit_lower;
-      model.joint_limit_upper[qd + k] = dof.limit_upper;
-      model.joint_target_ke[qd + k] = dof.target_ke;
-      model.joint_target_kd[qd + k] = dof.target_kd;
-    }
-    Scalar* q0 = model.joint_q0.data() + q;  // past the end for a joint without coordinates
-    switch (joint.type) {
-      case JointType::Revolute:
-      case JointType::Prismatic: model.joint_q_ref[q] = dof.q_ref; break;
-      case JointType::Ball: q0[3] = model.joint_q_ref[q + 3] = 1; break;
-      case JointType::Free: {
-        // start at the body's pose: J = X_p^-1 * body_xform * X_c
-        const Transform J = joint.options.parent_xform.inverse() * body_xform_[joint.child] * joint.options.child_xform;
-        J.to_array(q0);
-        J.to_array(model.joint_q_ref.data() + q);
-        break;
-      }
-      case JointType::Fixed: break;
-    }
+    lay_out_joint_dofs(joint, q, qd, model);
     q += joint_coord_count(joint.type);
     qd += joint_dof_count(joint.type);
   }
   model.joint_q_start[model.joint_count] = q;
   model.joint_qd_start[model.joint_count] = qd;
   model.articulation_start[model.articulation_count] = model.joint_count;
+}
 
+void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, Model& model) const {
+  const JointDofConfig& dof = joint.options.dof;
+  for (int k = 0; k < joint_dof_count(joint.type); ++k) {
+    model.joint_armature[qd + k] = dof.armature;
+    model.joint_damping[qd + k] = dof.damping;
+    model.joint_stiffness[qd + k] = dof.stiffness;
+    model.joint_limit_lower[qd + k] = dof.limit_lower;
+    model.joint_limit_upper[qd + k] = dof.limit_upper;
+    model.joint_target_ke[qd + k] = dof.target_ke;
+    model.joint_target_kd[qd + k] = dof.target_kd;
+  }
+  Scalar* q0 = model.joint_q0.data() + q;  // past the end for a joint without coordinates
+  switch (joint.type) {
+    case JointType::Revolute:
+    case JointType::Prismatic: model.joint_q_ref[q] = dof.q_ref; break;
+    case JointType::Ball: q0[3] = model.joint_q_ref[q + 3] = 1; break;
+    case JointType::Free: {
+      // start at the body's pose: J = X_p^-1 * body_xform * X_c
+      const Transform J = joint.options.parent_xform.inverse() * body_xform_[joint.child] * joint.options.child_xform;
+      J.to_array(q0);
+      J.to_array(model.joint_q_ref.data() + q);
+      break;
+    }
+    case JointType::Fixed: break;
+  }
+}
+
+void ModelBuilder::lay_out_bodies(Model& model) const {
   for (int b = 0; b < body_count(); ++b) {
     model.body_mass[b] = body_mass_[b];
     Eigen::Map<Vec3>(&model.body_com[3 * b]) = body_com_[b];
@@ -421,7 +415,9 @@ Model ModelBuilder::finalize() const {
   model.world_count = std::max(world_count_, 1);
   model.body_world = body_world_;
   model.shape_world = shape_world_;
+}
 
+void ModelBuilder::lay_out_shapes(Model& model) const {
   for (int s = 0; s < shape_count(); ++s) {
     const ShapeRecord& shape = shapes_[s];
     model.shape_type[s] = static_cast<int>(shape.type);
@@ -433,7 +429,9 @@ Model ModelBuilder::finalize() const {
     model.shape_collision_group[s] = shape.options.collision_group;
     model.shape_collision_mask[s] = shape.options.collision_mask;
   }
+}
 
+void ModelBuilder::lay_out_actuators(Model& model) const {
   for (int u = 0; u < actuator_count(); ++u) {
     const MotorRecord& motor = motors_[u];
     model.actuator_joint[u] = motor.joint;
@@ -444,7 +442,30 @@ Model ModelBuilder::finalize() const {
     model.actuator_force_upper[u] = motor.force_upper;
     model.actuator_name.push_back(motor.name);
   }
+}
 
+Model ModelBuilder::finalize() const {
+  int articulation_count = 0;
+  const std::vector<JointRecord> joints = articulated_joints(articulation_count);
+
+  Model model;
+  model.body_count = body_count();
+  model.joint_count = static_cast<int>(joints.size());
+  model.shape_count = shape_count();
+  model.articulation_count = articulation_count;
+  model.actuator_count = actuator_count();
+  for (const JointRecord& joint : joints) {
+    model.joint_coord_count += joint_coord_count(joint.type);
+    model.joint_dof_count += joint_dof_count(joint.type);
+  }
+  model.gravity = gravity_;
+  model.precision = precision_;
+  model.allocate();
+
+  lay_out_joints(joints, model);
+  lay_out_bodies(model);
+  lay_out_shapes(model);
+  lay_out_actuators(model);
   model.check_sizes();
   return model;
 }

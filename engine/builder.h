@@ -138,6 +138,20 @@ class ModelBuilder {
   // the implicit Free joint of a body no joint names as its child
   JointRecord free_joint(int body) const;
 
+  // finalize() in stages, in this order:
+  // the joints with their articulations assigned, an implicit Free joint appended per unjointed body
+  std::vector<JointRecord> articulated_joints(int& articulation_count) const;
+  // the Model's joint table, coordinate and dof starts and articulation starts
+  void lay_out_joints(const std::vector<JointRecord>& joints, Model& model) const;
+  // one joint's per-dof parameters and its q0 / q_ref coordinates (coordinates from q, dofs from qd)
+  void lay_out_joint_dofs(const JointRecord& joint, int q, int qd, Model& model) const;
+  // the Model's body mass properties, names and worlds
+  void lay_out_bodies(Model& model) const;
+  // the Model's shape table
+  void lay_out_shapes(Model& model) const;
+  // the Model's actuator table
+  void lay_out_actuators(Model& model) const;
+
   Vec3 gravity_;
   Precision precision_ = Precision::Float64;
   std::vector<Scalar> body_mass_;

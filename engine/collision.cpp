@@ -30,6 +30,17 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     fail("margin must be finite and >= 0, got ", options.margin);
   if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
   if (options_.contact_capacity == 0) options_.contact_capacity = std::max(64, 8 * model.shape_count);
+  link_bodies();
+  sort_shapes();
+  mask_pairs();
+  group_worlds();
+  describe_groups();
+  place_static_planes();
+  shared_boxes_.resize(shared_others_.size());
+}
+
+void CollisionPipeline::link_bodies() {
+  const Model& model = model_;
   body_parent_.assign(model.body_count, -1);
   body_articulation_.assign(model.body_count, -1);
   for (int j = 0; j < model.joint_count; ++j) {
@@ -39,6 +50,10 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     body_parent_[model.joint_child[j]] = parent;
     body_articulation_[model.joint_child[j]] = model.joint_articulation[j];
   }
+}
+
+void CollisionPipeline::sort_shapes() {
+  const Model& model = model_;
   world_others_.resize(model.world_count);
   world_planes_.resize(model.world_count);
   for (int s = 0; s < model.shape_count; ++s) {
@@ -52,6 +67,10 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     }
     (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
   }
+}
+
+void CollisionPipeline::mask_pairs() {
+  const Model& model = model_;
   world_sweep_.resize(model.world_count);
   world_pair_start_.assign(model.world_count, -1);
   for (int w = 0; w < model.world_count; ++w) {
@@ -69,21 +88,27 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
       world_pairs_.push_back(mask);
     }
   }
+}
+
+void CollisionPipeline::group_worlds() {
   // consecutive worlds alike, up to kLanes<Scalar> of them, have their boxes, their pairs' overlaps and
   // their planes' reach found together, a world per lane
-  for (int w = 0; w < model.world_count;) {
+  const int world_count = model_.world_count;
+  for (int w = 0; w < world_count;) {
     int end = w + 1;
-    while (end < model.world_count && end - w < kLanes<Scalar> && alike(w, end)) ++end;
+    while (end < world_count && end - w < kLanes<Scalar> && alike(w, end)) ++end;
     group_first_.push_back(w);
     w = end;
   }
-  group_first_.push_back(model.world_count);
+  group_first_.push_back(world_count);
+}
+
+void CollisionPipeline::describe_groups() {
   // per group of several: each shape's body in each lane (-1: none; the first world's again in lanes
   // past the group's), and a bit per shape whose local pose and size are the same in all its worlds
   // (read once: a replicated robot's), where group_boxes reads the model's arrays from the first world
   // only (a collide after a step finds little of them in cache); the runs of bodies its lanes' shapes
   // lie in (group_run_), and its planes
-  const int L = kLanes<Scalar>;
   const int groups = static_cast<int>(group_first_.size()) - 1;
   group_body_start_.assign(groups, -1);
   group_same_.assign(groups, 0);
@@ -92,31 +117,49 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
   for (int g = 0; g < groups; ++g) {
     const int first = group_first_[g], count = group_first_[g + 1] - first;
     if (count > 1) {
-      const std::vector<int>& shapes = world_others_[first];
-      const int n = static_cast<int>(shapes.size());
-      group_body_start_[g] = static_cast<int>(group_body_.size());
-      for (int i = 0; i < n; ++i) {
-        bool same = true;
-        for (int l = 0; l < L; ++l) {
-          const int a = shapes[i], s = world_others_[first + (l < count ? l : 0)][i];
-          group_body_.push_back(model.shape_body[s]);
-          for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
-          for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
-        }
-        if (same) group_same_[g] |= std::uint64_t{1} << i;
-      }
+      group_shapes(g);
       group_runs(g);
-      for (const int code : plane_order(first)) {
-        std::uint64_t reach = 0;
-        for (int i = 0; i < n; ++i)
-          if (may_collide(plane_of(first, code), shapes[i])) reach |= std::uint64_t{1} << i;
-        group_plane_.push_back(code);
-        group_plane_shapes_.push_back(reach);
-      }
+      group_plane_reach(g);
     }
     group_plane_start_.push_back(static_cast<int>(group_plane_.size()));
   }
+}
+
+void CollisionPipeline::group_shapes(int g) {
+  const Model& model = model_;
+  const int L = kLanes<Scalar>;
+  const int first = group_first_[g], count = group_first_[g + 1] - first;
+  const std::vector<int>& shapes = world_others_[first];
+  const int n = static_cast<int>(shapes.size());
+  group_body_start_[g] = static_cast<int>(group_body_.size());
+  for (int i = 0; i < n; ++i) {
+    bool same = true;
+    for (int l = 0; l < L; ++l) {
+      const int a = shapes[i], s = world_others_[first + (l < count ? l : 0)][i];
+      group_body_.push_back(model.shape_body[s]);
+      for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
+      for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
+    }
+    if (same) group_same_[g] |= std::uint64_t{1} << i;
+  }
+}
+
+void CollisionPipeline::group_plane_reach(int g) {
+  const int first = group_first_[g];
+  const std::vector<int>& shapes = world_others_[first];
+  const int n = static_cast<int>(shapes.size());
+  for (const int code : plane_order(first)) {
+    std::uint64_t reach = 0;
+    for (int i = 0; i < n; ++i)
+      if (may_collide(plane_of(first, code), shapes[i])) reach |= std::uint64_t{1} << i;
+    group_plane_.push_back(code);
+    group_plane_shapes_.push_back(reach);
+  }
+}
+
+void CollisionPipeline::place_static_planes() {
   // a plane on no body stays where the model put it; those on bodies move
+  const Model& model = model_;
   plane_pose_.resize(model.shape_count);
   plane_normal_.resize(model.shape_count);
   for (const int p : planes_) {
@@ -127,7 +170,6 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     plane_pose_[p] = Transform::from_array(&model.shape_transform[7 * p]);
     plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();
   }
-  shared_boxes_.resize(shared_others_.size());
 }
 
 bool CollisionPipeline::alike(int v, int w) const {
@@ -336,7 +378,32 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   if (!same_layout(contacts, model_) || contacts.contact_capacity != options_.contact_capacity)
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
+  keep_previous(contacts);
 
+  // the poses of the planes on bodies and the boxes of the shapes of no world first: every world meets
+  // them. Then per world, its shapes' boxes into the thread's scratch (in cache while used): its pairs
+  // (those its masks allow whose bounds overlap, in index order; a world of many shapes sweeps and
+  // prunes along x), the shapes of no world against its shapes, then its planes and the shared ones
+  // against its shapes. Worlds alike go a group at a time: their boxes, their pairs' overlaps and their
+  // planes' reach in lanes (group_boxes, group_planes), then each world's narrow phase in that order.
+  // Then the shapes of no world against each other, and every plane against them. Groups of worlds (and
+  // shared shapes, and planes) spread over threads
+  place_shared(state);
+  const int groups = static_cast<int>(group_first_.size()) - 1;
+  find_contacts(groups, contacts, kWorldsPerThread / kLanes<Scalar>,
+                [&](int g, Scratch& scratch) { group_contacts(state, g, scratch); });
+  find_contacts(static_cast<int>(shared_others_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
+    for (size_t k = i + 1; k < shared_others_.size(); ++k)
+      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
+  });
+  find_contacts(static_cast<int>(planes_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
+    against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), static_cast<int>(shared_others_.size()),
+                  scratch.found);
+  });
+  match_previous(contacts);
+}
+
+void CollisionPipeline::keep_previous(Contacts& contacts) const {
   // this step's contacts, in their order, become the previous ones for warm starting (a buffer not
   // made by contacts() gets its bookkeeping here)
   if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
@@ -348,101 +415,92 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   contacts.previous_count = contacts.contact_count;
   contacts.contact_count = 0;
   contacts.contact_dropped = 0;
+}
 
-  // the poses of the planes on bodies and the boxes of the shapes of no world first: every world meets
-  // them. Then per world, its shapes' boxes into the thread's scratch (in cache while used): its pairs
-  // (those its masks allow whose bounds overlap, in index order; a world of many shapes sweeps and
-  // prunes along x), the shapes of no world against its shapes, then its planes and the shared ones
-  // against its shapes. Worlds alike go a group at a time: their boxes, their pairs' overlaps and their
-  // planes' reach in lanes (group_boxes, group_planes), then each world's narrow phase in that order.
-  // Then the shapes of no world against each other, and every plane against them. Groups of worlds (and
-  // shared shapes, and planes) spread over threads
+void CollisionPipeline::place_shared(const State& state) {
   for (const int p : moving_planes_) {
     plane_pose_[p] = box(state, p).pose;
     plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();
   }
   for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
-  auto overlap = [](const Box& a, const Box& b) {
-    return boxes_overlap(a.lower.data(), a.upper.data(), b.lower.data(), b.upper.data());
-  };
-  auto test_pair = [&](int a, const Box& A, int b, const Box& B, std::vector<Found>& out) {
-    if (!overlap(A, B) || !may_collide(a, b)) return;
-    if (a < b)
-      narrow_phase(a, A.pose, b, B.pose, out);
-    else
-      narrow_phase(b, B.pose, a, A.pose, out);
-  };
-  // world w, its boxes in the scratch already with `hits`, the pairs found overlapping (for each shape,
-  // a bit for each of the shapes after it)
-  auto world = [&](int w, Scratch& scratch, const std::uint64_t* hits) {
-    std::vector<Found>& out = scratch.found;
-    const std::vector<int>& shapes = world_others_[w];
-    const int n = static_cast<int>(shapes.size());
-    std::vector<Box>& boxes = scratch.boxes;
-    if (!hits) {
-      if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
-      for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
-    }
-    if (hits || world_pair_start_[w] >= 0) {
-      const std::uint64_t* mask = hits ? hits : world_pairs_.data() + world_pair_start_[w];
-      for (int i = 0; i < n; ++i)
-        for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
-          const int j = __builtin_ctzll(m);
-          if (hits || overlap(boxes[i], boxes[j]))
-            narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out);
-        }
-    } else {
-      std::vector<int>& order = world_sweep_[w];  // local indices
-      std::sort(order.begin(), order.end(), [&](int x, int y) {
-        return boxes[x].lower.x() < boxes[y].lower.x() || (boxes[x].lower.x() == boxes[y].lower.x() && x < y);
-      });
-      for (int i = 0; i < n; ++i)
-        for (int j = i + 1; j < n && boxes[order[j]].lower.x() <= boxes[order[i]].upper.x(); ++j)
-          test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out);
-    }
-    for (size_t i = 0; i < shared_others_.size(); ++i)
-      for (int j = 0; j < n; ++j) test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out);
-    if (hits) return;  // (its group's planes follow)
-    // the world's planes and the shared ones, in index order
-    const std::vector<int>& own = world_planes_[w];
-    for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
-      const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
-      against_plane(take_own ? own[i++] : shared_planes_[j++], shapes.data(), boxes.data(), n, out);
-    }
-  };
-  const int groups = static_cast<int>(group_first_.size()) - 1;
-  find_contacts(groups, contacts, kWorldsPerThread / kLanes<Scalar>, [&](int g, Scratch& scratch) {
-    const int first = group_first_[g], count = group_first_[g + 1] - first;
-    if (count == 1) {
-      world(first, scratch, nullptr);
-      return;
-    }
-    group_boxes(state, g, scratch);
-    group_planes(g, scratch);
-    const int* code = group_plane_.data() + group_plane_start_[g];
-    const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
-    for (int l = 0; l < count; ++l) {
-      const std::vector<int>& shapes = world_others_[first + l];
-      lane_boxes(l, scratch);
-      world(first + l, scratch, scratch.hits.data() + l * shapes.size());
-      for (int k = 0; k < planes; ++k) {
-        const int p = plane_of(first + l, code[k]);
-        for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
-          const int i = __builtin_ctzll(m);
-          narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found);
-        }
+}
+
+bool CollisionPipeline::overlap(const Box& a, const Box& b) {
+  return boxes_overlap(a.lower.data(), a.upper.data(), b.lower.data(), b.upper.data());
+}
+
+void CollisionPipeline::test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out) const {
+  if (!overlap(A, B) || !may_collide(a, b)) return;
+  if (a < b)
+    narrow_phase(a, A.pose, b, B.pose, out);
+  else
+    narrow_phase(b, B.pose, a, A.pose, out);
+}
+
+void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scratch) {
+  const int first = group_first_[g], count = group_first_[g + 1] - first;
+  if (count == 1) {
+    world_contacts(state, first, scratch, nullptr);
+    return;
+  }
+  group_boxes(state, g, scratch);
+  group_planes(g, scratch);
+  const int* code = group_plane_.data() + group_plane_start_[g];
+  const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
+  for (int l = 0; l < count; ++l) {
+    const std::vector<int>& shapes = world_others_[first + l];
+    lane_boxes(l, scratch);
+    world_contacts(state, first + l, scratch, scratch.hits.data() + l * shapes.size());
+    for (int k = 0; k < planes; ++k) {
+      const int p = plane_of(first + l, code[k]);
+      for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
+        const int i = __builtin_ctzll(m);
+        narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found);
       }
     }
+  }
+}
+
+void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits) {
+  std::vector<Found>& out = scratch.found;
+  const std::vector<int>& shapes = world_others_[w];
+  const int n = static_cast<int>(shapes.size());
+  std::vector<Box>& boxes = scratch.boxes;
+  if (!hits) {
+    if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
+    for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
+  }
+  if (hits || world_pair_start_[w] >= 0) {
+    const std::uint64_t* mask = hits ? hits : world_pairs_.data() + world_pair_start_[w];
+    for (int i = 0; i < n; ++i)
+      for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
+        const int j = __builtin_ctzll(m);
+        if (hits || overlap(boxes[i], boxes[j])) narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out);
+      }
+  } else {
+    sweep_world(w, boxes, out);
+  }
+  for (size_t i = 0; i < shared_others_.size(); ++i)
+    for (int j = 0; j < n; ++j) test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out);
+  if (hits) return;  // (its group's planes follow)
+  // the world's planes and the shared ones, in index order
+  const std::vector<int>& own = world_planes_[w];
+  for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
+    const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
+    against_plane(take_own ? own[i++] : shared_planes_[j++], shapes.data(), boxes.data(), n, out);
+  }
+}
+
+void CollisionPipeline::sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out) {
+  const std::vector<int>& shapes = world_others_[w];
+  const int n = static_cast<int>(shapes.size());
+  std::vector<int>& order = world_sweep_[w];  // local indices
+  std::sort(order.begin(), order.end(), [&](int x, int y) {
+    return boxes[x].lower.x() < boxes[y].lower.x() || (boxes[x].lower.x() == boxes[y].lower.x() && x < y);
   });
-  find_contacts(static_cast<int>(shared_others_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
-    for (size_t k = i + 1; k < shared_others_.size(); ++k)
-      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
-  });
-  find_contacts(static_cast<int>(planes_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
-    against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), static_cast<int>(shared_others_.size()),
-                  scratch.found);
-  });
-  match_previous(contacts);
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n && boxes[order[j]].lower.x() <= boxes[order[i]].upper.x(); ++j)
+      test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out);
 }
 
 void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes, int count,

@@ -117,6 +117,39 @@ class CollisionPipeline {
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
   // where each contact of the buffer was among the previous ones (Contacts::previous_match)
   void match_previous(Contacts& contacts);
+  // the constructor's stages, in this order:
+  // each body's parent (skipping massless links) and articulation, for may_collide
+  void link_bodies();
+  // the colliding shapes into planes and others, per world or of no world
+  void sort_shapes();
+  // per world of few shapes its pairs' masks, per world of many its sweep order
+  void mask_pairs();
+  // consecutive worlds alike into groups found together (group_first_)
+  void group_worlds();
+  // per group of several worlds: its shapes' bodies and sameness, its runs of bodies, its planes' reach
+  void describe_groups();
+  // group g's shapes' bodies in each lane (group_body_) and which shapes are the same in all its worlds
+  void group_shapes(int g);
+  // group g's planes in the order its worlds meet them, each with the shapes that may reach it
+  void group_plane_reach(int g);
+  // the poses and normals of the planes on no body; those on bodies listed as moving
+  void place_static_planes();
+  // collide()'s stages:
+  // the buffer's contacts and impulses kept as the previous ones, the buffer emptied
+  void keep_previous(Contacts& contacts) const;
+  // the poses of the planes on bodies and the boxes of the shapes of no world at `state`
+  void place_shared(const State& state);
+  // whether two boxes overlap
+  static bool overlap(const Box& a, const Box& b);
+  // the narrow phase of shapes a and b (either order) where their boxes overlap and they may collide
+  void test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out) const;
+  // the contacts of group g's worlds into scratch.found: a world alone, or each lane's after group_boxes
+  void group_contacts(const State& state, int g, Scratch& scratch);
+  // world w's contacts into scratch.found; hits: its boxes are in scratch already, with the pairs found
+  // overlapping (per shape, a bit for each shape after it), and its group's planes follow
+  void world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits);
+  // world w's pairs by sweep and prune along x (a world of many shapes)
+  void sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out);
   // f(i, scratch) for i in [0, count) on the threads (at least `grain` i each), each appending its
   // contacts to its scratch's `found`; then every contact into the buffer in the order of i, so the
   // order does not depend on the thread count
@@ -169,8 +202,8 @@ class CollisionPipeline {
   std::vector<Vec3> plane_normal_;     // [shape] of the planes, their normals (+Y) in the world
   std::vector<int> previous_order_;    // previous contacts by key, when a contact is not where it was
   // per thread: the contacts it found, the boxes of the world it is at, of the group of worlds it is at
-  // and their pairs' overlaps; on cache lines of its own (each push writes its vector's end: written
-  // beside another thread's, measured 3x that thread's narrow-phase time)
+  // and their pairs' overlaps; on cache lines of its own (each push writes its vector's end, which would
+  // otherwise share a line with another thread's)
   struct alignas(64) Scratch {
     std::vector<Found> found;
     std::vector<Box> boxes;

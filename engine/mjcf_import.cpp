@@ -66,24 +66,11 @@ class MjcfImporter {
     const int p = m_->body_parentid[b];
     const Transform B = pose(m_->body_pos + 3 * b, m_->body_quat + 4 * b);
     const std::string name = mj_name(m_, mjOBJ_BODY, b);
-    RigidBody body;
-    body.mass = m_->body_mass[b];
-    body.com = vec3(m_->body_ipos + 3 * b);
-    const Mat3 R = quat_wxyz(m_->body_iquat + 4 * b).normalized().toRotationMatrix();
-    body.inertia = R * vec3(m_->body_inertia + 3 * b).asDiagonal() * R.transpose();
+    const RigidBody body = body_inertial(b);
     const int jnt_count = m_->body_jntnum[b];
 
     if (jnt_count == 0) {
-      if (is_static(p)) {
-        static_pose_[b] = static_pose_[p] * B;
-        return;
-      }
-      const int child = builder_.add_body_checked(body, Transform::identity(), name, true);
-      JointOptions options;
-      options.parent_xform = B;
-      options.name = name + "_weld";
-      builder_.add_joint(JointType::Fixed, out_.body_map[p], child, options);
-      out_.body_map[b] = child;
+      add_welded_body(b, B, body, name);
       return;
     }
 
@@ -94,57 +81,9 @@ class MjcfImporter {
       const int j = m_->body_jntadr[b] + k;
       const bool last = k == jnt_count - 1;
       const std::string joint_name = mj_name(m_, mjOBJ_JOINT, j);
-      const Vec3 anchor = vec3(m_->jnt_pos + 3 * j);
-      const int qa = m_->jnt_qposadr[j];
-      const int da = m_->jnt_dofadr[j];
-
-      JointOptions options;
-      options.name = joint_name;
-      JointDofConfig& dof = options.dof;
-      dof.axis = vec3(m_->jnt_axis + 3 * j);
-      dof.armature = m_->dof_armature[da];
-      dof.damping = m_->dof_damping[da];
-      if (m_->jnt_limited[j] && (m_->jnt_type[j] == mjJNT_HINGE || m_->jnt_type[j] == mjJNT_SLIDE)) {
-        dof.limit_lower = m_->jnt_range[2 * j];
-        dof.limit_upper = m_->jnt_range[2 * j + 1];
-      }
-
+      JointOptions options = joint_options(j, joint_name);
       Transform body_xform = Transform::identity();
-      JointType type = JointType::Fixed;
-      switch (m_->jnt_type[j]) {
-        case mjJNT_HINGE:
-        case mjJNT_SLIDE: {
-          const bool hinge = m_->jnt_type[j] == mjJNT_HINGE;
-          type = hinge ? JointType::Revolute : JointType::Prismatic;
-          dof.stiffness = m_->jnt_stiffness[j];
-          dof.q_ref = m_->qpos_spring[qa];
-          // MuJoCo moves the joint by qpos - qpos0: fold -qpos0 into the parent joint frame
-          Transform ref;
-          const Vec3 axis = dof.axis.normalized();
-          if (hinge)
-            ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_->qpos0[qa], axis));
-          else
-            ref.p = -m_->qpos0[qa] * axis;
-          options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor} * ref;
-          options.child_xform = Transform{anchor};
-          break;
-        }
-        case mjJNT_BALL:
-          type = JointType::Ball;
-          options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor};
-          options.child_xform = Transform{anchor};
-          if (m_->jnt_limited[j]) warn("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
-          if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': ball joint stiffness is not modelled");
-          break;
-        case mjJNT_FREE:
-          // a free joint places the body frame directly at qpos (MuJoCo ignores its pos)
-          type = JointType::Free;
-          body_xform = static_pose_[0] * pose(m_->qpos0 + qa, m_->qpos0 + qa + 3);
-          if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': free joint stiffness is not modelled");
-          break;
-      }
-      for (int d = 0; d < joint_dof_count(type); ++d)
-        if (m_->dof_frictionloss[da + d] != 0) warn("joint '" + joint_name + "': frictionloss is not modelled");
+      const JointType type = joint_frames(j, k, P, joint_name, options, body_xform);
 
       RigidBody link = body;
       if (!last) link = RigidBody{0, Vec3::Zero(), Mat3::Zero()};
@@ -154,6 +93,94 @@ class MjcfImporter {
       parent = child;
     }
     out_.body_map[b] = parent;
+  }
+
+  // body b's mass, centre of mass and inertia in its body frame
+  RigidBody body_inertial(int b) const {
+    RigidBody body;
+    body.mass = m_->body_mass[b];
+    body.com = vec3(m_->body_ipos + 3 * b);
+    const Mat3 R = quat_wxyz(m_->body_iquat + 4 * b).normalized().toRotationMatrix();
+    body.inertia = R * vec3(m_->body_inertia + 3 * b).asDiagonal() * R.transpose();
+    return body;
+  }
+
+  // a body without joints (at B in its parent): static geometry where its parent is static, else a
+  // link on a Fixed joint to its parent
+  void add_welded_body(int b, const Transform& B, const RigidBody& body, const std::string& name) {
+    const int p = m_->body_parentid[b];
+    if (is_static(p)) {
+      static_pose_[b] = static_pose_[p] * B;
+      return;
+    }
+    const int child = builder_.add_body_checked(body, Transform::identity(), name, true);
+    JointOptions options;
+    options.parent_xform = B;
+    options.name = name + "_weld";
+    builder_.add_joint(JointType::Fixed, out_.body_map[p], child, options);
+    out_.body_map[b] = child;
+  }
+
+  // joint j's name, axis, armature, damping and (hinge and slide) limits
+  JointOptions joint_options(int j, const std::string& joint_name) const {
+    const int da = m_->jnt_dofadr[j];
+    JointOptions options;
+    options.name = joint_name;
+    JointDofConfig& dof = options.dof;
+    dof.axis = vec3(m_->jnt_axis + 3 * j);
+    dof.armature = m_->dof_armature[da];
+    dof.damping = m_->dof_damping[da];
+    if (m_->jnt_limited[j] && (m_->jnt_type[j] == mjJNT_HINGE || m_->jnt_type[j] == mjJNT_SLIDE)) {
+      dof.limit_lower = m_->jnt_range[2 * j];
+      dof.limit_upper = m_->jnt_range[2 * j + 1];
+    }
+    return options;
+  }
+
+  // joint j's type, its frames (the k-th joint of a body whose frame is P in its parent) and a Free
+  // joint's initial pose; warns of what it does not model
+  JointType joint_frames(int j, int k, const Transform& P, const std::string& joint_name, JointOptions& options,
+                         Transform& body_xform) {
+    const Vec3 anchor = vec3(m_->jnt_pos + 3 * j);
+    const int qa = m_->jnt_qposadr[j];
+    const int da = m_->jnt_dofadr[j];
+    JointDofConfig& dof = options.dof;
+    JointType type = JointType::Fixed;
+    switch (m_->jnt_type[j]) {
+      case mjJNT_HINGE:
+      case mjJNT_SLIDE: {
+        const bool hinge = m_->jnt_type[j] == mjJNT_HINGE;
+        type = hinge ? JointType::Revolute : JointType::Prismatic;
+        dof.stiffness = m_->jnt_stiffness[j];
+        dof.q_ref = m_->qpos_spring[qa];
+        // MuJoCo moves the joint by qpos - qpos0: fold -qpos0 into the parent joint frame
+        Transform ref;
+        const Vec3 axis = dof.axis.normalized();
+        if (hinge)
+          ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_->qpos0[qa], axis));
+        else
+          ref.p = -m_->qpos0[qa] * axis;
+        options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor} * ref;
+        options.child_xform = Transform{anchor};
+        break;
+      }
+      case mjJNT_BALL:
+        type = JointType::Ball;
+        options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor};
+        options.child_xform = Transform{anchor};
+        if (m_->jnt_limited[j]) warn("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
+        if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': ball joint stiffness is not modelled");
+        break;
+      case mjJNT_FREE:
+        // a free joint places the body frame directly at qpos (MuJoCo ignores its pos)
+        type = JointType::Free;
+        body_xform = static_pose_[0] * pose(m_->qpos0 + qa, m_->qpos0 + qa + 3);
+        if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': free joint stiffness is not modelled");
+        break;
+    }
+    for (int d = 0; d < joint_dof_count(type); ++d)
+      if (m_->dof_frictionloss[da + d] != 0) warn("joint '" + joint_name + "': frictionloss is not modelled");
+    return type;
   }
 
   void add_geom(int g) {

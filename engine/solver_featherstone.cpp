@@ -320,21 +320,16 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
-  std::fill(data_.touched.begin(), data_.touched.end(), 0);
-  int unexpected = -1;  // a contact joining articulations whose shapes the filter keeps apart
-  auto touch = [&](int c) {
-    const int a = index_.moving(contacts.contact_body_a[c]), b = index_.moving(contacts.contact_body_b[c]);
-    if (a < 0 || b < 0 || a == b) return;
-    if (!may_touch_[a] || !may_touch_[b]) {
-#pragma omp atomic write
-      unexpected = c;
-    }
-#pragma omp atomic write
-    data_.touched[a] = 1;
-#pragma omp atomic write
-    data_.touched[b] = 1;
-  };
-  auto look_up = [&](int c) {
+  step.lists = {data_.contact_start.data(),  data_.contact_list.data(), data_.contact_link_a.data(),
+                data_.contact_link_b.data(), data_.contact_mu.data(),   data_.contact_restitution.data()};
+  step.touched = data_.touched.data();
+  island_contacts_.clear();
+  island_articulations_ = dense_rows_;
+  if (n == 0 && listed_ == 0) return;  // the lists are empty already
+  listed_ = n;
+  const int threads = std::min(thread_count(), n / 1024);
+  touch_articulations(contacts, threads);
+  parallel_for(threads, n, [&](int c) {
     const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
     const int a = index_.moving(ba), b = index_.moving(bb), art = a >= 0 ? a : b;
     const bool unit = art >= 0 && route_[art] == batches_.get() && !data_.touched[art];
@@ -345,27 +340,35 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
     data_.contact_mu[c] = contact_friction(model_, sa, sb);
     data_.contact_restitution[c] = contact_restitution(model_, sa, sb);
-  };
-  const int threads = std::min(thread_count(), n / 1024);
-  parallel_for(threads, n, touch);
-  if (unexpected >= 0)
-    fail("contact ", unexpected, " joins bodies ", contacts.contact_body_a[unexpected], " and ",
-         contacts.contact_body_b[unexpected],
-         " of two articulations whose shapes the model's collision filter "
-         "keeps apart");
-  parallel_for(threads, n, look_up);
+  });
   group_by_key(
       n, articulations, [&](int c) { return data_.contact_owner[c]; }, data_.contact_start.data(),
       data_.contact_list.data(), data_.fill.data());
-  step.lists = {data_.contact_start.data(),  data_.contact_list.data(), data_.contact_link_a.data(),
-                data_.contact_link_b.data(), data_.contact_mu.data(),   data_.contact_restitution.data()};
-  step.touched = data_.touched.data();
-  island_contacts_.clear();
   for (int c = 0; c < n; ++c)
     if (data_.contact_owner[c] < 0) island_contacts_.push_back(c);
-  island_articulations_ = dense_rows_;
-  for (int a = 0; a < articulations; ++a)
-    if (data_.touched[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
+  if (may_touch_any_)
+    for (int a = 0; a < articulations; ++a)
+      if (data_.touched[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
+}
+
+void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threads) {
+  std::fill(data_.touched.begin(), data_.touched.end(), 0);
+  int unexpected = -1;  // a contact joining articulations whose shapes the filter keeps apart
+  parallel_for(threads, contacts.contact_count, [&](int c) {
+    const int a = index_.moving(contacts.contact_body_a[c]), b = index_.moving(contacts.contact_body_b[c]);
+    if (a < 0 || b < 0 || a == b) return;
+    if (!may_touch_[a] || !may_touch_[b]) {
+#pragma omp atomic write
+      unexpected = c;
+    }
+#pragma omp atomic write
+    data_.touched[a] = 1;
+#pragma omp atomic write
+    data_.touched[b] = 1;
+  });
+  if (unexpected >= 0)
+    fail("contact ", unexpected, " joins bodies ", contacts.contact_body_a[unexpected], " and ",
+         contacts.contact_body_b[unexpected], " of two articulations the model's collision filter keeps apart");
 }
 
 void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) {

@@ -106,6 +106,9 @@ class SolverFeatherstone {
   void actuate(const Control& control, StepContext& step);
   // each contact to its articulation's unit, or to the islands with every row of the articulations it joins
   void list_contacts(const Contacts& contacts, StepContext& step);
+  // data_.touched: the articulations a contact joins to another moving one (throws for a contact between
+  // articulations whose shapes the model's filter keeps apart, which no CollisionPipeline makes)
+  void touch_articulations(const Contacts& contacts, int threads);
   // the stages first..last over every unit of both routes: block-major, a unit's in turn on its thread;
   // stage-major (profiling), each over all units before the next; the factors checked after Dynamics
   void pass(const StepContext& step, Stage first, Stage last);
@@ -141,6 +144,7 @@ class SolverFeatherstone {
   std::vector<const StepRoute*> route_;
   std::vector<int> dense_rows_;
   std::vector<int> island_articulations_, island_contacts_;  // this step's
+  int listed_ = 0;                                           // the contacts the last step listed
   SolverCounts counts_;
   SolverData data_;
   std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays

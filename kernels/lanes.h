@@ -16,14 +16,28 @@
 
 namespace novaphy {
 
-#ifndef NOVAPHY_VECTOR_BYTES
+// the target's widest vectors; the lanes are as wide unless the build names narrower ones
 #if defined(__AVX512F__)
-#define NOVAPHY_VECTOR_BYTES 64
+#define NOVAPHY_TARGET_VECTOR_BYTES 64
 #elif defined(__AVX__)
-#define NOVAPHY_VECTOR_BYTES 32
+#define NOVAPHY_TARGET_VECTOR_BYTES 32
 #else
-#define NOVAPHY_VECTOR_BYTES 16
+#define NOVAPHY_TARGET_VECTOR_BYTES 16
 #endif
+#ifndef NOVAPHY_VECTOR_BYTES
+#define NOVAPHY_VECTOR_BYTES NOVAPHY_TARGET_VECTOR_BYTES
+#endif
+// an installed NovaPhy defines the target width and -march its library was compiled for (CMakeLists.txt):
+// code compiled for a target with other vectors would lay out the lanes and Eigen's types unlike the library
+#ifdef NOVAPHY_LIBRARY_TARGET_VECTOR_BYTES
+#ifndef NOVAPHY_LIBRARY_ARCH
+#define NOVAPHY_LIBRARY_ARCH "the library's -march"
+#endif
+static_assert(NOVAPHY_TARGET_VECTOR_BYTES == NOVAPHY_LIBRARY_TARGET_VECTOR_BYTES,
+              "NovaPhy's library was compiled with " NOVAPHY_LIBRARY_ARCH
+              ", for a target whose vectors differ in width "
+              "from this compilation's: compile the code that includes NovaPhy's headers with the same -march (the "
+              "novaphy:: CMake targets pass it)");
 #endif
 
 inline constexpr int kVectorBytes = NOVAPHY_VECTOR_BYTES;
@@ -50,9 +64,8 @@ template <typename T>
 using IntLanes = typename LaneTypes<T>::mask;
 
 // true when some lane of the mask m is set: one test of the whole register where the machine has one
-// (AVX-512's into a mask register, AVX's vptest: measured 1.01-1.015x the contact-free quadruped's step
-// and 1.036x the standing one's, one thread, against ORing its words), else read as words (a vector
-// compare and a branch per lane would cost more than the test it guards)
+// (AVX-512's into a mask register, AVX's vptest), else read as words (a vector compare and a branch per
+// lane would cost more than the test it guards)
 template <typename T>
 inline bool any_lane(const IntLanes<T>& m) {
 #if defined(__AVX512F__)

@@ -8,6 +8,108 @@ namespace novaphy {
 
 using namespace lane_math;
 
+namespace {
+
+// link i's joint type, parent and starts, and its dofs' parents (last_dof: the deepest dof at or above
+// each link, link i's set here)
+template <typename T>
+void link_tree(const ArticulationView& art, int i, BatchTopology<T>& topo, std::vector<int>& last_dof) {
+  typename BatchTopology<T>::Link& L = topo.link[i];
+  L.type = art.type(i);
+  L.parent = art.parent(i);
+  L.q_start = art.q_start(i);
+  L.qd_start = art.qd_start(i);
+  L.dof = art.dof(i);
+  int up = L.parent < 0 ? -1 : last_dof[L.parent];
+  for (int k = 0; k < L.dof; ++k) {
+    topo.dof_parent[L.qd_start + k] = up;
+    up = L.qd_start + k;
+  }
+  last_dof[i] = up;
+  if (L.type == JointType::Revolute || L.type == JointType::Prismatic) topo.coord_of_dof[L.qd_start] = L.q_start;
+}
+
+// link i's joint frames, rotations and translations in precision T
+template <typename T>
+void link_frames(const ArticulationView& art, int i, typename BatchTopology<T>::Link& L) {
+  const Transform Xp = art.X_p(i), Xc = art.X_c(i), Xci = Xc.inverse();
+  const Vec3 a = art.axis(i);
+  const Mat3 Rp = Xp.rotation();
+  const Vec3 b = Xci.p;
+  auto quat = [](const Quat& q, T* out) { out[0] = q.x(), out[1] = q.y(), out[2] = q.z(), out[3] = q.w(); };
+  const Quat P0 = Xp.q * Xci.q;
+  const Quat P1 = Xp.q * Quat(0, a.x(), a.y(), a.z()) * Xci.q;
+  quat(P0, L.P0);
+  quat(P1, L.P1);
+  quat(Xp.q, L.Qp);
+  quat(Xci.q, L.Qci);
+  const Mat3 Rc = Xc.rotation();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) L.Rp[3 * r + c] = static_cast<T>(Rp(r, c)), L.Rc[3 * r + c] = static_cast<T>(Rc(r, c));
+  const Vec3 T0 = Xp.p + Rp * b;
+  Vec3 T1 = Vec3::Zero(), T2 = Vec3::Zero();
+  if (L.type == JointType::Revolute) T1 = Rp * a.cross(b), T2 = Rp * a.cross(a.cross(b));
+  if (L.type == JointType::Prismatic) T1 = Rp * a;
+  const Vec3 ac = Rc * a;
+  copy_n(Xp.p.data(), 3, L.tp);
+  copy_n(T0.data(), 3, L.T0);
+  copy_n(T1.data(), 3, L.T1);
+  copy_n(T2.data(), 3, L.T2);
+  copy_n(b.data(), 3, L.b);
+  copy_n(Xc.p.data(), 3, L.tc);
+  copy_n(ac.data(), 3, L.ac);
+}
+
+// each dof's ancestors ascending (ancestor_start, ancestors) and where its row starts in the packed triangle
+template <typename T>
+void list_ancestors(BatchTopology<T>& topo) {
+  topo.ancestor_start.assign(1, 0);
+  topo.row_start.resize(topo.dof_count);
+  for (int k = 0; k < topo.dof_count; ++k) {
+    const size_t first = topo.ancestors.size();
+    for (int j = topo.dof_parent[k]; j >= 0; j = topo.dof_parent[j]) topo.ancestors.push_back(j);
+    std::reverse(topo.ancestors.begin() + first, topo.ancestors.end());
+    topo.ancestor_start.push_back(static_cast<int>(topo.ancestors.size()));
+    topo.row_start[k] = packed_index(k, 0);
+  }
+}
+
+// each dof's ancestors as runs of consecutive dofs (run_start, ancestor_runs)
+template <typename T>
+void list_ancestor_runs(BatchTopology<T>& topo) {
+  auto& runs = topo.ancestor_runs;
+  topo.run_start.assign(1, 0);
+  for (int k = 0; k < topo.dof_count; ++k) {
+    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p) {
+      const bool extends =
+          static_cast<int>(runs.size()) > topo.run_start[k] && runs.back().dof + runs.back().count == topo.ancestors[p];
+      if (extends)
+        ++runs.back().count;
+      else
+        runs.push_back({topo.ancestors[p], 1});
+    }
+    topo.run_start.push_back(static_cast<int>(runs.size()));
+  }
+}
+
+// each link's dofs, its ancestors' and its own ascending (link_dof_start, link_dofs)
+template <typename T>
+void list_link_dofs(BatchTopology<T>& topo, const std::vector<int>& last_dof) {
+  topo.link_dof_start.assign(1, 0);
+  const int n = static_cast<int>(topo.link.size());
+  for (int i = 0; i < n; ++i) {
+    const int d = last_dof[i];
+    if (d >= 0) {
+      topo.link_dofs.insert(topo.link_dofs.end(), topo.ancestors.begin() + topo.ancestor_start[d],
+                            topo.ancestors.begin() + topo.ancestor_start[d + 1]);
+      topo.link_dofs.push_back(d);
+    }
+    topo.link_dof_start.push_back(static_cast<int>(topo.link_dofs.size()));
+  }
+}
+
+}  // namespace
+
 template <typename T>
 BatchTopology<T>::BatchTopology(const ArticulationView& art) {
   const int n = art.link_count();
@@ -18,79 +120,12 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
   coord_of_dof.assign(dof_count, -1);
   std::vector<int> last_dof(n, -1);  // deepest dof at or above each link
   for (int i = 0; i < n; ++i) {
-    Link& L = link[i];
-    L.type = art.type(i);
-    L.parent = art.parent(i);
-    L.q_start = art.q_start(i);
-    L.qd_start = art.qd_start(i);
-    L.dof = art.dof(i);
-    int up = L.parent < 0 ? -1 : last_dof[L.parent];
-    for (int k = 0; k < L.dof; ++k) {
-      dof_parent[L.qd_start + k] = up;
-      up = L.qd_start + k;
-    }
-    last_dof[i] = up;
-    if (L.type == JointType::Revolute || L.type == JointType::Prismatic) coord_of_dof[L.qd_start] = L.q_start;
-
-    const Transform Xp = art.X_p(i), Xc = art.X_c(i), Xci = Xc.inverse();
-    const Vec3 a = art.axis(i);
-    const Mat3 Rp = Xp.rotation();
-    const Vec3 b = Xci.p;
-    auto quat = [](const Quat& q, T* out) { out[0] = q.x(), out[1] = q.y(), out[2] = q.z(), out[3] = q.w(); };
-    const Quat P0 = Xp.q * Xci.q;
-    const Quat P1 = Xp.q * Quat(0, a.x(), a.y(), a.z()) * Xci.q;
-    quat(P0, L.P0);
-    quat(P1, L.P1);
-    quat(Xp.q, L.Qp);
-    quat(Xci.q, L.Qci);
-    const Mat3 Rc = Xc.rotation();
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        L.Rp[3 * r + c] = static_cast<T>(Rp(r, c)), L.Rc[3 * r + c] = static_cast<T>(Rc(r, c));
-    const Vec3 T0 = Xp.p + Rp * b;
-    Vec3 T1 = Vec3::Zero(), T2 = Vec3::Zero();
-    if (L.type == JointType::Revolute) T1 = Rp * a.cross(b), T2 = Rp * a.cross(a.cross(b));
-    if (L.type == JointType::Prismatic) T1 = Rp * a;
-    const Vec3 ac = Rc * a;
-    copy_n(Xp.p.data(), 3, L.tp);
-    copy_n(T0.data(), 3, L.T0);
-    copy_n(T1.data(), 3, L.T1);
-    copy_n(T2.data(), 3, L.T2);
-    copy_n(b.data(), 3, L.b);
-    copy_n(Xc.p.data(), 3, L.tc);
-    copy_n(ac.data(), 3, L.ac);
+    link_tree(art, i, *this, last_dof);
+    link_frames<T>(art, i, link[i]);
   }
-  ancestor_start.assign(1, 0);
-  row_start.resize(dof_count);
-  for (int k = 0; k < dof_count; ++k) {
-    const size_t first = ancestors.size();
-    for (int j = dof_parent[k]; j >= 0; j = dof_parent[j]) ancestors.push_back(j);
-    std::reverse(ancestors.begin() + first, ancestors.end());
-    ancestor_start.push_back(static_cast<int>(ancestors.size()));
-    row_start[k] = packed_index(k, 0);
-  }
-  run_start.assign(1, 0);
-  for (int k = 0; k < dof_count; ++k) {
-    for (int p = ancestor_start[k]; p < ancestor_start[k + 1]; ++p) {
-      const bool extends = static_cast<int>(ancestor_runs.size()) > run_start[k] &&
-                           ancestor_runs.back().dof + ancestor_runs.back().count == ancestors[p];
-      if (extends)
-        ++ancestor_runs.back().count;
-      else
-        ancestor_runs.push_back({ancestors[p], 1});
-    }
-    run_start.push_back(static_cast<int>(ancestor_runs.size()));
-  }
-  link_dof_start.assign(1, 0);
-  for (int i = 0; i < n; ++i) {
-    const int d = last_dof[i];
-    if (d >= 0) {
-      link_dofs.insert(link_dofs.end(), ancestors.begin() + ancestor_start[d],
-                       ancestors.begin() + ancestor_start[d + 1]);
-      link_dofs.push_back(d);
-    }
-    link_dof_start.push_back(static_cast<int>(link_dofs.size()));
-  }
+  list_ancestors(*this);
+  list_ancestor_runs(*this);
+  list_link_dofs(*this, last_dof);
 }
 
 template <typename T>

@@ -1,0 +1,293 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "engine/builder.h"
+#include "engine/dynamics.h"
+#include "engine/solver_featherstone.h"
+#include "solver_test_support.h"
+#include "test_support_errors.h"
+
+namespace novaphy {
+namespace {
+
+using namespace solver_test;
+
+// the finite checks of a state long enough to be split over threads still name the first bad entry
+TEST(SolverFeatherstoneErrors, ANonFiniteEntryOfALargeStateIsNamedOnAnyThreadCount) {
+  ModelBuilder world, builder;
+  add_box(world, Vec3(0, 0.5, 0));
+  builder.replicate(world, 12000);  // 84000 coordinates, 72000 body_f entries
+  const Model model = builder.finalize();
+  for (const int threads : {1, 2}) {
+    SolverFeatherstoneSettings settings;
+    settings.num_threads = threads;
+    SolverFeatherstone solver(model, settings);
+    CollisionPipeline pipeline(model);
+    Contacts contacts = pipeline.contacts();
+    State state = model.state();
+    const Control control = model.control();
+    state.body_f[6 * 11999 + 4] = std::numeric_limits<Scalar>::infinity();
+    state.body_f[6 * 11999 + 5] = std::nan("");
+    EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), "body_f[71998] is not finite: inf");
+    state.body_f = model.state().body_f;
+    state.joint_q[7 * 9000 + 2] = std::nan("");
+    EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), "joint_q[63002] is not finite: nan");
+  }
+}
+
+// the PD targets enter a step only through a nonzero gain: without one, non-finite targets are not read (the
+// steps equal those with finite targets, on the batched and the scalar path); with one, the first is named
+// and nothing is written
+TEST(SolverFeatherstoneErrors, PdTargetsAreCheckedWhenAGainReadsThem) {
+  ModelBuilder builder;
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.child_xform.p = Vec3(0, 0.25, 0);  // each hinge at the top of its link
+  const int upper = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  builder.add_joint_revolute(-1, upper, options);
+  const int lower = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  options.parent_xform.p = Vec3(0, -0.25, 0);
+  builder.add_joint_revolute(upper, lower, options);
+  for (const bool batched : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.use_batch_kernels = batched;
+    Scene finite(builder, settings), bad(builder, settings);
+    finite.state.joint_q[0] = bad.state.joint_q[0] = 0.5;
+    bad.control.joint_target_pos[0] = std::nan("");
+    bad.control.joint_target_vel[1] = std::numeric_limits<Scalar>::infinity();
+    finite.run(0.5);
+    bad.run(0.5);
+    EXPECT_EQ(bad.state.joint_q, finite.state.joint_q) << "batched " << batched;
+    EXPECT_EQ(bad.state.joint_qd, finite.state.joint_qd) << "batched " << batched;
+    EXPECT_EQ(bad.state.body_q, finite.state.body_q) << "batched " << batched;
+
+    const State before = bad.state;
+    bad.control.joint_target_kd[1] = 1;
+    EXPECT_NOVAPHY_ERROR(bad.solver.step(bad.state, bad.state, bad.control, bad.contacts, kDt),
+                         "joint_target_pos[0] is not finite: nan");
+    bad.control.joint_target_pos[0] = 0;
+    EXPECT_NOVAPHY_ERROR(bad.solver.step(bad.state, bad.state, bad.control, bad.contacts, kDt),
+                         "joint_target_vel[1] is not finite: inf");
+    EXPECT_EQ(bad.state.joint_q, before.joint_q);
+    EXPECT_EQ(bad.state.body_q, before.body_q);
+  }
+}
+
+TEST(SolverFeatherstoneErrors, BadStepArguments) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  add_box(builder, Vec3(0, 0.5, 0));
+  Scene scene(builder);
+  const State before = scene.state;
+  for (const Scalar dt : {0.0, -0.01, std::nan("")})
+    EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, dt),
+                         "dt must be finite and > 0");
+
+  ModelBuilder other;
+  other.add_ground_plane();
+  add_box(other, Vec3(0, 0.5, 0));
+  add_box(other, Vec3(0, 1.5, 0));
+  Scene foreign(other);
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(foreign.state, scene.state, scene.control, scene.contacts, kDt),
+                       "state or control from another model");
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, foreign.contacts, kDt),
+                       "contacts buffer is from another model");
+  EXPECT_NOVAPHY_ERROR(scene.pipeline.collide(scene.state, foreign.contacts),
+                       "contacts buffer was not made by this pipeline");
+
+  scene.solver.settings.num_iterations = -1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.num_iterations must be >= 0, got -1");
+  scene.solver.settings = {};
+  scene.solver.settings.erp = 1.5;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.erp must be in [0, 1], got 1.5");
+  scene.solver.settings = {};
+  scene.solver.settings.update_mass_matrix_interval = 0;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.update_mass_matrix_interval must be >= 1, got 0");
+  scene.solver.settings = {};
+  scene.solver.settings.aba_min_dofs = -1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.aba_min_dofs must be >= 0, got -1");
+  scene.solver.settings = {};
+  scene.solver.settings.stream_body_output_above = -1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.stream_body_output_above must be >= 0 bytes, got -1");
+  scene.solver.settings = {};
+  scene.solver.settings.coriolis_implicitness = 1.5;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "settings.coriolis_implicitness must be in [0, 1], got 1.5");
+  scene.solver.settings = {};
+  scene.control.joint_f[2] = std::nan("");
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                       "joint_f[2] is not finite: nan");
+  // nothing was written by the failed steps
+  EXPECT_EQ(scene.state.joint_q, before.joint_q);
+  EXPECT_EQ(scene.state.body_q, before.body_q);
+
+  // a velocity no double can hold after the step: the step raises and leaves the state as it was
+  scene.control.joint_f[2] = 0;
+  scene.control.joint_f[3] = 1e308;
+  scene.state.joint_qd[3] = 1e308;
+  const State fast = scene.state;
+  scene.solver.settings.on_divergence = DivergencePolicy::Raise;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1.0),
+                       "step diverged in articulation 0");
+  EXPECT_EQ(scene.state.joint_q, fast.joint_q);
+  EXPECT_EQ(scene.state.joint_qd, fast.joint_qd);
+
+  SolverFeatherstoneSettings bad;
+  bad.friction_smoothing = -1;
+  EXPECT_NOVAPHY_ERROR(SolverFeatherstone(scene.model, bad), "settings.friction_smoothing must be in [0, 1], got -1");
+  bad = {};
+  bad.pgs_tolerance = std::nan("");
+  EXPECT_NOVAPHY_ERROR(SolverFeatherstone(scene.model, bad), "settings.pgs_tolerance must be in [0, 1000000], got nan");
+}
+
+// ---- the divergence guard ----
+
+// four pendulums side by side; the third is thrown at a speed beyond divergence_speed
+ModelBuilder pendulums() {
+  ModelBuilder builder;
+  for (int k = 0; k < 4; ++k) {
+    const int link = builder.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+    JointOptions options;
+    options.dof.axis = Vec3::UnitZ();
+    options.parent_xform.p = Vec3(k, 2, 0);
+    options.child_xform.p = Vec3(-0.25, 0, 0);
+    builder.add_joint_revolute(-1, link, options);
+  }
+  return builder;
+}
+
+TEST(DivergenceGuard, FlagsOnlyTheDivergedArticulationAndKeepsItsState) {
+  Scene calm(pendulums()), wild(pendulums());
+  wild.state.joint_qd[2] = 2e6;
+  const std::vector<Scalar> q_before(wild.state.joint_q), qd_before(wild.state.joint_qd);
+  calm.run(kDt);
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+  EXPECT_EQ(wild.state.joint_q[2], q_before[2]);  // kept as it was
+  EXPECT_EQ(wild.state.joint_qd[2], qd_before[2]);
+  for (const int k : {0, 1, 3}) {  // the others stepped exactly as without it
+    EXPECT_EQ(wild.state.joint_q[k], calm.state.joint_q[k]);
+    EXPECT_EQ(wild.state.joint_qd[k], calm.state.joint_qd[k]);
+  }
+  wild.state.joint_qd[2] = 0;
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 0, 0}));
+}
+
+TEST(DivergenceGuard, ResetRestartsFromTheInitialState) {
+  SolverFeatherstoneSettings settings;
+  settings.on_divergence = DivergencePolicy::Reset;
+  Scene wild(pendulums(), settings);
+  wild.run(0.5);
+  wild.state.joint_qd[2] = std::numeric_limits<Scalar>::max();
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged()[2], 1);
+  EXPECT_EQ(wild.state.joint_q[2], wild.model.joint_q0[2]);
+  EXPECT_EQ(wild.state.joint_qd[2], 0);
+  EXPECT_NE(wild.state.joint_q[1], wild.model.joint_q0[1]);  // the others went on swinging
+}
+
+// four worlds of one pendulum, in one block: the blocks write each world's new state as they step it,
+// all but the worlds they flag
+ModelBuilder pendulum_worlds(Precision precision) {
+  ModelBuilder robot, worlds;
+  const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.parent_xform.p = Vec3(0, 2, 0);
+  options.child_xform.p = Vec3(-0.25, 0, 0);
+  robot.add_joint_revolute(-1, link, options);
+  worlds.set_precision(precision);
+  worlds.replicate(robot, 4);
+  return worlds;
+}
+
+TEST(DivergenceGuard, AFlaggedWorldOfABlockKeepsItsStateAndBodies) {
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    Scene calm(pendulum_worlds(precision)), wild(pendulum_worlds(precision));
+    const int lanes = wild.solver.batches()->lanes();  // world 2 shares its block with world 3 at least
+    ASSERT_EQ(wild.solver.batches()->block_count(), (4 + lanes - 1) / lanes);
+    calm.run(0.1);
+    wild.run(0.1);
+    wild.state.joint_qd[2] = 2e6;
+    const State before = wild.state;
+    calm.run(kDt);
+    wild.run(kDt);
+    EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+    EXPECT_EQ(wild.state.joint_q[2], before.joint_q[2]);
+    EXPECT_EQ(wild.state.joint_qd[2], before.joint_qd[2]);
+    // its bodies from its kept state
+    State fk = wild.state;
+    eval_fk(wild.model, fk);
+    for (int m = 0; m < 7; ++m) EXPECT_NEAR(wild.state.body_q[7 * 2 + m], fk.body_q[7 * 2 + m], 1e-12);
+    for (int m = 0; m < 6; ++m) EXPECT_NEAR(wild.state.body_qd[6 * 2 + m], fk.body_qd[6 * 2 + m], 1e-9);
+    for (const int k : {0, 1, 3}) {  // the others stepped exactly as without it
+      EXPECT_EQ(wild.state.joint_q[k], calm.state.joint_q[k]);
+      EXPECT_EQ(wild.state.joint_qd[k], calm.state.joint_qd[k]);
+      for (int m = 0; m < 7; ++m) EXPECT_EQ(wild.state.body_q[7 * k + m], calm.state.body_q[7 * k + m]);
+    }
+  }
+}
+
+// a mass matrix that is not positive definite in one world (its link made massless on the Model, as no
+// builder call allows) raises; that world is left as it was, and under Raise every world is
+TEST(SolverFeatherstoneErrors, AFailedMassMatrixLeavesItsWorldAsItWas) {
+  for (const DivergencePolicy policy : {DivergencePolicy::Flag, DivergencePolicy::Raise}) {
+    Model model = pendulum_worlds(Precision::Float32).finalize();
+    model.body_mass[1] = 0;
+    std::fill_n(model.body_inertia.begin() + 9, 9, 0);
+    SolverFeatherstoneSettings settings;
+    settings.on_divergence = policy;
+    SolverFeatherstone solver(model, settings);
+    CollisionPipeline pipeline(model);
+    Contacts contacts = pipeline.contacts();
+    State state = model.state();
+    const State before = state;
+    EXPECT_NOVAPHY_ERROR(solver.step(state, state, model.control(), contacts, kDt),
+                         "articulation 1: mass matrix is not positive definite at dof 1");
+    EXPECT_EQ(state.joint_q[1], before.joint_q[1]);
+    EXPECT_EQ(state.joint_qd[1], before.joint_qd[1]);
+    for (int m = 0; m < 7; ++m) EXPECT_EQ(state.body_q[7 + m], before.body_q[7 + m]);
+    if (policy == DivergencePolicy::Raise) {
+      EXPECT_EQ(state.joint_q, before.joint_q);
+      EXPECT_EQ(state.joint_qd, before.joint_qd);
+      EXPECT_EQ(state.body_q, before.body_q);
+      EXPECT_EQ(state.body_qd, before.body_qd);
+    } else {  // the others were stepped as they went (the one exception to "nothing is written")
+      EXPECT_NE(state.joint_qd[0], before.joint_qd[0]);
+    }
+  }
+}
+
+// a body whose step overflows to infinity while it rests on another: no NaN crosses the contact
+TEST(DivergenceGuard, NoNanSpreadsThroughContacts) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  const int bottom = add_box(builder, Vec3(0, 0.2, 0));
+  const int top = add_box(builder, Vec3(0, 0.6, 0));
+  Scene scene(builder);
+  scene.run(0.5);
+  scene.state.joint_qd[6 + 4] = 1e308;  // the top box's Free dofs: [w; v]
+  scene.control.joint_f[6 + 4] = 1e308;
+  scene.pipeline.collide(scene.state, scene.contacts);
+  scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1.0);
+  EXPECT_EQ(scene.solver.diverged(), (std::vector<std::uint8_t>{0, 1}));
+  for (const Scalar x : scene.state.body_q) EXPECT_TRUE(std::isfinite(x));
+  for (int c = 0; c < 3 * scene.contacts.contact_count; ++c)
+    EXPECT_TRUE(std::isfinite(scene.contacts.contact_impulse[c]));
+  EXPECT_NEAR(scene.position(bottom).y(), 0.2, 0.01);
+  EXPECT_NEAR(scene.position(top).y(), 0.6, 0.01);
+}
+
+}  // namespace
+}  // namespace novaphy
