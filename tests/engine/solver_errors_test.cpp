@@ -289,5 +289,24 @@ TEST(DivergenceGuard, NoNanSpreadsThroughContacts) {
   EXPECT_NEAR(scene.position(top).y(), 0.6, 0.01);
 }
 
+// a contact no collision pipeline makes: between the boxes of two worlds, which the model keeps apart. The
+// solver plans the rows that join articulations from the model's filter, so it names the contact
+TEST(SolverFeatherstoneErrors, AContactBetweenWorldsIsNamed) {
+  ModelBuilder world, builder;
+  add_box(world, Vec3(0, 0.5, 0));
+  builder.replicate(world, 2);
+  Scene scene(builder);
+  Contacts& contacts = scene.contacts;
+  ASSERT_GE(contacts.contact_capacity, 1);
+  contacts.contact_count = 1;
+  contacts.contact_shape_a[0] = 0;
+  contacts.contact_shape_b[0] = 1;
+  contacts.contact_body_a[0] = 0;
+  contacts.contact_body_b[0] = 1;
+  contacts.contact_normal[2] = 1;
+  EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, contacts, kDt),
+                       "contact 0 joins bodies 0 and 1 of two articulations the model's collision filter keeps apart");
+}
+
 }  // namespace
 }  // namespace novaphy
