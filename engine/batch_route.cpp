@@ -140,7 +140,7 @@ class Batches final : public ArticulationBatches {
     return sum;
   }
 
-  void solve_mass(int a, Scalar* x) const override {
+  void solve_mass(int a, Scalar* x) override {
     // rows come a world at a time: its factor is copied out of the block once per step and thread
     const Slot& s = slot_[a];
     const BatchGroup<T>& G = groups_[s.group];
@@ -367,7 +367,7 @@ class Batches final : public ArticulationBatches {
   std::vector<Slot> slot_;                  // per articulation
   std::vector<int> limit_cell_;             // [2 * limit slot + side] (limit_cells)
   int limit_cell_count_ = 0;
-  mutable std::vector<ThreadScratch<T>> scratch_;  // per thread
+  std::vector<ThreadScratch<T>> scratch_;  // per thread
 };
 
 }  // namespace

@@ -425,18 +425,6 @@ void CollisionPipeline::place_shared(const State& state) {
   for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
 }
 
-bool CollisionPipeline::overlap(const Box& a, const Box& b) {
-  return boxes_overlap(a.lower.data(), a.upper.data(), b.lower.data(), b.upper.data());
-}
-
-void CollisionPipeline::test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out) const {
-  if (!overlap(A, B) || !may_collide(a, b)) return;
-  if (a < b)
-    narrow_phase(a, A.pose, b, B.pose, out);
-  else
-    narrow_phase(b, B.pose, a, A.pose, out);
-}
-
 void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scratch) {
   const int first = group_first_[g], count = group_first_[g + 1] - first;
   if (count == 1) {

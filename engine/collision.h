@@ -139,10 +139,18 @@ class CollisionPipeline {
   void keep_previous(Contacts& contacts) const;
   // the poses of the planes on bodies and the boxes of the shapes of no world at `state`
   void place_shared(const State& state);
-  // whether two boxes overlap
-  static bool overlap(const Box& a, const Box& b);
+  // whether two boxes overlap (inline: the broad phase's innermost test)
+  static bool overlap(const Box& a, const Box& b) {
+    return boxes_overlap(a.lower.data(), a.upper.data(), b.lower.data(), b.upper.data());
+  }
   // the narrow phase of shapes a and b (either order) where their boxes overlap and they may collide
-  void test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out) const;
+  void test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out) const {
+    if (!overlap(A, B) || !may_collide(a, b)) return;
+    if (a < b)
+      narrow_phase(a, A.pose, b, B.pose, out);
+    else
+      narrow_phase(b, B.pose, a, A.pose, out);
+  }
   // the contacts of group g's worlds into scratch.found: a world alone, or each lane's after group_boxes
   void group_contacts(const State& state, int g, Scratch& scratch);
   // world w's contacts into scratch.found; hits: its boxes are in scratch already, with the pairs found

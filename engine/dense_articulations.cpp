@@ -214,9 +214,9 @@ const Scalar* DenseArticulations::link_wrenches(int a, const Scalar* body_f) {
   return link_f_.data();
 }
 
-void DenseArticulations::solve_mass(int a, Scalar* x) const {
+void DenseArticulations::solve_mass(int a, Scalar* x) {
   if (factor_[a] == Factor::Aba)
-    aba_solve(art_[a], const_cast<ArticulationScratch&>(scratch_[a]), x);
+    aba_solve(art_[a], scratch_[a], x);
   else
     cholesky_solve(scratch_[a].H, x);
 }

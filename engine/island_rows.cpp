@@ -20,7 +20,7 @@ IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& 
   limit_row_.assign(2 * static_cast<size_t>(model.joint_dof_count), -1);
 }
 
-void IslandRows::begin(const std::vector<const StepRoute*>& route) {
+void IslandRows::begin(const std::vector<StepRoute*>& route) {
   route_ = &route;
   row_count_ = 0;
   pool_size_ = 0;

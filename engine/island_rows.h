@@ -21,7 +21,7 @@ class IslandRows {
              const std::vector<int>& limit_cell);
 
   // this step's rows afresh; route[a]: the route stepping articulation a
-  void begin(const std::vector<const StepRoute*>& route);
+  void begin(const std::vector<StepRoute*>& route);
   // the limit rows of `articulations`, then the rows of `contacts`
   void add_limit_rows(const StepContext& step, const std::vector<int>& articulations);
   void add_contact_rows(const StepContext& step, const std::vector<int>& contacts);
@@ -47,7 +47,7 @@ class IslandRows {
   const std::vector<int>& limited_joints_;
   const std::vector<int>& limited_start_;
   const std::vector<int>& limit_cell_;
-  const std::vector<const StepRoute*>* route_ = nullptr;
+  const std::vector<StepRoute*>* route_ = nullptr;
   std::vector<PgsRow> rows_;
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;  // the rows' pools

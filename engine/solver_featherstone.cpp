@@ -79,37 +79,6 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
 
 // ---- made once: the articulations the kernels see, where bodies and dofs sit, the routes and their data
 
-namespace {
-
-// per articulation: 1 where one of its shapes may touch a shape of another moving articulation (the
-// model's collision filter: worlds, groups and masks), so that a contact may join the two
-std::vector<std::uint8_t> may_touch(const Model& model, const ArticulationIndex& index) {
-  std::vector<std::uint8_t> touch(model.articulation_count, 0);
-  std::vector<std::vector<int>> by_world(model.world_count + 1);  // the last: shapes of every world
-  for (int s = 0; s < model.shape_count; ++s)
-    if (index.moving(model.shape_body[s]) >= 0)
-      by_world[model.shape_world[s] < 0 ? model.world_count : model.shape_world[s]].push_back(s);
-  auto pair = [&](int a, int b) {
-    const int x = index.moving(model.shape_body[a]), y = index.moving(model.shape_body[b]);
-    if (x == y || (model.shape_collision_group[a] & model.shape_collision_mask[b]) == 0 ||
-        (model.shape_collision_group[b] & model.shape_collision_mask[a]) == 0)
-      return;
-    touch[x] = touch[y] = 1;
-  };
-  const std::vector<int>& every = by_world.back();
-  for (int w = 0; w <= model.world_count; ++w) {
-    const std::vector<int>& own = by_world[w];
-    for (size_t i = 0; i < own.size(); ++i)
-      for (size_t j = i + 1; j < own.size(); ++j) pair(own[i], own[j]);
-    if (w < model.world_count)
-      for (const int s : own)
-        for (const int g : every) pair(s, g);
-  }
-  return touch;
-}
-
-}  // namespace
-
 SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
     : settings(settings_), model_(model), welded_(weld_fixed_joints(model, settings_.weld_fixed_joints)) {
   settings.check();
@@ -135,8 +104,6 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     index_.dof_count.push_back(art_[a].dof_count());
     std::fill_n(index_.dof_articulation.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
   }
-  may_touch_ = may_touch(model, index_);
-  may_touch_any_ = std::find(may_touch_.begin(), may_touch_.end(), 1) != may_touch_.end();
   dof_actuators_.resize(model.actuator_count);
   dof_actuator_start_.resize(model.joint_dof_count + 1);
   std::vector<int> next(model.joint_dof_count + 1);
@@ -242,7 +209,7 @@ void SolverFeatherstone::plan() {
   dense_rows_.clear();
   for (int a = 0; a < model_.articulation_count; ++a) {
     const bool on_blocks = batches_ && batches_->active(a);
-    route_[a] = on_blocks ? static_cast<const StepRoute*>(batches_.get()) : dense_.get();
+    route_[a] = on_blocks ? static_cast<StepRoute*>(batches_.get()) : dense_.get();
     if (on_blocks) continue;
     dense.push_back(a);
     if (art_[a].dof_count() > 0) dense_rows_.push_back(a);
@@ -279,7 +246,6 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.rows.restitution_threshold = settings.restitution_threshold;
   step.rows.use_warmstarting = settings.use_warmstarting;
   step.divergence_speed = settings.divergence_speed;
-  step.split = !dense_rows_.empty() || may_touch_any_;
   step.store_in_pass = settings.on_divergence != DivergencePolicy::Raise;
   step.stream = step_bytes_ > settings.stream_body_output_above;
   step.profile = settings.profile_stages;
@@ -325,6 +291,7 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;
+  step.split = !island_articulations_.empty();
   if (n == 0 && listed_ == 0) return;  // the lists are empty already
   listed_ = n;
   const int threads = std::min(thread_count(), n / 1024);
@@ -346,18 +313,20 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
       data_.contact_list.data(), data_.fill.data());
   for (int c = 0; c < n; ++c)
     if (data_.contact_owner[c] < 0) island_contacts_.push_back(c);
-  if (may_touch_any_)
-    for (int a = 0; a < articulations; ++a)
-      if (data_.touched[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
+  for (int a = 0; a < articulations; ++a)
+    if (data_.touched[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
+  step.split = !island_articulations_.empty() || !island_contacts_.empty();
 }
 
 void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threads) {
   std::fill(data_.touched.begin(), data_.touched.end(), 0);
-  int unexpected = -1;  // a contact joining articulations whose shapes the filter keeps apart
+  int unexpected = -1;  // a contact joining bodies of two worlds
   parallel_for(threads, contacts.contact_count, [&](int c) {
-    const int a = index_.moving(contacts.contact_body_a[c]), b = index_.moving(contacts.contact_body_b[c]);
+    const int body_a = contacts.contact_body_a[c], body_b = contacts.contact_body_b[c];
+    const int a = index_.moving(body_a), b = index_.moving(body_b);
     if (a < 0 || b < 0 || a == b) return;
-    if (!may_touch_[a] || !may_touch_[b]) {
+    const int wa = model_.body_world[body_a], wb = model_.body_world[body_b];
+    if (wa >= 0 && wb >= 0 && wa != wb) {
 #pragma omp atomic write
       unexpected = c;
     }
@@ -366,9 +335,11 @@ void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threa
 #pragma omp atomic write
     data_.touched[b] = 1;
   });
-  if (unexpected >= 0)
-    fail("contact ", unexpected, " joins bodies ", contacts.contact_body_a[unexpected], " and ",
-         contacts.contact_body_b[unexpected], " of two articulations the model's collision filter keeps apart");
+  if (unexpected >= 0) {
+    const int body_a = contacts.contact_body_a[unexpected], body_b = contacts.contact_body_b[unexpected];
+    fail("contact ", unexpected, " joins body ", body_a, " of world ", model_.body_world[body_a], " and body ", body_b,
+         " of world ", model_.body_world[body_b], ": worlds never touch");
+  }
 }
 
 void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) {

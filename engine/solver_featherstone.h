@@ -107,7 +107,7 @@ class SolverFeatherstone {
   // each contact to its articulation's unit, or to the islands with every row of the articulations it joins
   void list_contacts(const Contacts& contacts, StepContext& step);
   // data_.touched: the articulations a contact joins to another moving one (throws for a contact between
-  // articulations whose shapes the model's filter keeps apart, which no CollisionPipeline makes)
+  // two worlds, which no CollisionPipeline makes)
   void touch_articulations(const Contacts& contacts, int threads);
   // the stages first..last over every unit of both routes: block-major, a unit's in turn on its thread;
   // stage-major (profiling), each over all units before the next; the factors checked after Dynamics
@@ -133,15 +133,13 @@ class SolverFeatherstone {
   std::vector<int> limited_joints_, limited_start_, limit_cell_;
   // per dof: the actuators that drive it, in order, dof_actuators_[dof_actuator_start_[d] .. [d + 1])
   std::vector<int> dof_actuator_start_, dof_actuators_;
-  std::vector<std::uint8_t> may_touch_;  // per articulation: its shapes may touch another moving articulation's
-  bool may_touch_any_ = false;
   std::unique_ptr<ArticulationBatches> batches_;
   std::unique_ptr<DenseArticulations> dense_;
   std::unique_ptr<IslandRows> islands_;
   // the plan: the aba_min_dofs the blocks were enabled with (-1: none yet), each articulation's route, the
   // dense route's articulations with dofs (their rows are the islands')
   int planned_max_dofs_ = -1;
-  std::vector<const StepRoute*> route_;
+  std::vector<StepRoute*> route_;
   std::vector<int> dense_rows_;
   std::vector<int> island_articulations_, island_contacts_;  // this step's
   int listed_ = 0;                                           // the contacts the last step listed

@@ -100,7 +100,7 @@ class StepRoute {
 
   // for the islands' rows, after Dynamics: x = M^-1 x with articulation a's factor, and J += sign *
   // (the row of d . the velocity of the point p riding on `link`) over a's dofs
-  virtual void solve_mass(int a, Scalar* x) const = 0;
+  virtual void solve_mass(int a, Scalar* x) = 0;
   virtual void point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const = 0;
 
   // bytes held

@@ -289,8 +289,7 @@ TEST(DivergenceGuard, NoNanSpreadsThroughContacts) {
   EXPECT_NEAR(scene.position(top).y(), 0.6, 0.01);
 }
 
-// a contact no collision pipeline makes: between the boxes of two worlds, which the model keeps apart. The
-// solver plans the rows that join articulations from the model's filter, so it names the contact
+// a contact no collision pipeline makes: between the boxes of two worlds, which never touch
 TEST(SolverFeatherstoneErrors, AContactBetweenWorldsIsNamed) {
   ModelBuilder world, builder;
   add_box(world, Vec3(0, 0.5, 0));
@@ -305,7 +304,7 @@ TEST(SolverFeatherstoneErrors, AContactBetweenWorldsIsNamed) {
   contacts.contact_body_b[0] = 1;
   contacts.contact_normal[2] = 1;
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, contacts, kDt),
-                       "contact 0 joins bodies 0 and 1 of two articulations the model's collision filter keeps apart");
+                       "contact 0 joins body 0 of world 0 and body 1 of world 1: worlds never touch");
 }
 
 }  // namespace
