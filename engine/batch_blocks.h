@@ -97,7 +97,26 @@ struct alignas(64) RowWork {
   std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
   std::vector<V> point;  // [dof][3] the velocity of a slot's contact point moved by each dof
   int rows = 0;          // rows of the block being built
-  void resize(int rows, int dofs, int slots);
+  // room for `rows` rows of `dofs` dofs and `slots` contacts a lane (inline: every block calls it)
+  void resize(int rows_, int dofs_, int slots) {
+    dofs = dofs_;
+    if (static_cast<int>(kind.size()) < rows_) {
+      kind.resize(rows_);
+      normal.resize(rows_);
+      active.resize(rows_);
+      nonzero_begin.resize(rows_);
+      nonzero_end.resize(rows_);
+      limit_row.resize(rows_);
+      for (auto* x : {&target, &mu, &inv_mass, &lambda}) x->resize(rows_);
+    }
+    for (auto* x : {&J, &z})
+      if (x->size() < static_cast<size_t>(rows_) * dofs) x->resize(static_cast<size_t>(rows_) * dofs);
+    if (contact.size() < static_cast<size_t>(slots) * kLanes<T>) contact.resize(static_cast<size_t>(slots) * kLanes<T>);
+    if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
+    for (auto* x : {&coef, &qd_in})
+      if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
+    if (static_cast<int>(point.size()) < 3 * dofs) point.resize(3 * dofs);
+  }
   V* J_row(int r) { return J.data() + static_cast<size_t>(r) * dofs; }
   V* z_row(int r) { return z.data() + static_cast<size_t>(r) * dofs; }
   std::size_t bytes() const;

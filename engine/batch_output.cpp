@@ -35,20 +35,6 @@ namespace {
 
 using namespace lane_math;
 
-// body_q = [p, Q] and body_qd = [velocity of the centre of mass, angular velocity] of body k in lanes
-template <typename T>
-void put_body(const Lanes<T>* p, const Lanes<T>* Q, const Lanes<T>* com, const Lanes<T>* v, const Lanes<T>* o,
-              Lanes<T>* x, Lanes<T>* y) {
-  Lanes<T> c[3];
-  body_point<T>(p, Q, com, o, c);
-  for (int m = 0; m < 3; ++m) x[m] = p[m];
-  for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
-  y[0] = v[3] + v[1] * c[2] - v[2] * c[1];
-  y[1] = v[4] + v[2] * c[0] - v[0] * c[2];
-  y[2] = v[5] + v[0] * c[1] - v[1] * c[0];
-  for (int m = 0; m < 3; ++m) y[3 + m] = v[m];
-}
-
 // the block's rows of body_q and body_qd from lanes x_q [body][7] and x_qd [body][6] into `out`
 template <typename T>
 void write_bodies(const BatchGroup<T>& G, int b, const Lanes<T>* x_q, const Lanes<T>* x_qd, const IntLanes<T>& written,
@@ -99,16 +85,27 @@ void block_store(const BatchGroup<T>& G, int b, BatchWork<T>& w, Lanes<T>* o, co
   // of each array in the model's order when its bodies are one run)
   Lanes<T>* x_q = w.bodies.data();
   Lanes<T>* x_qd = x_q + 7 * nb;
+  // body k: body_q = [p, Q], body_qd = [velocity of the centre of mass, angular velocity]
+  auto put = [&](int k, const Lanes<T>* p, const Lanes<T>* Q, const Lanes<T>* com, const Lanes<T>* v) {
+    Lanes<T>* x = x_q + 7 * k;
+    Lanes<T>* y = x_qd + 6 * k;
+    Lanes<T> c[3];
+    body_point<T>(p, Q, com, o, c);
+    for (int m = 0; m < 3; ++m) x[m] = p[m];
+    for (int m = 0; m < 4; ++m) x[3 + m] = Q[m];
+    y[0] = v[3] + v[1] * c[2] - v[2] * c[1];
+    y[1] = v[4] + v[2] * c[0] - v[0] * c[2];
+    y[2] = v[5] + v[0] * c[1] - v[1] * c[0];
+    for (int m = 0; m < 3; ++m) y[3 + m] = v[m];
+  };
   const Lanes<T>* body_com = G.body_com(b);
   const int* place = G.body_place.data();
-  for (int i = 0; i < n; ++i)
-    put_body<T>(&w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i], o, x_q + 7 * place[i], x_qd + 6 * place[i]);
+  for (int i = 0; i < n; ++i) put(place[i], &w.p[3 * i], &w.Q[4 * i], body_com + 3 * i, &w.v[6 * i]);
   for (size_t k = 0; k < G.welds.size(); ++k) {
     const auto& weld = G.welds[k];
     Lanes<T> p[3], Q[4];
     weld_pose<T>(weld, w, p, Q);
-    const int at = place[n + k];
-    put_body<T>(p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link], o, x_q + 7 * at, x_qd + 6 * at);
+    put(place[n + k], p, Q, body_com + 3 * (n + k), &w.v[6 * weld.link]);
   }
   write_bodies(G, b, x_q, x_qd, written, out, stream);
 }

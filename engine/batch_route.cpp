@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "engine/batch_blocks.h"
+#include "engine/parts/rows.h"
 
 namespace novaphy {
 

@@ -4,29 +4,9 @@
 #include <chrono>
 
 #include "engine/batch_blocks.h"
+#include "engine/parts/rows.h"
 
 namespace novaphy {
-
-template <typename T>
-void RowWork<T>::resize(int rows_, int dofs_, int slots) {
-  dofs = dofs_;
-  if (static_cast<int>(kind.size()) < rows_) {
-    kind.resize(rows_);
-    normal.resize(rows_);
-    active.resize(rows_);
-    nonzero_begin.resize(rows_);
-    nonzero_end.resize(rows_);
-    limit_row.resize(rows_);
-    for (auto* x : {&target, &mu, &inv_mass, &lambda}) x->resize(rows_);
-  }
-  for (auto* x : {&J, &z})
-    if (x->size() < static_cast<size_t>(rows_) * dofs) x->resize(static_cast<size_t>(rows_) * dofs);
-  if (contact.size() < static_cast<size_t>(slots) * kLanes<T>) contact.resize(static_cast<size_t>(slots) * kLanes<T>);
-  if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
-  for (auto* x : {&coef, &qd_in})
-    if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
-  if (static_cast<int>(point.size()) < 3 * dofs) point.resize(3 * dofs);
-}
 
 template <typename T>
 std::size_t RowWork<T>::bytes() const {

@@ -83,13 +83,16 @@ void DenseArticulations::joint_forces(int a, const StepContext& step, Scalar* rh
     for (int m = 0; m < art.dof(i); ++m) {
       const int k = art.qd_start(i) + m, g = qd0 + k;
       // (the targets are read only when some gain is nonzero: unchecked otherwise)
+      const Scalar target_vel = step.drives ? control.joint_target_vel[g] : 0;
+      const Scalar target_pos = step.drives ? control.joint_target_pos[g] : 0;
+      const Scalar q_ref = coordinate ? model_.joint_q_ref[q0 + art.q_start(i)] : 0;
       const DofDrive<Scalar> d{model_.joint_damping[g],
                                control.joint_target_kd[g],
-                               step.drives ? control.joint_target_vel[g] : 0,
+                               target_vel,
                                model_.joint_stiffness[g],
-                               coordinate ? model_.joint_q_ref[q0 + art.q_start(i)] : 0,
+                               q_ref,
                                control.joint_target_ke[g],
-                               step.drives ? control.joint_target_pos[g] : 0};
+                               target_pos};
       rhs[k] = step.tau[g];
       diagonal[k] = add_dof_forces(d, bias[k], qd[k], coordinate ? q + art.q_start(i) : nullptr, step.dt, rhs[k]);
     }

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "engine/parallel.h"
+#include "engine/parts/rows.h"
 
 namespace novaphy {
 

@@ -11,6 +11,7 @@
 #include "engine/dynamics.h"
 #include "engine/error.h"
 #include "engine/parallel.h"
+#include "engine/parts/rows.h"
 #include "kernels/stream.h"
 
 namespace novaphy {
@@ -82,6 +83,7 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
 SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
     : settings(settings_), model_(model), welded_(weld_fixed_joints(model, settings_.weld_fixed_joints)) {
   settings.check();
+  max_threads_ = std::max(1, omp_get_max_threads());
   if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
   const Model& kernel_model = welded_.welded_bodies.empty() ? model : welded_.model;
   for (int a = 0; a < model.articulation_count; ++a) art_.push_back(kernel_model.articulation(a));
@@ -160,8 +162,8 @@ std::size_t SolverFeatherstone::memory_bytes() const {
 }
 
 int SolverFeatherstone::thread_count() const {
-  return std::max(1, std::min(settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads(),
-                              std::max(1, omp_get_max_threads())));
+  // no more than the threads the routes keep scratch for (OpenMP's count when the solver was made)
+  return std::clamp(settings.num_threads > 0 ? settings.num_threads : omp_get_max_threads(), 1, max_threads_);
 }
 
 // ---- the step

@@ -151,6 +151,7 @@ class SolverFeatherstone {
   int steps_since_factor_ = 0;
   bool factor_kept_ = false;  // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
   Scalar factored_dt_ = 0;
+  int max_threads_ = 1;  // the threads the routes keep scratch for
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;  // steady_clock nanoseconds at the last lap
 };

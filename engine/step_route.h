@@ -10,7 +10,7 @@
 
 #include "engine/collision.h"
 #include "engine/model.h"
-#include "engine/parts/rows.h"
+#include "engine/parts/row_params.h"
 
 namespace novaphy {
 

@@ -9,11 +9,12 @@
 
 namespace novaphy {
 
+// (references: the blocks' lanes are read where they lie, not copied)
 template <typename V>
 struct DofDrive {
-  V damping, kd, target_vel;  // the damper and the velocity drive
-  V stiffness, q_ref;         // the spring (a dof with a coordinate: Revolute, Prismatic)
-  V ke, target_pos;           // the position drive (likewise)
+  const V &damping, &kd, &target_vel;  // the damper and the velocity drive
+  const V &stiffness, &q_ref;          // the spring (a dof with a coordinate: Revolute, Prismatic)
+  const V &ke, &target_pos;            // the position drive (likewise)
 };
 
 // rhs += the dof's forces at the end of the step, given its bias force and, for a dof with a coordinate,

@@ -9,17 +9,12 @@
 
 #include "engine/model.h"
 #include "engine/parts/number.h"
+#include "engine/parts/row_params.h"
 #include "kernels/batch/pgs.h"
 #include "kernels/pgs.h"
 
 namespace novaphy {
 
-// what every row reads of the solver's settings
-struct RowParams {
-  PgsSettings pgs;  // the sweeps: iterations, cfm, friction cone, tolerance
-  Scalar erp = 0.2, linear_slop = 0.001, warmstarting_factor = 0.85, restitution_threshold = 0.2;
-  bool use_warmstarting = true;
-};
 
 // ---- joint limits: one row per side of a Revolute or Prismatic joint's range. With sign +1 for the
 // lower limit and -1 for the upper, gap = sign (q - limit) >= 0 inside the range and the row keeps
