@@ -10,6 +10,21 @@ namespace novaphy::python {
 
 namespace {
 
+ActuatorOptions actuator_options(Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
+                                 Scalar force_upper, const std::string& name, Scalar gain = 1,
+                                 const Vec3& bias = Vec3::Zero()) {
+  ActuatorOptions a;
+  a.gear = gear;
+  a.gain = gain;
+  a.bias = bias;
+  a.ctrl_lower = ctrl_lower;
+  a.ctrl_upper = ctrl_upper;
+  a.force_lower = force_lower;
+  a.force_upper = force_upper;
+  a.name = name;
+  return a;
+}
+
 JointDofConfig dof_config(py::object axis) {
   if (axis.is_none()) return {};
   if (py::isinstance<JointDofConfig>(axis)) return axis.cast<JointDofConfig>();
@@ -130,6 +145,40 @@ void bind_builder(py::module_& m) {
            py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY,
            py::arg("force_upper") = INFINITY, py::arg("name") = "",
            "Motor on a Revolute/Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range).")
+      .def(
+          "add_actuator",
+          [](ModelBuilder& self, int joint, Scalar gear, Scalar gain, const Vec3& bias, Scalar ctrl_lower,
+             Scalar ctrl_upper, Scalar force_lower, Scalar force_upper, const std::string& name) {
+            return self.add_actuator(
+                joint, actuator_options(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name, gain, bias));
+          },
+          py::arg("joint"), py::kw_only(), py::arg("gear") = 1.0, py::arg("gain") = 1.0, py::arg("bias") = Vec3::Zero(),
+          py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY,
+          py::arg("force_upper") = INFINITY, py::arg("name") = "",
+          "MuJoCo's affine actuator on a Revolute/Prismatic joint: force = clamp(gain * clamp(ctrl) + bias[0] + "
+          "bias[1] * gear * q + bias[2] * gear * qd, force range), tau = gear * force; its position and velocity "
+          "terms are integrated implicitly.")
+      .def(
+          "add_position",
+          [](ModelBuilder& self, int joint, Scalar kp, Scalar kv, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper,
+             Scalar force_lower, Scalar force_upper, const std::string& name) {
+            return self.add_position(joint, kp, kv,
+                                     actuator_options(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name));
+          },
+          py::arg("joint"), py::kw_only(), py::arg("kp"), py::arg("kv") = 0.0, py::arg("gear") = 1.0,
+          py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY,
+          py::arg("force_upper") = INFINITY, py::arg("name") = "",
+          "Position servo (MuJoCo's position actuator): gain kp, bias [0, -kp, -kv]; ctrl is the target.")
+      .def(
+          "add_velocity",
+          [](ModelBuilder& self, int joint, Scalar kv, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper,
+             Scalar force_lower, Scalar force_upper, const std::string& name) {
+            return self.add_velocity(joint, kv,
+                                     actuator_options(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name));
+          },
+          py::arg("joint"), py::kw_only(), py::arg("kv"), py::arg("gear") = 1.0, py::arg("ctrl_lower") = -INFINITY,
+          py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY,
+          py::arg("name") = "", "Velocity servo (MuJoCo's velocity actuator): gain kv, bias [0, 0, -kv].")
       .def_property_readonly("actuator_count", &ModelBuilder::actuator_count)
       .def_property_readonly("world_count", &ModelBuilder::world_count)
       .def(

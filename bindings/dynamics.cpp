@@ -48,8 +48,14 @@ void bind_dynamics(py::module_& m) {
         "bias = C qd + g - tau_passive - J^T body_f, so that H qdd = tau - bias.");
   m.def("eval_inverse_dynamics", &eval_inverse_dynamics, py::arg("model"), py::arg("state"), py::arg("qdd"), release,
         "tau = H qdd + bias (RNEA).");
-  m.def("eval_control_force", &eval_control_force, py::arg("model"), py::arg("control"), release,
-        "tau = control.joint_f plus every motor's clamped force through its gear.");
+  m.def(
+      "eval_control_force",
+      [](const Model& model, const Control& control, const State* state) {
+        return eval_control_force(model, control, state);
+      },
+      py::arg("model"), py::arg("control"), py::arg("state") = nullptr, release,
+      "tau = control.joint_f plus every actuator's joint force at the state (needed where an actuator has a "
+      "position or velocity term).");
   m.def(
       "eval_forward_dynamics",
       [](const Model& model, const State& state, const Control& control, const std::string& method) {

@@ -53,9 +53,10 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
   const int* qd_off = &G.qd_off[static_cast<size_t>(b) * kLanes<T>];
   V* x = w.x.data();
   gather_lanes<T>(qd_off, step.tau, nv, x);
-  // kd, target velocity, ke, target position (the targets are read only where some gain is nonzero)
+  // kd, target velocity, ke, target position (the targets are read only where some gain is nonzero), the
+  // actuators' stiffness and damping
   V* kd = w.drive.data();
-  V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv;
+  V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv, *ka = kd + 4 * nv, *da = kd + 5 * nv;
   if (step.drives) {
     const Control& control = *step.control;
     gather_lanes<T>(qd_off, control.joint_target_kd.data(), nv, kd);
@@ -63,13 +64,20 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
     gather_lanes<T>(qd_off, control.joint_target_ke.data(), nv, ke);
     gather_lanes<T>(qd_off, control.joint_target_pos.data(), nv, qt);
   } else {
-    std::fill(w.drive.begin(), w.drive.end(), V{});
+    std::fill(kd, kd + 4 * nv, V{});
   }
   const V dt = splat<V>(static_cast<T>(step.dt));
   for (int k = 0; k < nv; ++k) {
     const DofDrive<V> d{P.damping[k], kd[k], vt[k], P.stiffness[k], P.q_ref[k], ke[k], qt[k]};
     const int c = G.topo.coord_of_dof[k];
     w.diag[k] = add_dof_forces(d, w.tau[k], w.qd[k], c < 0 ? nullptr : &w.q[c], dt, x[k]);
+  }
+  if (!step.actuator_stiffness) return;
+  gather_lanes<T>(qd_off, step.actuator_stiffness, nv, ka);
+  gather_lanes<T>(qd_off, step.actuator_damping, nv, da);
+  for (int k = 0; k < nv; ++k) {
+    const int c = G.topo.coord_of_dof[k];  // (actuators drive Revolute and Prismatic joints only)
+    if (c >= 0) w.diag[k] += add_actuator_forces(ka[k], da[k], w.q[c], w.qd[k], dt, x[k]);
   }
 }
 

@@ -216,21 +216,52 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const S
   return shape_count() - 1;
 }
 
-int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
-                            Scalar force_upper, const std::string& name) {
-  const std::string item = label("actuator", actuator_count(), name);
+int ModelBuilder::add_actuator(int joint, const ActuatorOptions& options) {
+  return add_actuator_of("an actuator", joint, options);
+}
+
+int ModelBuilder::add_actuator_of(const char* kind, int joint, const ActuatorOptions& options) {
+  const std::string item = label("actuator", actuator_count(), options.name);
   if (joint < 0 || joint >= joint_count())
     fail(item, ": joint index ", joint, " out of range [0, ", joint_count(), ")");
   const JointType type = joints_[joint].type;
   if (type != JointType::Revolute && type != JointType::Prismatic)
-    fail(item, ": a motor drives a Revolute or Prismatic joint, joint ", joint, " is ", joint_type_name(type));
-  check_finite(item, "gear", gear);
-  if (std::isnan(ctrl_lower) || std::isnan(ctrl_upper) || ctrl_lower > ctrl_upper)
-    fail(item, ": control range must satisfy lower <= upper, got [", ctrl_lower, ", ", ctrl_upper, "]");
-  if (std::isnan(force_lower) || std::isnan(force_upper) || force_lower > force_upper)
-    fail(item, ": force range must satisfy lower <= upper, got [", force_lower, ", ", force_upper, "]");
-  motors_.push_back({joint, gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name});
+    fail(item, ": ", kind, " drives a Revolute or Prismatic joint, joint ", joint, " is ", joint_type_name(type));
+  check_finite(item, "gear", options.gear);
+  check_finite(item, "gain", options.gain);
+  for (int k = 0; k < 3; ++k) check_finite(item, "bias", options.bias[k]);
+  if (std::isnan(options.ctrl_lower) || std::isnan(options.ctrl_upper) || options.ctrl_lower > options.ctrl_upper)
+    fail(item, ": control range must satisfy lower <= upper, got [", options.ctrl_lower, ", ", options.ctrl_upper, "]");
+  if (std::isnan(options.force_lower) || std::isnan(options.force_upper) || options.force_lower > options.force_upper)
+    fail(item, ": force range must satisfy lower <= upper, got [", options.force_lower, ", ", options.force_upper, "]");
+  actuators_.push_back({joint, options});
   return actuator_count() - 1;
+}
+
+int ModelBuilder::add_position(int joint, Scalar kp, Scalar kv, const ActuatorOptions& options) {
+  ActuatorOptions servo = options;
+  servo.gain = kp;
+  servo.bias = Vec3(0, -kp, -kv);
+  return add_actuator_of("a position servo", joint, servo);
+}
+
+int ModelBuilder::add_velocity(int joint, Scalar kv, const ActuatorOptions& options) {
+  ActuatorOptions servo = options;
+  servo.gain = kv;
+  servo.bias = Vec3(0, 0, -kv);
+  return add_actuator_of("a velocity servo", joint, servo);
+}
+
+int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
+                            Scalar force_upper, const std::string& name) {
+  ActuatorOptions motor;
+  motor.gear = gear;
+  motor.ctrl_lower = ctrl_lower;
+  motor.ctrl_upper = ctrl_upper;
+  motor.force_lower = force_lower;
+  motor.force_upper = force_upper;
+  motor.name = name;
+  return add_actuator_of("a motor", joint, motor);
 }
 
 int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, const ShapeOptions& options) {
@@ -307,9 +338,9 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
     shapes_.push_back(shape);
     shape_world_.push_back(world);
   }
-  for (MotorRecord motor : other.motors_) {
-    motor.joint += joint0;
-    motors_.push_back(motor);
+  for (ActuatorRecord actuator : other.actuators_) {
+    actuator.joint += joint0;
+    actuators_.push_back(actuator);
   }
   world_count_ = std::max(world_count_, world + 1);
 }
@@ -433,14 +464,16 @@ void ModelBuilder::lay_out_shapes(Model& model) const {
 
 void ModelBuilder::lay_out_actuators(Model& model) const {
   for (int u = 0; u < actuator_count(); ++u) {
-    const MotorRecord& motor = motors_[u];
-    model.actuator_joint[u] = motor.joint;
-    model.actuator_gear[u] = motor.gear;
-    model.actuator_ctrl_lower[u] = motor.ctrl_lower;
-    model.actuator_ctrl_upper[u] = motor.ctrl_upper;
-    model.actuator_force_lower[u] = motor.force_lower;
-    model.actuator_force_upper[u] = motor.force_upper;
-    model.actuator_name.push_back(motor.name);
+    const ActuatorOptions& a = actuators_[u].options;
+    model.actuator_joint[u] = actuators_[u].joint;
+    model.actuator_gear[u] = a.gear;
+    model.actuator_gain[u] = a.gain;
+    for (int k = 0; k < 3; ++k) model.actuator_bias[3 * u + k] = a.bias[k];
+    model.actuator_ctrl_lower[u] = a.ctrl_lower;
+    model.actuator_ctrl_upper[u] = a.ctrl_upper;
+    model.actuator_force_lower[u] = a.force_lower;
+    model.actuator_force_upper[u] = a.force_upper;
+    model.actuator_name.push_back(a.name);
   }
 }
 

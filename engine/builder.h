@@ -42,6 +42,16 @@ struct ShapeOptions {
   int collision_mask = -1;
 };
 
+// an actuator's parameters (add_actuator); the defaults make a motor of unit gear, unlimited
+struct ActuatorOptions {
+  Scalar gear = 1;
+  Scalar gain = 1;
+  Vec3 bias = Vec3::Zero();
+  Scalar ctrl_lower = -std::numeric_limits<Scalar>::infinity(), ctrl_upper = std::numeric_limits<Scalar>::infinity();
+  Scalar force_lower = -std::numeric_limits<Scalar>::infinity(), force_upper = std::numeric_limits<Scalar>::infinity();
+  std::string name;
+};
+
 struct ImportOptions {
   Transform xform;            // places the file's world frame in the builder's world
   bool static_shapes = true;  // geoms of the world body and bodies welded to it (a floor)
@@ -89,7 +99,15 @@ class ModelBuilder {
   // capsule along the shape frame's local Y axis
   int add_shape_capsule(int body, Scalar radius, Scalar half_height, const ShapeOptions& options = {});
 
-  // a motor on a Revolute or Prismatic joint: tau = gear * clamp(clamp(ctrl, ctrl range), force range)
+  // an actuator on a Revolute or Prismatic joint, MuJoCo's affine one (engine/parts/actuator.h):
+  // force = clamp(gain clamp(ctrl, ctrl range) + bias[0] + bias[1] gear q + bias[2] gear qd, force range),
+  // tau = gear force; its position and velocity terms are integrated implicitly
+  int add_actuator(int joint, const ActuatorOptions& options = {});
+  // a position servo: gain kp, bias [0, -kp, -kv]
+  int add_position(int joint, Scalar kp, Scalar kv = 0, const ActuatorOptions& options = {});
+  // a velocity servo: gain kv, bias [0, 0, -kv]
+  int add_velocity(int joint, Scalar kv, const ActuatorOptions& options = {});
+  // a motor: gain 1, no bias, tau = gear * clamp(clamp(ctrl, ctrl range), force range)
   int add_motor(int joint, Scalar gear = 1, Scalar ctrl_lower = -std::numeric_limits<Scalar>::infinity(),
                 Scalar ctrl_upper = std::numeric_limits<Scalar>::infinity(),
                 Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
@@ -112,7 +130,7 @@ class ModelBuilder {
   int body_count() const { return static_cast<int>(body_mass_.size()); }
   int joint_count() const { return static_cast<int>(joints_.size()); }
   int shape_count() const { return static_cast<int>(shapes_.size()); }
-  int actuator_count() const { return static_cast<int>(motors_.size()); }
+  int actuator_count() const { return static_cast<int>(actuators_.size()); }
 
   // bodies no joint names as their child get an implicit Free joint in an articulation of their own
   Model finalize() const;
@@ -151,6 +169,8 @@ class ModelBuilder {
   void lay_out_shapes(Model& model) const;
   // the Model's actuator table
   void lay_out_actuators(Model& model) const;
+  // add_actuator, its errors naming the kind of actuator ("a motor")
+  int add_actuator_of(const char* kind, int joint, const ActuatorOptions& options);
 
   Vec3 gravity_;
   Precision precision_ = Precision::Float64;
@@ -165,12 +185,11 @@ class ModelBuilder {
   int world_count_ = 0;
   std::vector<JointRecord> joints_;
   std::vector<ShapeRecord> shapes_;
-  struct MotorRecord {
+  struct ActuatorRecord {
     int joint;
-    Scalar gear, ctrl_lower, ctrl_upper, force_lower, force_upper;
-    std::string name;
+    ActuatorOptions options;
   };
-  std::vector<MotorRecord> motors_;
+  std::vector<ActuatorRecord> actuators_;
   int articulation_count_ = 0;
 };
 

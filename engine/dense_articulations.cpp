@@ -95,6 +95,9 @@ void DenseArticulations::joint_forces(int a, const StepContext& step, Scalar* rh
                                target_pos};
       rhs[k] = step.tau[g];
       diagonal[k] = add_dof_forces(d, bias[k], qd[k], coordinate ? q + art.q_start(i) : nullptr, step.dt, rhs[k]);
+      if (coordinate && step.actuator_stiffness)
+        diagonal[k] += add_actuator_forces(step.actuator_stiffness[g], step.actuator_damping[g], q[art.q_start(i)],
+                                           qd[k], step.dt, rhs[k]);
     }
   }
 }

@@ -10,6 +10,7 @@
 
 #include "engine/articulation_batches.h"
 #include "engine/error.h"
+#include "engine/parts/actuator.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -238,17 +239,28 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
   return tau;
 }
 
-void control_force(const Model& model, const Control& control, Scalar* tau) {
+void control_force(const Model& model, const Control& control, const State* state, Scalar* tau) {
   std::copy(control.joint_f.begin(), control.joint_f.end(), tau);
-  for (int u = 0; u < model.actuator_count; ++u)
-    tau[model.joint_qd_start[model.actuator_joint[u]]] += actuator_force(model, control, u);
+  for (int u = 0; u < model.actuator_count; ++u) {
+    const int j = model.actuator_joint[u], dof = model.joint_qd_start[j];
+    if (!state && (model.actuator_bias[3 * u + 1] != 0 || model.actuator_bias[3 * u + 2] != 0))
+      fail("actuator ", u, " '", model.actuator_name[u],
+           "' depends on its joint's position or velocity: its force needs the state (eval_control_force(model, "
+           "control, state))");
+    const Scalar q = state ? state->joint_q[model.joint_q_start[j]] : 0, qd = state ? state->joint_qd[dof] : 0;
+    tau[dof] += actuator_joint_force(model, u, control.actuator_ctrl[u], q, qd);
+  }
 }
 
-VecX eval_control_force(const Model& model, const Control& control) {
+VecX eval_control_force(const Model& model, const Control& control, const State* state) {
   model.check(control);
   check_finite_control(control);
+  if (state) {
+    model.check(*state);
+    check_finite_state(*state);
+  }
   VecX tau(model.joint_dof_count);
-  control_force(model, control, tau.data());
+  control_force(model, control, state, tau.data());
   return tau;
 }
 
@@ -257,7 +269,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
   model.check(state);
   bool wrenches = false;
   check_finite_state(state, &wrenches);
-  const VecX tau_control = eval_control_force(model, control);
+  const VecX tau_control = eval_control_force(model, control, &state);
   if (method == ForwardDynamicsMethod::Batched)
     return batched_forward_dynamics(model, state, control, tau_control, wrenches);
   VecX qdd(model.joint_dof_count);

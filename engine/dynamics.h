@@ -29,14 +29,10 @@ Scalar eval_energy(const Model& model, const State& state);
 // tau = H qdd + bias
 VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd);
 
-// tau = control.joint_f plus every motor's gear * clamp(clamp(actuator_ctrl, ctrl range), force range)
-VecX eval_control_force(const Model& model, const Control& control);
-void control_force(const Model& model, const Control& control, Scalar* tau);  // into joint_dof_count entries
-// motor u's part of it: gear * clamp(clamp(actuator_ctrl[u], ctrl range), force range)
-inline Scalar actuator_force(const Model& model, const Control& control, int u) {
-  const Scalar ctrl = std::clamp(control.actuator_ctrl[u], model.actuator_ctrl_lower[u], model.actuator_ctrl_upper[u]);
-  return model.actuator_gear[u] * std::clamp(ctrl, model.actuator_force_lower[u], model.actuator_force_upper[u]);
-}
+// tau = control.joint_f plus every actuator's joint force (engine/parts/actuator.h) at the state's coordinates
+// and velocities; without a state (nullptr) every actuator must be free of position and velocity bias
+VecX eval_control_force(const Model& model, const Control& control, const State* state = nullptr);
+void control_force(const Model& model, const Control& control, const State* state, Scalar* tau);  // joint_dof_count
 
 // body_q / body_qd of body b, riding on link `link` at `offset` (its pose in the link frame) with its
 // centre of mass at `com` (body frame), from scratch after forward_kinematics + forward_velocity

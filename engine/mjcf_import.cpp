@@ -206,24 +206,40 @@ class MjcfImporter {
     }
   }
 
-  // a motor: joint transmission, no activation dynamics, unit fixed gain, no bias
+  // MuJoCo's affine actuators (motor, position, velocity, general of fixed gain and affine or no bias) on a
+  // hinge or slide without activation dynamics (engine/parts/actuator.h); any other is reported
   void add_actuator(int u) {
     const std::string name = mj_name(m_, mjOBJ_ACTUATOR, u);
-    const int j = m_->actuator_trnid[2 * u];
-    const bool motor = m_->actuator_trntype[u] == mjTRN_JOINT && m_->actuator_dyntype[u] == mjDYN_NONE &&
-                       m_->actuator_gaintype[u] == mjGAIN_FIXED && m_->actuator_gainprm[mjNGAIN * u] == 1 &&
-                       m_->actuator_biastype[u] == mjBIAS_NONE;
-    if (!motor || (m_->jnt_type[j] != mjJNT_HINGE && m_->jnt_type[j] != mjJNT_SLIDE)) {
-      warn("actuator '" + name + "' is not a motor on a hinge or slide joint: not modelled");
+    const std::string unsupported = unsupported_actuator(u);
+    if (!unsupported.empty()) {
+      warn("actuator '" + name + "' " + unsupported + ": not modelled");
       return;
     }
     constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
     const bool ctrl_limited = m_->actuator_ctrllimited[u] && !(m_->opt.disableflags & mjDSBL_CLAMPCTRL);
     const bool force_limited = m_->actuator_forcelimited[u];
-    out_.actuator_map[u] = builder_.add_motor(
-        joint_index_[j], m_->actuator_gear[6 * u], ctrl_limited ? m_->actuator_ctrlrange[2 * u] : -inf,
-        ctrl_limited ? m_->actuator_ctrlrange[2 * u + 1] : inf, force_limited ? m_->actuator_forcerange[2 * u] : -inf,
-        force_limited ? m_->actuator_forcerange[2 * u + 1] : inf, name);
+    ActuatorOptions a;
+    a.gear = m_->actuator_gear[6 * u];
+    a.gain = m_->actuator_gainprm[mjNGAIN * u];
+    if (m_->actuator_biastype[u] == mjBIAS_AFFINE) a.bias = vec3(m_->actuator_biasprm + mjNBIAS * u);
+    a.ctrl_lower = ctrl_limited ? m_->actuator_ctrlrange[2 * u] : -inf;
+    a.ctrl_upper = ctrl_limited ? m_->actuator_ctrlrange[2 * u + 1] : inf;
+    a.force_lower = force_limited ? m_->actuator_forcerange[2 * u] : -inf;
+    a.force_upper = force_limited ? m_->actuator_forcerange[2 * u + 1] : inf;
+    a.name = name;
+    out_.actuator_map[u] = builder_.add_actuator(joint_index_[m_->actuator_trnid[2 * u]], a);
+  }
+
+  // why actuator u is not one NovaPhy models ("" when it is)
+  std::string unsupported_actuator(int u) const {
+    if (m_->actuator_trntype[u] != mjTRN_JOINT) return "drives a tendon, site or body (joints only are modelled)";
+    const int type = m_->jnt_type[m_->actuator_trnid[2 * u]];
+    if (type != mjJNT_HINGE && type != mjJNT_SLIDE) return "drives a ball or free joint (hinges and slides only)";
+    if (m_->actuator_dyntype[u] != mjDYN_NONE) return "has activation dynamics (dyntype)";
+    if (m_->actuator_gaintype[u] != mjGAIN_FIXED) return "has a gain that is not fixed (gaintype)";
+    if (m_->actuator_biastype[u] != mjBIAS_NONE && m_->actuator_biastype[u] != mjBIAS_AFFINE)
+      return "has a bias that is not affine (biastype)";
+    return "";
   }
 
   void report_unmodelled() {

@@ -4,7 +4,7 @@
 //   body with no joint        -> a Fixed joint to its parent (static geometry when welded to the world)
 //   hinge / slide / ball / free -> Revolute / Prismatic / Ball / Free, q identical except quaternion
 //   order ([w x y z] -> [x y z w]) and the Free velocity ([v; w_body] -> [w_world; v])
-//   motor on a hinge or slide    -> add_motor with its gear, ctrlrange and forcerange
+//   motor, position, velocity, general (fixed gain, affine bias) on a hinge or slide -> add_actuator
 #pragma once
 
 #include <mujoco/mujoco.h>

@@ -55,6 +55,8 @@ const char* shape_type_name(ShapeType type);
   X(int, shape_world, shape_count, 1)                   \
   X(int, actuator_joint, actuator_count, 1)             \
   X(Scalar, actuator_gear, actuator_count, 1)           \
+  X(Scalar, actuator_gain, actuator_count, 1)           \
+  X(Scalar, actuator_bias, actuator_count, 3)           \
   X(Scalar, actuator_ctrl_lower, actuator_count, 1)     \
   X(Scalar, actuator_ctrl_upper, actuator_count, 1)     \
   X(Scalar, actuator_force_lower, actuator_count, 1)    \

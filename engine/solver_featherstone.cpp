@@ -11,6 +11,7 @@
 #include "engine/dynamics.h"
 #include "engine/error.h"
 #include "engine/parallel.h"
+#include "engine/parts/actuator.h"
 #include "engine/parts/rows.h"
 #include "kernels/stream.h"
 
@@ -148,7 +149,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   dense_ = std::make_unique<DenseArticulations>(model, art_, welded_into_);
   islands_ = std::make_unique<IslandRows>(model, art_, index_, limited_joints_, limited_start_, limit_cell_);
   route_.assign(model.articulation_count, nullptr);
-  counts_ = {model.joint_dof_count, model.joint_coord_count, model.articulation_count, cells, 0};
+  counts_ = {model.joint_dof_count, model.joint_coord_count, model.articulation_count, cells, 0, 16 * max_threads_};
   data_.allocate(counts_);
   std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
   step_bytes_ = static_cast<std::int64_t>(memory_bytes()) +
@@ -266,20 +267,37 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
 void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
   step.tau = control.joint_f.data();
   if (model_.actuator_count == 0) return;
-  // control_force's sums, dof by dof (joint_f, then its actuators in order), the dofs in runs over the threads
-  const int n = model_.joint_dof_count, runs = std::min(n, 16 * thread_count());
+  // each dof's joint force and its actuators' (engine/parts/actuator.h), in order, the dofs in runs over the
+  // threads; a run notes whether an actuator of its dofs has a position or velocity term (the step's implicit
+  // stiffness and damping)
+  const int n = model_.joint_dof_count, runs = std::min(n, counts_.runs);
   const int *start = dof_actuator_start_.data(), *actuator = dof_actuators_.data();
-  const Scalar* joint_f = control.joint_f.data();
-  Scalar* tau = data_.tau.data();
+  const State& in = *step.in;
   parallel_for(thread_count(), runs, [&](int r) {
     const int end = static_cast<int>(static_cast<std::int64_t>(n) * (r + 1) / runs);
+    bool affine = false;
     for (int d = static_cast<int>(static_cast<std::int64_t>(n) * r / runs); d < end; ++d) {
-      Scalar sum = joint_f[d];
-      for (int k = start[d]; k < start[d + 1]; ++k) sum += actuator_force(model_, control, actuator[k]);
-      tau[d] = sum;
+      Scalar sum = control.joint_f[d], stiffness = 0, damping = 0;
+      for (int k = start[d]; k < start[d + 1]; ++k) {
+        const int u = actuator[k];
+        const Scalar q = in.joint_q[model_.joint_q_start[model_.actuator_joint[u]]];
+        const ActuatorForce a = actuator_force(model_, u, control.actuator_ctrl[u], q, in.joint_qd[d]);
+        sum += a.force;
+        stiffness += a.stiffness;
+        damping += a.damping;
+      }
+      data_.tau[d] = sum;
+      data_.actuator_stiffness[d] = stiffness;
+      data_.actuator_damping[d] = damping;
+      affine |= stiffness != 0 || damping != 0;
     }
+    data_.affine_run[r] = affine;
   });
-  step.tau = tau;
+  step.tau = data_.tau.data();
+  if (std::find(data_.affine_run.begin(), data_.affine_run.begin() + runs, 1) == data_.affine_run.begin() + runs)
+    return;
+  step.actuator_stiffness = data_.actuator_stiffness.data();
+  step.actuator_damping = data_.actuator_damping.data();
 }
 
 void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& step) {

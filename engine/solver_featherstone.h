@@ -46,11 +46,15 @@ struct JointSupportMatrix {
 // SolverCounts n: the table sizes them (and again as a step's contacts outgrow them) and counts their bytes
 struct SolverCounts {
   int dofs = 0, coords = 0, articulations = 0, limit_cells = 0, contacts = 0;
+  int runs = 0;  // the runs of dofs the actuators are summed in
 };
 #define NOVAPHY_SOLVER_DATA(X)                                                                                     \
   X(Scalar, qd, n.dofs, "velocity being solved, between the passes of a step")                                     \
   X(Scalar, q_next, n.coords, "coordinates after the step, between the passes")                                    \
   X(Scalar, tau, n.dofs, "the control's joint forces with its actuators'")                                         \
+  X(Scalar, actuator_stiffness, n.dofs, "the actuators' stiffness on each dof, taken implicitly")                  \
+  X(Scalar, actuator_damping, n.dofs, "the actuators' damping on each dof, taken implicitly")                      \
+  X(std::uint8_t, affine_run, n.runs, "1 where an actuator of the run's dofs has a position or velocity term")     \
   X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")         \
   X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                     \
   X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                         \

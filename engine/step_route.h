@@ -35,6 +35,9 @@ struct StepContext {
   Contacts* contacts = nullptr;  // geometry and warm starts in; contact_impulse out
   Scalar dt = 0;
   const Scalar* tau = nullptr;  // [dof] the control's joint forces with its actuators'
+  // [dof] the actuators' stiffness and damping, which the step takes implicitly (nullptr: none this step)
+  const Scalar* actuator_stiffness = nullptr;
+  const Scalar* actuator_damping = nullptr;
 
   // the dynamics this step
   bool refactor = true;     // H recomputed and factored (else the last factor is reused)

@@ -1,7 +1,8 @@
 // The implicit joint-space forces of one dof: its damper, spring and PD drive, evaluated at the end of
 // the step (semi-implicit Euler with the stiff terms implicit), so that
 //   (H + dt D + dt^2 K) qdd = tau - bias - D qd + kd (v_t - qd) - K_s (q_end - q_ref) + ke (q_t - q_end)
-// with D = damping + kd, K = stiffness + ke, q_end = q + dt qd. Written once over the number type
+// with D = damping + kd, K = stiffness + ke, q_end = q + dt qd; and the actuators' stiffness K_a and damping D_a
+// (engine/parts/actuator.h) likewise. Written once over the number type
 // (engine/parts/number.h) for the dense route and the blocks.
 #pragma once
 
@@ -28,6 +29,14 @@ inline V add_dof_forces(const DofDrive<V>& d, const V& bias, const V& qd, const 
   rhs += -d.stiffness * (q_end - d.q_ref) + d.ke * (d.target_pos - q_end);
   diagonal += dt * dt * (d.stiffness + d.ke);
   return diagonal;
+}
+
+// rhs += the actuators' -K_a q_end - D_a qd at the end of the step on a dof of coordinate q; returns the
+// diagonal dt D_a + dt^2 K_a they add to H
+template <typename V>
+inline V add_actuator_forces(const V& stiffness, const V& damping, const V& q, const V& qd, const V& dt, V& rhs) {
+  rhs += -stiffness * (q + dt * qd) - damping * qd;
+  return dt * damping + dt * dt * stiffness;
 }
 
 }  // namespace novaphy

@@ -15,7 +15,6 @@
 
 namespace novaphy {
 
-
 // ---- joint limits: one row per side of a Revolute or Prismatic joint's range. With sign +1 for the
 // lower limit and -1 for the upper, gap = sign (q - limit) >= 0 inside the range and the row keeps
 // sign qd >= target

@@ -155,7 +155,7 @@ void BatchWork<T>::resize(const BatchTopology<T>& topo) {
   Q.resize(4 * n), p.resize(3 * n), R.resize(9 * n);
   v.resize(6 * n), a.resize(6 * n), f.resize(6 * n), I.resize(10 * n), vrel.resize(3 * n);
   q.resize(topo.coord_count), qd.resize(topo.dof_count), x.resize(topo.dof_count), tau.resize(topo.dof_count);
-  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(4 * topo.dof_count);
+  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(6 * topo.dof_count);
   IJ.resize(6 * (topo.dof_count + 1));
 }
 

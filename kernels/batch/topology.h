@@ -103,9 +103,10 @@ struct BatchWork {
   std::vector<Lanes<T>> tau;       // [dof] bias forces
   std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
   std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
-  std::vector<Lanes<T>> drive;     // [4][dof] PD drive gains and targets: kd, target velocity, ke, target position
-  std::vector<Lanes<T>> bodies;    // [body][13] body_q and body_qd on their way out (sized by the owner)
-  std::vector<Lanes<T>> IJ;        // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
+  // [6][dof] PD drive gains and targets (kd, target velocity, ke, target position), actuator stiffness and damping
+  std::vector<Lanes<T>> drive;
+  std::vector<Lanes<T>> bodies;  // [body][13] body_q and body_qd on their way out (sized by the owner)
+  std::vector<Lanes<T>> IJ;      // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
 
   void resize(const BatchTopology<T>& topo);
 };

@@ -279,3 +279,24 @@ def test_collision_threads_find_the_same_contacts():
     np.testing.assert_array_equal(found[0][1], found[1][1])
     with pytest.raises(ValueError, match="num_threads must be >= 0"):
         novaphy.CollisionPipeline(model, num_threads=-1)
+
+
+def test_a_position_servo_holds_its_target_and_its_force_needs_the_state():
+    builder = novaphy.ModelBuilder(gravity=[0.0, 0.0, 0.0])
+    link = builder.add_body(novaphy.RigidBody.from_box(0.1, [0.1, 0.02, 0.02]))
+    joint = builder.add_joint_revolute(parent=-1, child=link, axis=[0.0, 0.0, 1.0],
+                                       child_xform=novaphy.Transform([-0.1, 0, 0]))
+    servo = builder.add_position(joint, kp=1e4, kv=5.0, force_lower=-1e4, force_upper=1e4, name="servo")
+    model = builder.finalize()
+    assert model.actuator_gain[servo] == 1e4 and list(model.actuator_bias[servo]) == [0.0, -1e4, -5.0]
+    state, control = model.state(), model.control()
+    control.actuator_ctrl[servo] = 2.0
+    with pytest.raises(ValueError, match="needs the state"):
+        novaphy.eval_control_force(model, control)
+    assert novaphy.eval_control_force(model, control, state)[0] == 1e4  # clamped at its force range
+    control.actuator_ctrl[servo] = 0.7
+    solver = novaphy.solvers.SolverFeatherstone(model, angular_damping=0.0)
+    contacts = novaphy.CollisionPipeline(model).contacts()
+    for _ in range(180):
+        solver.step(state, state, control, contacts, 1.0 / 60.0)
+    assert state.joint_q[0] == pytest.approx(0.7, abs=1e-6)
