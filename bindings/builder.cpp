@@ -179,6 +179,10 @@ void bind_builder(py::module_& m) {
           py::arg("joint"), py::kw_only(), py::arg("kv"), py::arg("gear") = 1.0, py::arg("ctrl_lower") = -INFINITY,
           py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY,
           py::arg("name") = "", "Velocity servo (MuJoCo's velocity actuator): gain kv, bias [0, 0, -kv].")
+      .def("add_keyframe", &ModelBuilder::add_keyframe, py::arg("name"), py::arg("joint_q"),
+           py::arg("joint_qd") = std::vector<Scalar>{}, py::arg("ctrl") = std::vector<Scalar>{},
+           "A keyframe over the joints and actuators added so far (joint_qd and ctrl default to zero); keyframes of "
+           "one name from several builders make one keyframe of the model.")
       .def_property_readonly("actuator_count", &ModelBuilder::actuator_count)
       .def_property_readonly("world_count", &ModelBuilder::world_count)
       .def(

@@ -2,6 +2,8 @@
 // engine's buffer (no copy). Model views are read-only; State and Control views are writable.
 #include "engine/model.h"
 
+#include <optional>
+
 #include "bindings/bindings.h"
 
 namespace novaphy::python {
@@ -130,8 +132,14 @@ void bind_model(py::module_& m) {
             .format(py::cast(Eigen::RowVector3d(t.p)), py::cast(Eigen::RowVector4d(t.q.coeffs())));
       });
 
-#define NOVAPHY_BIND_FIELD(Owner, T, name, width, writeable) \
-  .def_property_readonly(#name, [](py::object self) { return field_view(self, &Owner::name, width, writeable); })
+// (a width may name the owner's counts: the keyframes' rows are a coordinate, dof or actuator each)
+#define NOVAPHY_BIND_FIELD(Owner, T, name, width, writeable)                                                           \
+  .def_property_readonly(#name, [](py::object self) {                                                                  \
+    const ModelCounts& counts = self.cast<const Owner&>();                                                             \
+    [[maybe_unused]] const int joint_coord_count = counts.joint_coord_count, joint_dof_count = counts.joint_dof_count, \
+                               actuator_count = counts.actuator_count;                                                 \
+    return field_view(self, &Owner::name, width, writeable);                                                           \
+  })
 
   // State and Control first: Model's methods return them
   auto state =
@@ -163,8 +171,22 @@ void bind_model(py::module_& m) {
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("joint_name", &Model::joint_name)
       .def_readonly("actuator_name", &Model::actuator_name)
-      .def("state", &Model::state, "A state at the initial coordinates joint_q0, with body_q/body_qd from FK.")
-      .def("control", &Model::control, "A zeroed control.");
+      .def_readonly("keyframes", &Model::keyframe_name, "The keyframes' names (rows of keyframe_q, _qd, _ctrl).")
+      .def(
+          "state",
+          [](const Model& self, std::optional<std::string> keyframe) {
+            return keyframe ? self.state(*keyframe) : self.state();
+          },
+          py::kw_only(), py::arg("keyframe") = py::none(),
+          "A state at the initial coordinates joint_q0, or at the named keyframe's coordinates and velocities, with "
+          "body_q/body_qd from FK.")
+      .def(
+          "control",
+          [](const Model& self, std::optional<std::string> keyframe) {
+            return keyframe ? self.control(*keyframe) : self.control();
+          },
+          py::kw_only(), py::arg("keyframe") = py::none(),
+          "A zeroed control with the model's PD gains, or with the named keyframe's actuator commands.");
 #define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
   NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
 }

@@ -1,6 +1,7 @@
 #include "engine/builder.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "engine/dynamics.h"
@@ -298,6 +299,47 @@ ModelBuilder::JointRecord ModelBuilder::free_joint(int body) const {
   return joint;
 }
 
+void ModelBuilder::add_keyframe(const std::string& name, const std::vector<Scalar>& joint_q,
+                                const std::vector<Scalar>& joint_qd, const std::vector<Scalar>& ctrl) {
+  int coords = 0, dofs = 0;
+  for (const JointRecord& joint : joints_) coords += joint_coord_count(joint.type), dofs += joint_dof_count(joint.type);
+  const std::string item = "keyframe '" + name + "'";
+  if (name.empty()) fail("a keyframe needs a name");
+  auto check = [&](const char* what, const std::vector<Scalar>& x, size_t size, bool may_be_empty) {
+    if (x.size() != size && !(may_be_empty && x.empty()))
+      fail(item, ": ", what, " has ", x.size(), " entries, the joints and actuators added so far need ", size);
+    for (size_t k = 0; k < x.size(); ++k)
+      if (!std::isfinite(x[k])) fail(item, ": ", what, "[", k, "] is not finite: ", x[k]);
+  };
+  check("joint_q", joint_q, coords, false);
+  check("joint_qd", joint_qd, dofs, true);
+  check("ctrl", ctrl, actuators_.size(), true);
+  KeyframeRecord key{name, 0, joint_count(), 0, joint_q, joint_qd, ctrl};
+  if (key.qd.empty()) key.qd.assign(dofs, 0);
+  if (key.ctrl.empty()) key.ctrl.assign(actuators_.size(), 0);
+  keyframes_.push_back(std::move(key));
+}
+
+void ModelBuilder::lay_out_keyframes(Model& model) const {
+  for (const KeyframeRecord& key : keyframes_)
+    if (std::find(model.keyframe_name.begin(), model.keyframe_name.end(), key.name) == model.keyframe_name.end())
+      model.keyframe_name.push_back(key.name);
+  model.keyframe_count = static_cast<int>(model.keyframe_name.size());
+  const size_t nq = model.joint_coord_count, nv = model.joint_dof_count, nu = model.actuator_count;
+  model.keyframe_q.resize(model.keyframe_count * nq);
+  model.keyframe_qd.assign(model.keyframe_count * nv, 0);
+  model.keyframe_ctrl.assign(model.keyframe_count * nu, 0);
+  for (int k = 0; k < model.keyframe_count; ++k) std::copy_n(model.joint_q0.begin(), nq, &model.keyframe_q[k * nq]);
+  for (const KeyframeRecord& key : keyframes_) {
+    const size_t k =
+        std::find(model.keyframe_name.begin(), model.keyframe_name.end(), key.name) - model.keyframe_name.begin();
+    const int q0 = model.joint_q_start[key.joint_begin], qd0 = model.joint_qd_start[key.joint_begin];
+    std::copy(key.q.begin(), key.q.end(), &model.keyframe_q[k * nq + q0]);
+    std::copy(key.qd.begin(), key.qd.end(), &model.keyframe_qd[k * nv + qd0]);
+    std::copy(key.ctrl.begin(), key.ctrl.end(), &model.keyframe_ctrl[k * nu + key.actuator_begin]);
+  }
+}
+
 void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform, int world) {
   if (&other == this) fail("add_builder: a builder cannot be added to itself");
   if (world < -1) fail("add_builder: world must be >= -1, got ", world);
@@ -337,6 +379,12 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
       shape.body += body0;
     shapes_.push_back(shape);
     shape_world_.push_back(world);
+  }
+  for (KeyframeRecord key : other.keyframes_) {
+    key.joint_begin += joint0;
+    key.joint_end += joint0;
+    key.actuator_begin += actuator_count();
+    keyframes_.push_back(std::move(key));
   }
   for (ActuatorRecord actuator : other.actuators_) {
     actuator.joint += joint0;
@@ -499,6 +547,7 @@ Model ModelBuilder::finalize() const {
   lay_out_bodies(model);
   lay_out_shapes(model);
   lay_out_actuators(model);
+  lay_out_keyframes(model);
   model.check_sizes();
   return model;
 }

@@ -113,7 +113,13 @@ class ModelBuilder {
                 Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
                 Scalar force_upper = std::numeric_limits<Scalar>::infinity(), const std::string& name = "");
 
-  // appends everything of `other` (bodies, joints, articulations, shapes, motors) as world `world`
+  // a keyframe over the joints and actuators added so far: their coordinates joint_q, velocities joint_qd and
+  // commands ctrl (empty: zero), in the order the joints and actuators were added; keyframes of one name
+  // from several builders (replicated worlds) make one keyframe of the model, coordinates no keyframe names
+  // keeping the initial ones
+  void add_keyframe(const std::string& name, const std::vector<Scalar>& joint_q,
+                    const std::vector<Scalar>& joint_qd = {}, const std::vector<Scalar>& ctrl = {});
+  // appends everything of `other` (bodies, joints, articulations, shapes, actuators, keyframes) as world `world`
   // (-1: a new world), its root joints, free bodies and static shapes placed by xform
   void add_builder(const ModelBuilder& other, const Transform& xform = {}, int world = -1);
   // world_count copies of `other`, copy i shifted by i * spacing, one world each
@@ -169,6 +175,8 @@ class ModelBuilder {
   void lay_out_shapes(Model& model) const;
   // the Model's actuator table
   void lay_out_actuators(Model& model) const;
+  // the Model's keyframes, by name in the order first added
+  void lay_out_keyframes(Model& model) const;
   // add_actuator, its errors naming the kind of actuator ("a motor")
   int add_actuator_of(const char* kind, int joint, const ActuatorOptions& options);
 
@@ -190,6 +198,13 @@ class ModelBuilder {
     ActuatorOptions options;
   };
   std::vector<ActuatorRecord> actuators_;
+  // a keyframe's values for joints [joint_begin, joint_end) and actuators from actuator_begin
+  struct KeyframeRecord {
+    std::string name;
+    int joint_begin, joint_end, actuator_begin;
+    std::vector<Scalar> q, qd, ctrl;
+  };
+  std::vector<KeyframeRecord> keyframes_;
   int articulation_count_ = 0;
 };
 

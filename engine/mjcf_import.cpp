@@ -50,11 +50,14 @@ class MjcfImporter {
       out_.qd_begin += joint_dof_count(joint.type);
     }
     joint_index_.assign(m_->njnt, -1);
+    const int joint0 = builder_.joint_count();
     builder_.set_gravity(vec3(m_->opt.gravity));
     for (int b = 1; b < m_->nbody; ++b) add_body(b);
     for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
     out_.actuator_map.assign(m_->nu, -1);
+    const int actuator0 = builder_.actuator_count();
     for (int u = 0; u < m_->nu; ++u) add_actuator(u);
+    for (int k = 0; k < m_->nkey; ++k) add_keyframe(k, joint0, actuator0);
     report_unmodelled();
     return out_;
   }
@@ -228,6 +231,20 @@ class MjcfImporter {
     a.force_upper = force_limited ? m_->actuator_forcerange[2 * u + 1] : inf;
     a.name = name;
     out_.actuator_map[u] = builder_.add_actuator(joint_index_[m_->actuator_trnid[2 * u]], a);
+  }
+
+  // keyframe k over the joints and actuators this import added (from joint0 and actuator0): qpos and qvel
+  // in NovaPhy's coordinates, the commands of the actuators imported
+  void add_keyframe(int k, int joint0, int actuator0) {
+    std::vector<Scalar> q(out_.q_begin + m_->nq), qd(out_.qd_begin + m_->nv);
+    out_.to_joint_q(m_, m_->key_qpos + k * m_->nq, q.data());
+    out_.to_joint_qd(m_, m_->key_qpos + k * m_->nq, m_->key_qvel + k * m_->nv, qd.data());
+    std::vector<Scalar> ctrl(builder_.actuator_count() - actuator0);
+    for (int u = 0; u < m_->nu; ++u)
+      if (out_.actuator_map[u] >= 0) ctrl[out_.actuator_map[u] - actuator0] = m_->key_ctrl[k * m_->nu + u];
+    builder_.keyframes_.push_back({mj_name(m_, mjOBJ_KEY, k), joint0, builder_.joint_count(), actuator0,
+                                   std::vector<Scalar>(q.begin() + out_.q_begin, q.end()),
+                                   std::vector<Scalar>(qd.begin() + out_.qd_begin, qd.end()), ctrl});
   }
 
   // why actuator u is not one NovaPhy models ("" when it is)

@@ -1,5 +1,7 @@
 #include "engine/model.h"
 
+#include <algorithm>
+
 #include "engine/dynamics.h"
 #include "engine/error.h"
 
@@ -87,6 +89,30 @@ State Model::state() const {
   s.joint_q = joint_q0;
   eval_fk(*this, s);
   return s;
+}
+
+int Model::keyframe(const std::string& name) const {
+  for (int k = 0; k < keyframe_count; ++k)
+    if (keyframe_name[k] == name) return k;
+  std::string names;
+  for (const std::string& n : keyframe_name) names += (names.empty() ? "'" : ", '") + n + "'";
+  fail("no keyframe '", name, "': the model has ", keyframe_count == 0 ? "none" : names);
+}
+
+State Model::state(const std::string& name) const {
+  const int k = keyframe(name);
+  State s = state();
+  std::copy_n(&keyframe_q[static_cast<size_t>(k) * joint_coord_count], joint_coord_count, s.joint_q.begin());
+  std::copy_n(&keyframe_qd[static_cast<size_t>(k) * joint_dof_count], joint_dof_count, s.joint_qd.begin());
+  eval_fk(*this, s);
+  return s;
+}
+
+Control Model::control(const std::string& name) const {
+  const int k = keyframe(name);
+  Control c = control();
+  std::copy_n(&keyframe_ctrl[static_cast<size_t>(k) * actuator_count], actuator_count, c.actuator_ctrl.begin());
+  return c;
 }
 
 Control Model::control() const {

@@ -19,48 +19,51 @@ const char* precision_name(Precision precision);
 const char* shape_type_name(ShapeType type);
 
 // X(type, name, count, width): `count` is an expression over the Model's counts
-#define NOVAPHY_MODEL_FIELDS(X)                         \
-  X(Scalar, body_mass, body_count, 1)                   \
-  X(Scalar, body_com, body_count, 3)                    \
-  X(Scalar, body_inertia, body_count, 9)                \
-  X(int, body_world, body_count, 1)                     \
-  X(int, joint_type, joint_count, 1)                    \
-  X(int, joint_parent, joint_count, 1)                  \
-  X(int, joint_child, joint_count, 1)                   \
-  X(int, joint_ancestor, joint_count, 1)                \
-  X(int, joint_articulation, joint_count, 1)            \
-  X(int, joint_q_start, joint_count + 1, 1)             \
-  X(int, joint_qd_start, joint_count + 1, 1)            \
-  X(Scalar, joint_X_p, joint_count, 7)                  \
-  X(Scalar, joint_X_c, joint_count, 7)                  \
-  X(Scalar, joint_axis, joint_count, 3)                 \
-  X(Scalar, joint_q0, joint_coord_count, 1)             \
-  X(Scalar, joint_q_ref, joint_coord_count, 1)          \
-  X(Scalar, joint_armature, joint_dof_count, 1)         \
-  X(Scalar, joint_damping, joint_dof_count, 1)          \
-  X(Scalar, joint_stiffness, joint_dof_count, 1)        \
-  X(Scalar, joint_limit_lower, joint_dof_count, 1)      \
-  X(Scalar, joint_limit_upper, joint_dof_count, 1)      \
-  X(Scalar, joint_target_ke, joint_dof_count, 1)        \
-  X(Scalar, joint_target_kd, joint_dof_count, 1)        \
-  X(int, articulation_start, articulation_count + 1, 1) \
-  X(int, shape_type, shape_count, 1)                    \
-  X(int, shape_body, shape_count, 1)                    \
-  X(Scalar, shape_transform, shape_count, 7)            \
-  X(Scalar, shape_scale, shape_count, 3)                \
-  X(Scalar, shape_mu, shape_count, 1)                   \
-  X(Scalar, shape_restitution, shape_count, 1)          \
-  X(int, shape_collision_group, shape_count, 1)         \
-  X(int, shape_collision_mask, shape_count, 1)          \
-  X(int, shape_world, shape_count, 1)                   \
-  X(int, actuator_joint, actuator_count, 1)             \
-  X(Scalar, actuator_gear, actuator_count, 1)           \
-  X(Scalar, actuator_gain, actuator_count, 1)           \
-  X(Scalar, actuator_bias, actuator_count, 3)           \
-  X(Scalar, actuator_ctrl_lower, actuator_count, 1)     \
-  X(Scalar, actuator_ctrl_upper, actuator_count, 1)     \
-  X(Scalar, actuator_force_lower, actuator_count, 1)    \
-  X(Scalar, actuator_force_upper, actuator_count, 1)
+#define NOVAPHY_MODEL_FIELDS(X)                            \
+  X(Scalar, body_mass, body_count, 1)                      \
+  X(Scalar, body_com, body_count, 3)                       \
+  X(Scalar, body_inertia, body_count, 9)                   \
+  X(int, body_world, body_count, 1)                        \
+  X(int, joint_type, joint_count, 1)                       \
+  X(int, joint_parent, joint_count, 1)                     \
+  X(int, joint_child, joint_count, 1)                      \
+  X(int, joint_ancestor, joint_count, 1)                   \
+  X(int, joint_articulation, joint_count, 1)               \
+  X(int, joint_q_start, joint_count + 1, 1)                \
+  X(int, joint_qd_start, joint_count + 1, 1)               \
+  X(Scalar, joint_X_p, joint_count, 7)                     \
+  X(Scalar, joint_X_c, joint_count, 7)                     \
+  X(Scalar, joint_axis, joint_count, 3)                    \
+  X(Scalar, joint_q0, joint_coord_count, 1)                \
+  X(Scalar, joint_q_ref, joint_coord_count, 1)             \
+  X(Scalar, joint_armature, joint_dof_count, 1)            \
+  X(Scalar, joint_damping, joint_dof_count, 1)             \
+  X(Scalar, joint_stiffness, joint_dof_count, 1)           \
+  X(Scalar, joint_limit_lower, joint_dof_count, 1)         \
+  X(Scalar, joint_limit_upper, joint_dof_count, 1)         \
+  X(Scalar, joint_target_ke, joint_dof_count, 1)           \
+  X(Scalar, joint_target_kd, joint_dof_count, 1)           \
+  X(int, articulation_start, articulation_count + 1, 1)    \
+  X(int, shape_type, shape_count, 1)                       \
+  X(int, shape_body, shape_count, 1)                       \
+  X(Scalar, shape_transform, shape_count, 7)               \
+  X(Scalar, shape_scale, shape_count, 3)                   \
+  X(Scalar, shape_mu, shape_count, 1)                      \
+  X(Scalar, shape_restitution, shape_count, 1)             \
+  X(int, shape_collision_group, shape_count, 1)            \
+  X(int, shape_collision_mask, shape_count, 1)             \
+  X(int, shape_world, shape_count, 1)                      \
+  X(int, actuator_joint, actuator_count, 1)                \
+  X(Scalar, actuator_gear, actuator_count, 1)              \
+  X(Scalar, actuator_gain, actuator_count, 1)              \
+  X(Scalar, actuator_bias, actuator_count, 3)              \
+  X(Scalar, actuator_ctrl_lower, actuator_count, 1)        \
+  X(Scalar, actuator_ctrl_upper, actuator_count, 1)        \
+  X(Scalar, actuator_force_lower, actuator_count, 1)       \
+  X(Scalar, actuator_force_upper, actuator_count, 1)       \
+  X(Scalar, keyframe_q, keyframe_count, joint_coord_count) \
+  X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)  \
+  X(Scalar, keyframe_ctrl, keyframe_count, actuator_count)
 
 #define NOVAPHY_STATE_FIELDS(X)            \
   X(Scalar, joint_q, joint_coord_count, 1) \
@@ -90,6 +93,7 @@ struct ModelCounts {
   int articulation_count = 0;
   int shape_count = 0;
   int actuator_count = 0;
+  int keyframe_count = 0;
 };
 
 bool same_layout(const ModelCounts& a, const ModelCounts& b);
@@ -114,6 +118,7 @@ struct Model : ModelCounts {
   std::vector<std::string> body_name;
   std::vector<std::string> joint_name;
   std::vector<std::string> actuator_name;
+  std::vector<std::string> keyframe_name;  // keyframe k's joint_q, joint_qd and actuator_ctrl: row k of keyframe_*
 
   // sizes every field from the counts (fields are zero-filled)
   void allocate();
@@ -121,9 +126,15 @@ struct Model : ModelCounts {
   void check_sizes() const;
 
   ArticulationView articulation(int a) const;
-  // a state at the initial coordinates joint_q0, with body_q/body_qd from forward kinematics
+  // a state at the initial coordinates joint_q0 (or keyframe `keyframe`'s coordinates and velocities), with
+  // body_q/body_qd from forward kinematics
   State state() const;
+  State state(const std::string& keyframe) const;
+  // a zeroed control with the model's PD gains (and keyframe `keyframe`'s actuator commands)
   Control control() const;
+  Control control(const std::string& keyframe) const;
+  // the index of the keyframe of that name; throws Error listing the model's keyframes when there is none
+  int keyframe(const std::string& name) const;
 
   // throws Error naming the array unless `state` / `control` was made for this model
   void check(const State& state) const;

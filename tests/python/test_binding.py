@@ -291,3 +291,21 @@ def test_eval_energy():
     novaphy.eval_fk(model, state)
     assert novaphy.eval_energy(model, state) == pytest.approx(2.0 * 9.81 * 3.0 + 0.5 * 2.0, rel=1e-12)
     assert ball == 0
+
+
+def test_keyframes_give_every_world_its_state_and_commands():
+    robot = novaphy.ModelBuilder(gravity=[0.0, 0.0, 0.0])
+    body = robot.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
+    hinge = robot.add_joint_revolute(parent=-1, child=body, axis=[0.0, 0.0, 1.0])
+    robot.add_position(hinge, kp=10.0)
+    robot.add_keyframe("home", [0.3], [0.5], [0.7])
+    worlds = novaphy.ModelBuilder(gravity=[0.0, 0.0, 0.0])
+    worlds.replicate(robot, 4)
+    model = worlds.finalize()
+    assert model.keyframes == ["home"] and model.keyframe_q.shape == (1, 4)
+    state, control = model.state(keyframe="home"), model.control(keyframe="home")
+    assert list(state.joint_q) == [0.3] * 4 and list(state.joint_qd) == [0.5] * 4
+    assert list(control.actuator_ctrl) == [0.7] * 4
+    assert list(model.state().joint_q) == [0.0] * 4
+    with pytest.raises(ValueError, match="no keyframe 'stand': the model has 'home'"):
+        model.state(keyframe="stand")
