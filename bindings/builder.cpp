@@ -179,6 +179,11 @@ void bind_builder(py::module_& m) {
           py::arg("joint"), py::kw_only(), py::arg("kv"), py::arg("gear") = 1.0, py::arg("ctrl_lower") = -INFINITY,
           py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY,
           py::arg("name") = "", "Velocity servo (MuJoCo's velocity actuator): gain kv, bias [0, 0, -kv].")
+      .def_property("collision_filter", &ModelBuilder::collision_filter, &ModelBuilder::set_collision_filter,
+                    "The rule shape collision groups and masks filter pairs by; add_mjcf sets Mujoco.")
+      .def("exclude_shapes", &ModelBuilder::exclude_shapes, py::arg("a"), py::arg("b"), "Shapes a and b never collide.")
+      .def("exclude_bodies", &ModelBuilder::exclude_bodies, py::arg("body_a"), py::arg("body_b"),
+           "No shape of body_a collides with a shape of body_b (those added so far; -1: static shapes).")
       .def("add_keyframe", &ModelBuilder::add_keyframe, py::arg("name"), py::arg("joint_q"),
            py::arg("joint_qd") = std::vector<Scalar>{}, py::arg("ctrl") = std::vector<Scalar>{},
            "A keyframe over the joints and actuators added so far (joint_qd and ctrl default to zero); keyframes of "

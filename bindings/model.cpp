@@ -106,6 +106,12 @@ void bind_model(py::module_& m) {
       .value("Float64", Precision::Float64)
       .value("Float32", Precision::Float32);
 
+  py::enum_<CollisionFilter>(m, "CollisionFilter",
+                             "Which shape pairs may collide: GroupAndMask needs (group_a & mask_b) and (group_b & "
+                             "mask_a); Mujoco (contype/conaffinity) needs either.")
+      .value("GroupAndMask", CollisionFilter::GroupAndMask)
+      .value("Mujoco", CollisionFilter::Mujoco);
+
   py::enum_<ShapeType>(m, "ShapeType", "Collision shape types.")
       .value("Plane", ShapeType::Plane)
       .value("Sphere", ShapeType::Sphere)
@@ -171,6 +177,7 @@ void bind_model(py::module_& m) {
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("joint_name", &Model::joint_name)
       .def_readonly("actuator_name", &Model::actuator_name)
+      .def_readonly("collision_filter", &Model::collision_filter, "The rule shape_collision_group/_mask filter by.")
       .def_readonly("keyframes", &Model::keyframe_name, "The keyframes' names (rows of keyframe_q, _qd, _ctrl).")
       .def(
           "state",

@@ -299,6 +299,23 @@ ModelBuilder::JointRecord ModelBuilder::free_joint(int body) const {
   return joint;
 }
 
+void ModelBuilder::exclude_shapes(int a, int b) {
+  for (const int s : {a, b})
+    if (s < 0 || s >= shape_count()) fail("exclude_shapes: shape index ", s, " out of range [0, ", shape_count(), ")");
+  if (a == b) fail("exclude_shapes: shape ", a, " with itself");
+  excluded_.push_back({std::min(a, b), std::max(a, b)});
+}
+
+void ModelBuilder::exclude_bodies(int body_a, int body_b) {
+  for (const int b : {body_a, body_b})
+    if (b < -1 || b >= body_count()) fail("exclude_bodies: body index ", b, " out of range [-1, ", body_count(), ")");
+  for (int a = 0; a < shape_count(); ++a)
+    for (int b = 0; b < shape_count(); ++b)
+      if (a < b && ((shapes_[a].body == body_a && shapes_[b].body == body_b) ||
+                    (shapes_[a].body == body_b && shapes_[b].body == body_a)))
+        excluded_.push_back({a, b});
+}
+
 void ModelBuilder::add_keyframe(const std::string& name, const std::vector<Scalar>& joint_q,
                                 const std::vector<Scalar>& joint_qd, const std::vector<Scalar>& ctrl) {
   int coords = 0, dofs = 0;
@@ -345,7 +362,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   if (world < -1) fail("add_builder: world must be >= -1, got ", world);
   const Transform place = checked_transform("add_builder", "xform", xform);
   if (world < 0) world = world_count_;
-  const int body0 = body_count(), joint0 = joint_count();
+  const int body0 = body_count(), joint0 = joint_count(), shape0 = shape_count();
   for (int b = 0; b < other.body_count(); ++b) {
     body_mass_.push_back(other.body_mass_[b]);
     body_com_.push_back(other.body_com_[b]);
@@ -380,6 +397,8 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
     shapes_.push_back(shape);
     shape_world_.push_back(world);
   }
+  for (const auto& [a, b] : other.excluded_) excluded_.push_back({a + shape0, b + shape0});
+  if (other.collision_filter_ == CollisionFilter::Mujoco) collision_filter_ = CollisionFilter::Mujoco;
   for (KeyframeRecord key : other.keyframes_) {
     key.joint_begin += joint0;
     key.joint_end += joint0;
@@ -548,6 +567,10 @@ Model ModelBuilder::finalize() const {
   lay_out_shapes(model);
   lay_out_actuators(model);
   lay_out_keyframes(model);
+  model.collision_filter = collision_filter_;
+  model.exclude_count = static_cast<int>(excluded_.size());
+  model.exclude_shape.clear();
+  for (const auto& [a, b] : excluded_) model.exclude_shape.insert(model.exclude_shape.end(), {a, b});
   model.check_sizes();
   return model;
 }

@@ -113,6 +113,13 @@ class ModelBuilder {
                 Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
                 Scalar force_upper = std::numeric_limits<Scalar>::infinity(), const std::string& name = "");
 
+  // the rule shape_collision_group and shape_collision_mask filter pairs by (model.h); add_mjcf sets Mujoco
+  void set_collision_filter(CollisionFilter filter) { collision_filter_ = filter; }
+  CollisionFilter collision_filter() const { return collision_filter_; }
+  // shapes a and b never collide (MuJoCo's <exclude>, by shape)
+  void exclude_shapes(int a, int b);
+  // no shape of body a collides with a shape of body b (those added so far; -1: the static shapes)
+  void exclude_bodies(int body_a, int body_b);
   // a keyframe over the joints and actuators added so far: their coordinates joint_q, velocities joint_qd and
   // commands ctrl (empty: zero), in the order the joints and actuators were added; keyframes of one name
   // from several builders (replicated worlds) make one keyframe of the model, coordinates no keyframe names
@@ -205,6 +212,8 @@ class ModelBuilder {
     std::vector<Scalar> q, qd, ctrl;
   };
   std::vector<KeyframeRecord> keyframes_;
+  std::vector<std::pair<int, int>> excluded_;  // shape pairs
+  CollisionFilter collision_filter_ = CollisionFilter::GroupAndMask;
   int articulation_count_ = 0;
 };
 

@@ -30,6 +30,7 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     fail("margin must be finite and >= 0, got ", options.margin);
   if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
   if (options_.contact_capacity == 0) options_.contact_capacity = std::max(64, 8 * model.shape_count);
+  list_exclusions();
   link_bodies();
   sort_shapes();
   mask_pairs();
@@ -52,13 +53,45 @@ void CollisionPipeline::link_bodies() {
   }
 }
 
+bool CollisionPipeline::visual_only(int s) const {
+  const int group = model_.shape_collision_group[s], mask = model_.shape_collision_mask[s];
+  return model_.collision_filter == CollisionFilter::Mujoco ? group == 0 && mask == 0 : group == 0 || mask == 0;
+}
+
+void CollisionPipeline::list_exclusions() {
+  // per shape, the shapes it is excluded with, ascending
+  const Model& model = model_;
+  exclude_start_.assign(model.shape_count + 1, 0);
+  for (int e = 0; e < model.exclude_count; ++e)
+    for (int k = 0; k < 2; ++k) {
+      const int s = model.exclude_shape[2 * e + k];
+      if (s < 0 || s >= model.shape_count)
+        fail("exclude_shape[", e, "] names shape ", s, ", the model has ", model.shape_count);
+      ++exclude_start_[s + 1];
+    }
+  for (int s = 0; s < model.shape_count; ++s) exclude_start_[s + 1] += exclude_start_[s];
+  exclude_other_.resize(exclude_start_.back());
+  std::vector<int> next(exclude_start_.begin(), exclude_start_.end() - 1);
+  for (int e = 0; e < model.exclude_count; ++e) {
+    const int a = model.exclude_shape[2 * e], b = model.exclude_shape[2 * e + 1];
+    exclude_other_[next[a]++] = b;
+    exclude_other_[next[b]++] = a;
+  }
+  for (int s = 0; s < model.shape_count; ++s)
+    std::sort(exclude_other_.begin() + exclude_start_[s], exclude_other_.begin() + exclude_start_[s + 1]);
+}
+
+bool CollisionPipeline::excluded(int a, int b) const {
+  const auto begin = exclude_other_.begin() + exclude_start_[a], end = exclude_other_.begin() + exclude_start_[a + 1];
+  return begin != end && std::binary_search(begin, end, b);
+}
+
 void CollisionPipeline::sort_shapes() {
   const Model& model = model_;
   world_others_.resize(model.world_count);
   world_planes_.resize(model.world_count);
   for (int s = 0; s < model.shape_count; ++s) {
-    // a shape with an empty group or mask never collides: the broad phase never sees it
-    if (model.shape_collision_group[s] == 0 || model.shape_collision_mask[s] == 0) continue;
+    if (visual_only(s)) continue;  // the broad phase never sees it
     const int w = model.shape_world[s];
     if (model.shape_type[s] == static_cast<int>(ShapeType::Plane)) {
       planes_.push_back(s);
@@ -131,9 +164,10 @@ bool CollisionPipeline::may_collide(int a, int b) const {
   if (ba == bb) return false;
   const int wa = model_.shape_world[a], wb = model_.shape_world[b];
   if (wa >= 0 && wb >= 0 && wa != wb) return false;
-  if ((model_.shape_collision_group[a] & model_.shape_collision_mask[b]) == 0 ||
-      (model_.shape_collision_group[b] & model_.shape_collision_mask[a]) == 0)
-    return false;
+  const bool ab = (model_.shape_collision_group[a] & model_.shape_collision_mask[b]) != 0;
+  const bool ba_ = (model_.shape_collision_group[b] & model_.shape_collision_mask[a]) != 0;
+  if (model_.collision_filter == CollisionFilter::Mujoco ? !(ab || ba_) : !(ab && ba_)) return false;
+  if (excluded(a, b)) return false;
   if (ba < 0 || bb < 0) return true;
   if (body_parent_[ba] == bb || body_parent_[bb] == ba) return false;
   return options_.self_collision || body_articulation_[ba] != body_articulation_[bb];

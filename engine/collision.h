@@ -77,6 +77,8 @@ class CollisionPipeline {
 
  private:
   bool may_collide(int a, int b) const;
+  // shape s collides with no shape by the model's filter (its group or mask empty, both under Mujoco's rule)
+  bool visual_only(int s) const;
   // a contact found by the narrow phase, on its way into the contacts buffer
   struct Found {
     int a, b;
@@ -120,6 +122,10 @@ class CollisionPipeline {
   // the constructor's stages, in this order:
   // each body's parent (skipping massless links) and articulation, for may_collide
   void link_bodies();
+  // exclude_start_ and exclude_other_ from the model's excluded shape pairs
+  void list_exclusions();
+  // shapes a and b are an excluded pair
+  bool excluded(int a, int b) const;
   // the colliding shapes into planes and others, per world or of no world
   void sort_shapes();
   // per world of few shapes its pairs' masks, per world of many its sweep order
@@ -183,6 +189,8 @@ class CollisionPipeline {
   std::vector<int> world_pair_start_;
   std::vector<std::uint64_t> world_pairs_;
   std::vector<int> group_first_;  // the first world of each group found together, then world_count
+  // per shape s, the shapes it never collides with, exclude_other_[exclude_start_[s] .. exclude_start_[s + 1])
+  std::vector<int> exclude_start_, exclude_other_;
   // per group of several worlds: where its bodies start in group_body_ (-1: a world alone); per shape of
   // its worlds and lane, the shape's body or -1; a bit per shape the same in all its worlds
   std::vector<int> group_body_start_;

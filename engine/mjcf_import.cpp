@@ -53,7 +53,10 @@ class MjcfImporter {
     const int joint0 = builder_.joint_count();
     builder_.set_gravity(vec3(m_->opt.gravity));
     for (int b = 1; b < m_->nbody; ++b) add_body(b);
+    builder_.set_collision_filter(CollisionFilter::Mujoco);
+    geom_shape_.assign(m_->ngeom, -1);
     for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
+    add_exclusions();
     out_.actuator_map.assign(m_->nu, -1);
     const int actuator0 = builder_.actuator_count();
     for (int u = 0; u < m_->nu; ++u) add_actuator(u);
@@ -186,6 +189,8 @@ class MjcfImporter {
     return type;
   }
 
+  // geom g as a shape of its body (or static), filtered by its contype and conaffinity (MuJoCo's rule); a
+  // geom of a type NovaPhy does not collide is reported unless it is visual only (both zero)
   void add_geom(int g) {
     const int b = m_->geom_bodyid[g];
     const int body = out_.body_map[b];
@@ -196,16 +201,30 @@ class MjcfImporter {
     ShapeOptions options;
     options.xform = G;
     options.mu = m_->geom_friction[3 * g];
+    options.collision_group = m_->geom_contype[g];
+    options.collision_mask = m_->geom_conaffinity[g];
     ShapeOptions along_z = options;  // capsules and plane normals: MuJoCo's Z onto NovaPhy's Y
     along_z.xform = G * y_to_z();
     switch (m_->geom_type[g]) {
-      case mjGEOM_PLANE: builder_.add_shape(ShapeType::Plane, body, Vec3::Ones(), along_z); break;
-      case mjGEOM_SPHERE: builder_.add_shape_sphere(body, size[0], options); break;
-      case mjGEOM_CAPSULE: builder_.add_shape_capsule(body, size[0], size[1], along_z); break;
-      case mjGEOM_BOX: builder_.add_shape_box(body, vec3(size), options); break;
+      case mjGEOM_PLANE: geom_shape_[g] = builder_.add_shape(ShapeType::Plane, body, Vec3::Ones(), along_z); break;
+      case mjGEOM_SPHERE: geom_shape_[g] = builder_.add_shape_sphere(body, size[0], options); break;
+      case mjGEOM_CAPSULE: geom_shape_[g] = builder_.add_shape_capsule(body, size[0], size[1], along_z); break;
+      case mjGEOM_BOX: geom_shape_[g] = builder_.add_shape_box(body, vec3(size), options); break;
       default:
-        warn("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
-             " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");
+        if (m_->geom_contype[g] != 0 || m_->geom_conaffinity[g] != 0)
+          warn("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
+               " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");
+    }
+  }
+
+  // MuJoCo's <exclude> body pairs as pairs of their geoms' shapes
+  void add_exclusions() {
+    for (int e = 0; e < m_->nexclude; ++e) {
+      const int body1 = (m_->exclude_signature[e] >> 16) - 1, body2 = (m_->exclude_signature[e] & 0xffff) - 1;
+      for (int a = 0; a < m_->ngeom; ++a)
+        for (int b = 0; b < m_->ngeom; ++b)
+          if (m_->geom_bodyid[a] == body1 && m_->geom_bodyid[b] == body2 && geom_shape_[a] >= 0 && geom_shape_[b] >= 0)
+            builder_.exclude_shapes(geom_shape_[a], geom_shape_[b]);
     }
   }
 
@@ -265,7 +284,6 @@ class MjcfImporter {
       warn("equality constraint '" + mj_name(m_, mjOBJ_EQUALITY, e) + "' is not modelled");
     for (int s = 0; s < m_->nsensor; ++s) warn("sensor '" + mj_name(m_, mjOBJ_SENSOR, s) + "' is not modelled");
     if (m_->npair > 0) warn(std::to_string(m_->npair) + " explicit contact pair(s) are not modelled");
-    if (m_->nexclude > 0) warn(std::to_string(m_->nexclude) + " contact exclusion(s) are not modelled");
     if (m_->opt.density != 0 || m_->opt.viscosity != 0) warn("fluid forces (density, viscosity) are not modelled");
   }
 
@@ -277,6 +295,7 @@ class MjcfImporter {
   MujocoImport out_;
   std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
   std::vector<int> joint_index_;        // MuJoCo joint -> NovaPhy joint
+  std::vector<int> geom_shape_;         // MuJoCo geom -> NovaPhy shape (-1: none)
 };
 
 mjModel* load_mujoco_model(const std::string& path) {

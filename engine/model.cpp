@@ -17,6 +17,14 @@ const char* shape_type_name(ShapeType type) {
   return "Unknown";
 }
 
+const char* collision_filter_name(CollisionFilter filter) {
+  switch (filter) {
+    case CollisionFilter::GroupAndMask: return "GroupAndMask";
+    case CollisionFilter::Mujoco: return "Mujoco";
+  }
+  return "unknown";
+}
+
 const char* precision_name(Precision precision) {
   switch (precision) {
     case Precision::Float64: return "float64";

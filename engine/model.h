@@ -16,6 +16,13 @@ enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
 // with Float32 the stepped state is rounded to float each step)
 enum class Precision : int { Float64 = 0, Float32 = 1 };
 const char* precision_name(Precision precision);
+
+// which shape pairs may collide, from each shape's shape_collision_group and shape_collision_mask:
+// GroupAndMask (the builder's default): (group_a & mask_b) != 0 and (group_b & mask_a) != 0;
+// Mujoco (a model that imported MJCF), MuJoCo's contype/conaffinity: (group_a & mask_b) != 0 or
+// (group_b & mask_a) != 0. Either way a shape that can collide with no shape is visual only
+enum class CollisionFilter : int { GroupAndMask = 0, Mujoco = 1 };
+const char* collision_filter_name(CollisionFilter filter);
 const char* shape_type_name(ShapeType type);
 
 // X(type, name, count, width): `count` is an expression over the Model's counts
@@ -53,6 +60,7 @@ const char* shape_type_name(ShapeType type);
   X(int, shape_collision_group, shape_count, 1)            \
   X(int, shape_collision_mask, shape_count, 1)             \
   X(int, shape_world, shape_count, 1)                      \
+  X(int, exclude_shape, exclude_count, 2)                  \
   X(int, actuator_joint, actuator_count, 1)                \
   X(Scalar, actuator_gear, actuator_count, 1)              \
   X(Scalar, actuator_gain, actuator_count, 1)              \
@@ -94,6 +102,7 @@ struct ModelCounts {
   int shape_count = 0;
   int actuator_count = 0;
   int keyframe_count = 0;
+  int exclude_count = 0;
 };
 
 bool same_layout(const ModelCounts& a, const ModelCounts& b);
@@ -113,6 +122,7 @@ struct Control : ModelCounts {
 struct Model : ModelCounts {
   Vec3 gravity = Vec3(0, -9.81, 0);
   Precision precision = Precision::Float64;
+  CollisionFilter collision_filter = CollisionFilter::GroupAndMask;  // exclude_shape: pairs that never collide
   NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
 #undef NOVAPHY_DECLARE
   std::vector<std::string> body_name;

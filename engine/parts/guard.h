@@ -12,10 +12,10 @@ template <typename V>
 inline void divergence_test(const V* q_next, int nq, const V* qd, int nv, Scalar speed, bool* diverged) {
   Mask<V> ok = finite(splat<V>(0));
   V fastest{};
-  for (int k = 0; k < nq; ++k) ok = ok & finite(q_next[k]);
+  for (int k = 0; k < nq; ++k) ok = both(ok, finite(q_next[k]));
   for (int k = 0; k < nv; ++k) {
     const V v = magnitude(qd[k]);
-    ok = ok & finite(v);
+    ok = both(ok, finite(v));
     fastest = select<V>(v > fastest, v, fastest);
   }
   for (int l = 0; l < NumberTraits<V>::lanes; ++l)

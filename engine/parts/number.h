@@ -42,6 +42,15 @@ inline V select(const Mask<V>& m, const V& a, const V& b) {
   return m ? a : b;
 }
 
+// a and b, lane by lane
+template <typename M>
+inline M both(const M& a, const M& b) {
+  if constexpr (std::is_same_v<M, bool>)
+    return a && b;
+  else
+    return a & b;
+}
+
 // |x|; a NaN stays a NaN
 template <typename V>
 inline V magnitude(const V& x) {

@@ -42,7 +42,7 @@ inline V limit_row_warm_start(const V& kept, const RowParams& p) {
 // the impulse kept for the next step: 0 where the row was off or its impulse is not finite
 template <typename V>
 inline V limit_impulse_kept(const V& lambda, const Mask<V>& on) {
-  return select<V>(on & finite(lambda), lambda, V{});
+  return select<V>(both(on, finite(lambda)), lambda, V{});
 }
 
 // ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame
@@ -87,8 +87,9 @@ inline V contact_normal_target(const V& depth, const V& v_approach, const V& res
   const V target =
       select<V>(depth > slop, static_cast<E>(p.erp) * (depth - slop) / dt, select<V>(depth < 0, depth, zero) / dt);
   const V bounce = -restitution * v_approach;
-  const Mask<V> closing = (v_approach < -static_cast<E>(p.restitution_threshold)) & (depth - v_approach * dt >= 0);
-  return select<V>(closing & (bounce > target), bounce, target);
+  const Mask<V> approaching = v_approach < -static_cast<E>(p.restitution_threshold);
+  const Mask<V> closing = both<Mask<V>>(approaching, depth - v_approach * dt >= 0);
+  return select<V>(both<Mask<V>>(closing, bounce > target), bounce, target);
 }
 
 // the rows' starting impulses warm [3] (normal, t1, t2): the last step's impulse `previous` [3] (a world
@@ -106,7 +107,7 @@ inline void contact_warm_start(const V* previous, const V* d, const RowParams& p
 template <typename V>
 inline void contact_impulse_kept(const V* lambda, const V* d, V* P) {
   for (int m = 0; m < 3; ++m) P[m] = lambda[0] * d[m] + lambda[1] * d[3 + m] + lambda[2] * d[6 + m];
-  const Mask<V> ok = finite(P[0]) & finite(P[1]) & finite(P[2]);
+  const Mask<V> ok = both(both(finite(P[0]), finite(P[1])), finite(P[2]));
   for (int m = 0; m < 3; ++m) P[m] = select<V>(ok, P[m], V{});
 }
 

@@ -3,10 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <random>
 #include <set>
 
 #include "engine/builder.h"
+#include "engine/mjcf_import.h"
+#include "test_support.h"
 #include "test_support_errors.h"
 
 namespace novaphy {
@@ -398,6 +401,80 @@ TEST(CollisionPipelineErrors, BadOptions) {
   options = {};
   options.num_threads = -1;
   EXPECT_NOVAPHY_ERROR(CollisionPipeline(model, options), "num_threads must be >= 0 (0: OpenMP's default), got -1");
+}
+
+// MuJoCo's filter on an imported file: a pair collides when either shape's contype meets the other's
+// conaffinity (where the builder's rule needs both); <exclude> keeps two bodies apart; a geom that collides with
+// nothing is visual and not reported, a geom NovaPhy cannot collide that could collide is
+TEST(CollisionPipelineFiltering, MujocosContypeConaffinityAndExclusions) {
+  const std::string path = test::write_temp_file("filtered.xml", R"(
+<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1"><freejoint/><geom type="sphere" size="0.1" contype="1" conaffinity="0"/></body>
+    <body name="b" pos="0.15 0 1"><freejoint/><geom type="sphere" size="0.1" contype="0" conaffinity="1"/></body>
+    <body name="c" pos="0 3 1"><freejoint/><geom type="sphere" size="0.1" contype="2" conaffinity="2"/></body>
+    <body name="d" pos="0.15 3 1"><freejoint/><geom type="sphere" size="0.1" contype="1" conaffinity="1"/></body>
+    <body name="e" pos="0 6 1"><freejoint/><geom type="box" size="0.1 0.1 0.1"/>
+      <geom type="cylinder" size="0.05 0.1" contype="0" conaffinity="0"/></body>
+    <body name="f" pos="0.15 6 1"><freejoint/><geom type="box" size="0.1 0.1 0.1"/>
+      <geom name="can" type="cylinder" size="0.05 0.1" pos="0 0 0.5"/></body>
+  </worldbody>
+  <contact><exclude body1="e" body2="f"/></contact>
+</mujoco>)");
+  ModelBuilder builder(Vec3(0, 0, -9.81));
+  const std::vector<std::string> warnings = builder.add_mjcf(path);
+  std::string all;
+  for (const std::string& w : warnings) all += w + "\n";
+  EXPECT_NE(all.find("geom 'can'"), std::string::npos) << all;
+  EXPECT_EQ(all.find("type 5"), all.rfind("type 5")) << all;  // the visual cylinder is not reported
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.collision_filter, CollisionFilter::Mujoco);
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  std::set<std::pair<int, int>> touching;
+  for (int k = 0; k < contacts.contact_count; ++k)
+    touching.insert({std::min(contacts.contact_body_a[k], contacts.contact_body_b[k]),
+                     std::max(contacts.contact_body_a[k], contacts.contact_body_b[k])});
+  EXPECT_EQ(touching, (std::set<std::pair<int, int>>{{0, 1}}));  // c-d filtered, e-f excluded
+  std::filesystem::remove(path);
+
+  // the builder's rule on the same pair of masks: both ways needed
+  ModelBuilder own;
+  ShapeOptions one_way, other_way;
+  one_way.collision_group = 1, one_way.collision_mask = 0;
+  other_way.collision_group = 0, other_way.collision_mask = 1;
+  own.add_shape_sphere(own.add_body(RigidBody::from_sphere(1, 0.1)), 0.1, one_way);
+  own.add_shape_sphere(own.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(0.15, 0, 0)}), 0.1, other_way);
+  const Model mine = own.finalize();
+  EXPECT_EQ(mine.collision_filter, CollisionFilter::GroupAndMask);
+  CollisionPipeline strict(mine);
+  Contacts none = strict.contacts();
+  strict.collide(mine.state(), none);
+  EXPECT_EQ(none.contact_count, 0);
+}
+
+TEST(CollisionPipelineFiltering, ExcludedShapePairsNeverCollideInEveryWorld) {
+  ModelBuilder world;
+  const int a = world.add_body(RigidBody::from_sphere(1, 0.1));
+  const int b = world.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(0.15, 0, 0)});
+  const int c = world.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(0.075, 0.1, 0)});
+  for (const int body : {a, b, c}) world.add_shape_sphere(body, 0.1);
+  world.exclude_bodies(a, b);
+  EXPECT_NOVAPHY_ERROR(world.exclude_shapes(0, 7), "exclude_shapes: shape index 7 out of range [0, 3)");
+  EXPECT_NOVAPHY_ERROR(world.exclude_bodies(a, 9), "exclude_bodies: body index 9 out of range [-1, 3)");
+  ModelBuilder worlds;
+  worlds.replicate(world, 3);
+  const Model model = worlds.finalize();
+  ASSERT_EQ(model.exclude_count, 3);
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  for (int k = 0; k < contacts.contact_count; ++k) {
+    const int x = contacts.contact_body_a[k] % 3, y = contacts.contact_body_b[k] % 3;
+    EXPECT_FALSE((x == a && y == b) || (x == b && y == a)) << "contact " << k;
+  }
+  EXPECT_EQ(contacts.contact_count, 3 * 2);  // a-c and b-c in each world
 }
 
 }  // namespace

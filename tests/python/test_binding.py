@@ -309,3 +309,26 @@ def test_keyframes_give_every_world_its_state_and_commands():
     assert list(model.state().joint_q) == [0.0] * 4
     with pytest.raises(ValueError, match="no keyframe 'stand': the model has 'home'"):
         model.state(keyframe="stand")
+
+
+def test_an_imported_model_filters_by_mujocos_rule_and_keeps_excluded_shapes_apart():
+    builder = novaphy.ModelBuilder()
+    assert builder.collision_filter == novaphy.CollisionFilter.GroupAndMask
+    a = builder.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
+    b = builder.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1), xform=novaphy.Transform([0.15, 0, 0]))
+    builder.add_shape_sphere(a, 0.1, collision_group=1, collision_mask=0)
+    builder.add_shape_sphere(b, 0.1, collision_group=0, collision_mask=1)
+    for rule, found in ((novaphy.CollisionFilter.GroupAndMask, 0), (novaphy.CollisionFilter.Mujoco, 1)):
+        builder.collision_filter = rule
+        model = builder.finalize()
+        assert model.collision_filter == rule
+        pipeline = novaphy.CollisionPipeline(model)
+        contacts = pipeline.contacts()
+        pipeline.collide(model.state(), contacts)
+        assert contacts.contact_count == found
+    builder.exclude_bodies(a, b)
+    model = builder.finalize()
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    pipeline.collide(model.state(), contacts)
+    assert contacts.contact_count == 0 and list(model.exclude_shape[0]) == [0, 1]

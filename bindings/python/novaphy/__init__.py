@@ -6,6 +6,7 @@ novaphy.mpi (worlds sharded over MPI ranks) needs mpi4py and is imported on its 
 from . import solvers
 from .worlds import world_view
 from ._novaphy import (
+    CollisionFilter,
     CollisionPipeline,
     Contacts,
     Control,
@@ -40,6 +41,7 @@ from ._novaphy import (
 
 __all__ = [
     "CollisionPipeline",
+    "CollisionFilter",
     "Contacts",
     "Control",
     "Error",
