@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "engine/error.h"
+#include "engine/mjcf_translate.h"
 
 namespace novaphy {
 
@@ -301,7 +302,10 @@ class MjcfImporter {
 mjModel* load_mujoco_model(const std::string& path) {
   if (!std::filesystem::exists(path)) fail("cannot load '", path, "': file does not exist");
   char error[1024] = "";
-  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  // MJCF of MuJoCo >= 3 translated for 2.2.2's parser (engine/mjcf_translate.h); URDF as it is
+  const bool urdf = std::filesystem::path(path).extension() == ".urdf";
+  const TranslatedMjcf translated = urdf ? TranslatedMjcf{} : translate_mjcf(path);
+  mjModel* m = mj_loadXML(path.c_str(), translated.vfs.get(), error, sizeof(error));
   if (m == nullptr) fail("cannot load '", path, "': ", error);
   return m;
 }

@@ -1,0 +1,189 @@
+#include "engine/mjcf_translate.h"
+
+#include <tinyxml2.h>
+
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "engine/error.h"
+
+namespace novaphy {
+
+namespace {
+
+using tinyxml2::XMLDocument;
+using tinyxml2::XMLElement;
+
+// MuJoCo >= 3 attributes with no translation here: element, attribute
+constexpr const char* kUntranslated[][2] = {{"position", "dampratio"},     {"position", "inheritrange"},
+                                            {"position", "timeconst"},     {"intvelocity", "inheritrange"},
+                                            {"joint", "actuatorfrcrange"}, {"joint", "actuatorgravcomp"},
+                                            {"body", "gravcomp"},          {"general", "actearly"},
+                                            {"compiler", "alignfree"}};
+
+std::string where(const std::string& file, const XMLElement* e) {
+  return file + " line " + std::to_string(e->GetLineNum()) + ": <" + e->Name() + ">";
+}
+
+// every element below `e` (itself included), depth first
+template <typename F>
+void for_each_element(XMLElement* e, F&& f) {
+  f(e);
+  for (XMLElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) for_each_element(c, f);
+}
+
+// a default class's attribute on its `tag` element, looked up the class and its ancestors (MuJoCo's defaults)
+class Defaults {
+ public:
+  explicit Defaults(XMLElement* root) {
+    for_each_element(root, [&](XMLElement* e) {
+      if (std::strcmp(e->Name(), "default") != 0) return;
+      const char* name = e->Attribute("class");
+      classes_[name ? name : "main"] = e;
+    });
+  }
+  const char* find(const char* cls, const char* tag, const char* attribute) const {
+    const auto it = classes_.find(cls ? cls : "main");
+    for (const XMLElement* d = it == classes_.end() ? nullptr : it->second; d && std::strcmp(d->Name(), "default") == 0;
+         d = d->Parent()->ToElement())
+      if (const XMLElement* t = d->FirstChildElement(tag); t && t->Attribute(attribute)) return t->Attribute(attribute);
+    return nullptr;
+  }
+
+ private:
+  std::map<std::string, XMLElement*> classes_;
+};
+
+struct Unreadable {};  // a file that is not well-formed XML: MuJoCo's parser reports it
+
+class Translator {
+ public:
+  explicit Translator(TranslatedMjcf& out) : out_(out) {}
+
+  void file(const std::string& path, bool main) {
+    auto doc = std::make_unique<XMLDocument>();
+    XMLElement* root = doc->LoadFile(path.c_str()) == tinyxml2::XML_SUCCESS ? doc->RootElement() : nullptr;
+    if (!root) throw Unreadable{};
+    const std::string dir = std::filesystem::path(path).parent_path().string();
+    Defaults defaults(root);
+    for_each_element(root, [&](XMLElement* e) { element(path, e, defaults); });
+    for (XMLElement* e : defaults_with_kv_) e->DeleteAttribute("kv");
+    defaults_with_kv_.clear();
+    if (main && !has_autolimits_) autolimits(root, path);
+    std::vector<std::string> includes;
+    for_each_element(root, [&](XMLElement* e) {
+      if (std::strcmp(e->Name(), "include") == 0 && e->Attribute("file"))
+        includes.push_back((std::filesystem::path(main ? dir : main_dir_) / e->Attribute("file")).string());
+    });
+    if (main) main_dir_ = dir;
+    add(path, *doc);
+    for (const std::string& include : includes) file(include, false);
+  }
+
+ private:
+  void element(const std::string& path, XMLElement* e, const Defaults& defaults) {
+    for (const auto& [tag, attribute] : kUntranslated)
+      if (std::strcmp(e->Name(), tag) == 0 && e->Attribute(attribute))
+        fail(where(path, e), ": MuJoCo 3's attribute '", attribute,
+             "' has no translation for MuJoCo 2.2.2's parser (docs/mjcf.md lists those that have)");
+    if (std::strcmp(e->Name(), "compiler") == 0 && e->Attribute("autolimits")) has_autolimits_ = true;
+    if (std::strcmp(e->Name(), "option") == 0 && e->Attribute("integrator", "implicitfast")) {
+      e->SetAttribute("integrator", "implicit");
+      note(path, e, "integrator=\"implicitfast\" -> \"implicit\"");
+    }
+    whitespace(path, e);
+    if (std::strcmp(e->Name(), "position") == 0) position_kv(path, e, defaults);
+  }
+
+  // attribute values over several lines (keyframes) on one
+  void whitespace(const std::string& path, XMLElement* e) {
+    for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
+      const std::string value = a->Value();
+      if (value.find_first_of("\n\r\t") == std::string::npos) continue;
+      std::istringstream words(value);
+      std::string word, joined;
+      while (words >> word) joined += (joined.empty() ? "" : " ") + word;
+      const std::string name = a->Name();
+      e->SetAttribute(name.c_str(), joined.c_str());
+      note(path, e, name + " over several lines -> one");
+      a = e->FindAttribute(name.c_str());
+    }
+  }
+
+  // MuJoCo 3's position servo with kv (on the element or its class): a general actuator of gain kp and bias
+  // [0, -kp, -kv]; in a default, kv is dropped once its actuators are rewritten
+  void position_kv(const std::string& path, XMLElement* e, const Defaults& defaults) {
+    const bool in_default = e->Parent() && std::strcmp(e->Parent()->ToElement()->Name(), "default") == 0;
+    if (in_default) {
+      if (e->Attribute("kv")) defaults_with_kv_.push_back(e);  // dropped once the file's actuators are rewritten
+      return;
+    }
+    const char* cls = e->Attribute("class");
+    const char* kv = e->Attribute("kv") ? e->Attribute("kv") : defaults.find(cls, "position", "kv");
+    if (!kv) return;
+    const char* kp_text = e->Attribute("kp") ? e->Attribute("kp") : defaults.find(cls, "position", "kp");
+    const std::string kp = kp_text ? kp_text : "1";
+    e->SetName("general");
+    e->DeleteAttribute("kp");
+    e->DeleteAttribute("kv");
+    e->SetAttribute("gaintype", "fixed");
+    e->SetAttribute("biastype", "affine");
+    e->SetAttribute("gainprm", kp.c_str());
+    e->SetAttribute("biasprm", ("0 -" + kp + " -" + std::string(kv)).c_str());
+    note(path, e, "position kp=" + kp + " kv=" + kv + " -> general gainprm, biasprm");
+  }
+
+  // MuJoCo 3 limits a joint or actuator that has a range (autolimits="true" is its default)
+  void autolimits(XMLElement* root, const std::string& path) {
+    XMLElement* compiler = root->FirstChildElement("compiler");
+    if (!compiler) {
+      compiler = root->GetDocument()->NewElement("compiler");
+      root->InsertFirstChild(compiler);
+    }
+    compiler->SetAttribute("autolimits", "true");
+    note(path, compiler, "autolimits=\"true\" (MuJoCo 3's default)");
+  }
+
+  void note(const std::string& path, const XMLElement* e, const std::string& what) {
+    out_.translations.push_back(std::filesystem::path(path).filename().string() + " line " +
+                                std::to_string(e->GetLineNum()) + ": " + what);
+  }
+
+  void add(const std::string& path, XMLDocument& doc) {
+    tinyxml2::XMLPrinter printer;
+    doc.Print(&printer);
+    const std::string name = std::filesystem::path(path).filename().string();
+    if (mj_findFileVFS(out_.vfs.get(), name.c_str()) >= 0)
+      fail("cannot load '", path, "': two included files are named '", name, "'");
+    const int size = printer.CStrSize() - 1;
+    if (mj_makeEmptyFileVFS(out_.vfs.get(), name.c_str(), size) != 0)
+      fail("cannot load '", path, "': too many included files for MuJoCo's virtual file system");
+    std::memcpy(out_.vfs->filedata[mj_findFileVFS(out_.vfs.get(), name.c_str())], printer.CStr(), size);
+  }
+
+  TranslatedMjcf& out_;
+  std::vector<XMLElement*> defaults_with_kv_;
+  std::string main_dir_;
+  bool has_autolimits_ = false;
+};
+
+}  // namespace
+
+TranslatedMjcf translate_mjcf(const std::string& path) {
+  TranslatedMjcf out;
+  out.vfs = {new mjVFS, [](mjVFS* vfs) {
+               mj_deleteVFS(vfs);
+               delete vfs;
+             }};
+  mj_defaultVFS(out.vfs.get());
+  try {
+    Translator(out).file(path, true);
+  } catch (const Unreadable&) {
+    return {};  // MuJoCo's own parser names what is wrong with the file
+  }
+  return out;
+}
+
+}  // namespace novaphy

@@ -1,0 +1,26 @@
+// MuJoCo >= 3 MJCF through MuJoCo 2.2.2's parser (the reference NovaPhy imports with): the file and its
+// <include>s read, the newer syntax today's MuJoCo Menagerie files use rewritten into its 2.2.2 equivalent
+// (docs/mjcf.md lists each), and the translated files handed to mj_loadXML in memory (a virtual file system);
+// meshes and other assets are still read from disk. A newer attribute it does not translate is an Error
+// naming it, its element, file and line.
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace novaphy {
+
+struct TranslatedMjcf {
+  std::unique_ptr<mjVFS, void (*)(mjVFS*)> vfs{nullptr, nullptr};  // the translated files, by base name
+  std::vector<std::string> translations;                           // what was rewritten, one line each
+};
+
+// reads `path` (MJCF) and its includes and translates them; throws Error for a MuJoCo >= 3 attribute without a
+// translation. A file that is not well-formed XML gives no file system (vfs null): MuJoCo's parser, reading the
+// files from disk, reports it
+TranslatedMjcf translate_mjcf(const std::string& path);
+
+}  // namespace novaphy
