@@ -249,12 +249,18 @@ NovaPhyRun run_novaphy(const Model& model, const Robot& robot, const std::vector
   SolverFeatherstoneSettings settings;
   settings.num_threads = o.threads;
   SolverFeatherstone solver(model, settings);
-  State state = model.state();
-  const Control control = model.control();
+  // from the file's first keyframe (its commands held) where it has one, else its pose at rest; the kick on top
   const mjModel* m = robot.mujoco.get();
+  const bool keyed = m->nkey > 0;
+  State state = keyed ? model.state(model.keyframe_name[0]) : model.state();
+  const Control control = keyed ? model.control(model.keyframe_name[0]) : model.control();
+  const mjtNum* qpos = keyed ? m->key_qpos : m->qpos0;
   const int nv = robot.model.joint_dof_count;
-  for (int w = 0; w < model.world_count; ++w)
-    robot.import.to_joint_qd(m, m->qpos0, &qvel[static_cast<size_t>(w) * m->nv], &state.joint_qd[w * nv]);
+  std::vector<Scalar> kick(nv);
+  for (int w = 0; w < model.world_count; ++w) {
+    robot.import.to_joint_qd(m, qpos, &qvel[static_cast<size_t>(w) * m->nv], kick.data());
+    for (int k = 0; k < nv; ++k) state.joint_qd[w * nv + k] += kick[k];
+  }
   std::vector<int> world_of(model.articulation_count);  // an articulation's world
   for (int a = 0; a < model.articulation_count; ++a) {
     const int joint = model.articulation_start[a];
@@ -299,7 +305,8 @@ MujocoRun run_mujoco(const mjModel* m, const std::vector<mjtNum>& qvel, int worl
   std::vector<std::unique_ptr<mjData, void (*)(mjData*)>> data;
   for (int w = 0; w < worlds; ++w) {
     data.emplace_back(mj_makeData(m), mj_deleteData);
-    std::copy_n(&qvel[static_cast<size_t>(w) * m->nv], m->nv, data.back()->qvel);
+    if (m->nkey > 0) mj_resetDataKeyframe(m, data.back().get(), 0);  // its pose, velocities and commands
+    for (int k = 0; k < m->nv; ++k) data.back()->qvel[k] += qvel[static_cast<size_t>(w) * m->nv + k];
   }
   const int threads = o.threads > 0 ? o.threads : omp_get_max_threads();
   MujocoRun run;
@@ -382,7 +389,10 @@ int run(const Options& o) {
   std::printf("novaphy_showcase: %s, %d worlds of %d bodies and %d dofs, %d steps of %g ms (%g s), %s, %d thread%s\n",
               file_name(o.scene).c_str(), o.worlds, robot.model.body_count, robot.model.joint_dof_count, steps,
               dt * 1e3, steps * dt, o.float32 ? "float32" : "float64", threads, threads == 1 ? "" : "s");
-  if (o.kick != 0) std::printf("each world starts from the file's pose with its own random joint velocities\n");
+  const std::string start =
+      m->nkey > 0 ? "its keyframe '" + robot.model.keyframe_name[0] + "' (commands held)" : "the file's pose";
+  if (o.kick != 0) std::printf("each world starts from %s with its own random joint velocities\n", start.c_str());
+  if (o.kick == 0) std::printf("each world starts from %s\n", start.c_str());
   for (const std::string& warning : robot.import.warnings) std::printf("import: %s\n", warning.c_str());
   std::fflush(stdout);
 
