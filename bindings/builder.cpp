@@ -41,15 +41,16 @@ JointDofConfig dof_config(py::object axis) {
 auto joint_adder(JointType type) {
   return [type](ModelBuilder& builder, int parent, int child, std::optional<Transform> parent_xform,
                 std::optional<Transform> child_xform, py::object axis, std::optional<Scalar> armature,
-                std::optional<Scalar> damping, std::optional<Scalar> stiffness, std::optional<Scalar> limit_lower,
-                std::optional<Scalar> limit_upper, std::optional<Scalar> target_ke, std::optional<Scalar> target_kd,
-                const std::string& name) {
+                std::optional<Scalar> damping, std::optional<Scalar> frictionloss, std::optional<Scalar> stiffness,
+                std::optional<Scalar> limit_lower, std::optional<Scalar> limit_upper, std::optional<Scalar> target_ke,
+                std::optional<Scalar> target_kd, const std::string& name) {
     JointOptions options;
     options.parent_xform = parent_xform.value_or(Transform::identity());
     options.child_xform = child_xform.value_or(Transform::identity());
     options.dof = dof_config(axis);
     if (armature) options.dof.armature = *armature;
     if (damping) options.dof.damping = *damping;
+    if (frictionloss) options.dof.frictionloss = *frictionloss;
     if (stiffness) options.dof.stiffness = *stiffness;
     if (limit_lower) options.dof.limit_lower = *limit_lower;
     if (limit_upper) options.dof.limit_upper = *limit_upper;
@@ -64,9 +65,9 @@ template <typename Class>
 void def_joint(Class& c, const char* method, JointType type, const char* doc) {
   c.def(method, joint_adder(type), py::arg("parent"), py::arg("child"), py::kw_only(),
         py::arg("parent_xform") = py::none(), py::arg("child_xform") = py::none(), py::arg("axis") = py::none(),
-        py::arg("armature") = py::none(), py::arg("damping") = py::none(), py::arg("stiffness") = py::none(),
-        py::arg("limit_lower") = py::none(), py::arg("limit_upper") = py::none(), py::arg("target_ke") = py::none(),
-        py::arg("target_kd") = py::none(), py::arg("name") = "", doc);
+        py::arg("armature") = py::none(), py::arg("damping") = py::none(), py::arg("frictionloss") = py::none(),
+        py::arg("stiffness") = py::none(), py::arg("limit_lower") = py::none(), py::arg("limit_upper") = py::none(),
+        py::arg("target_ke") = py::none(), py::arg("target_kd") = py::none(), py::arg("name") = "", doc);
 }
 
 ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar restitution, int group, int mask) {
@@ -120,6 +121,7 @@ void bind_builder(py::module_& m) {
       .def_readwrite("limit_upper", &JointDofConfig::limit_upper)
       .def_readwrite("armature", &JointDofConfig::armature)
       .def_readwrite("damping", &JointDofConfig::damping)
+      .def_readwrite("frictionloss", &JointDofConfig::frictionloss)
       .def_readwrite("stiffness", &JointDofConfig::stiffness)
       .def_readwrite("q_ref", &JointDofConfig::q_ref)
       .def_readwrite("target_ke", &JointDofConfig::target_ke)

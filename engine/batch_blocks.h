@@ -45,6 +45,8 @@ struct BatchGroup {
   std::vector<int> rotational;  // dofs angular damping scales: Revolute ones and Ball's and Free's angular ones
   std::vector<int> limited;     // Revolute / Prismatic dofs with a finite limit in some world
   std::vector<V> limits;        // per block: [limited][2] lower and upper limit
+  std::vector<int> frictional;  // dofs with dry friction (frictionloss > 0) in some world
+  std::vector<V> frictionloss;  // per block: [frictional]
   // where its blocks' kept limit impulses start in the step's limit_impulse: per block [limited][2][lane]
   int impulse_base = 0;
   bool enabled = true;
@@ -92,6 +94,8 @@ struct alignas(64) RowWork {
   std::vector<IntLanes<T>> active;
   std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
   std::vector<int> limit_row;                         // [limited][2] its row, or -1
+  std::vector<int> friction_row;                      // [frictional] its row, or -1
+  std::vector<V> bound;                               // [row] a Bounded row's largest |impulse|
   std::vector<int> contact;                           // [slot][lane] the contact, or -1
   std::vector<V> frame;                               // [slot][3][3] the normal and tangents
   std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
@@ -107,7 +111,8 @@ struct alignas(64) RowWork {
       nonzero_begin.resize(rows_);
       nonzero_end.resize(rows_);
       limit_row.resize(rows_);
-      for (auto* x : {&target, &mu, &inv_mass, &lambda}) x->resize(rows_);
+      friction_row.resize(rows_);
+      for (auto* x : {&target, &mu, &inv_mass, &lambda, &bound}) x->resize(rows_);
     }
     for (auto* x : {&J, &z})
       if (x->size() < static_cast<size_t>(rows_) * dofs) x->resize(static_cast<size_t>(rows_) * dofs);

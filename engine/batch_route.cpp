@@ -53,6 +53,7 @@ class Batches final : public ArticulationBatches {
       lay_out(groups_[g], g, welded);
       gather_params(groups_[g], com);
       lay_out_limits(groups_[g], model, limit_slot);
+      lay_out_friction(groups_[g], model);
     }
     size_scratch();
     enable(std::numeric_limits<int>::max());
@@ -173,7 +174,8 @@ class Batches final : public ArticulationBatches {
   std::size_t bytes() const override {
     std::size_t n = limit_cell_.size() * sizeof(int);
     for (const BatchGroup<T>& G : groups_)
-      n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size() + G.limits.size()) * sizeof(V) +
+      n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size() + G.limits.size() + G.frictionloss.size()) *
+               sizeof(V) +
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int) + G.contiguous.size();
     for (const ThreadScratch<T>& s : scratch_) {
       n += (s.S.size() + s.H.size()) * sizeof(V) + s.factor.size() * sizeof(Scalar) + s.rows.bytes();
@@ -338,6 +340,22 @@ class Batches final : public ArticulationBatches {
         }
   }
 
+  // the group's dofs with dry friction and its blocks' frictionloss
+  void lay_out_friction(BatchGroup<T>& G, const Model& model) {
+    for (int k = 0; k < G.topo.dof_count; ++k) {
+      bool any = false;
+      for (const int a : G.arts) any |= model.joint_frictionloss[art_[a].qd_begin() + k] > 0;
+      if (any) G.frictional.push_back(k);
+    }
+    const int nf = static_cast<int>(G.frictional.size());
+    G.frictionloss.resize(static_cast<size_t>(G.blocks) * nf);
+    for (int b = 0; b < G.blocks; ++b)
+      for (int m = 0; m < nf; ++m)
+        for (int l = 0; l < W; ++l)
+          G.frictionloss[b * nf + m][l] =
+              static_cast<T>(model.joint_frictionloss[art_[G.arts[b * W + l]].qd_begin() + G.frictional[m]]);
+  }
+
   // a scratch per thread, sized for the largest group: every limit row and four contacts a world
   void size_scratch() {
     scratch_.resize(std::max(1, omp_get_max_threads()));
@@ -355,7 +373,9 @@ class Batches final : public ArticulationBatches {
       for (size_t g = 0; g < groups_.size(); ++g) {
         s.work[g].resize(groups_[g].topo);
         s.work[g].bodies.resize(13 * groups_[g].bodies());
-        s.rows.resize(2 * static_cast<int>(groups_[g].limited.size()) + 3 * 4, groups_[g].topo.dof_count, 4);
+        s.rows.resize(
+            2 * static_cast<int>(groups_[g].limited.size()) + static_cast<int>(groups_[g].frictional.size()) + 3 * 4,
+            groups_[g].topo.dof_count, 4);
       }
     }
   }

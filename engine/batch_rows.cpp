@@ -10,11 +10,13 @@ namespace novaphy {
 
 template <typename T>
 std::size_t RowWork<T>::bytes() const {
-  return (J.size() + z.size() + target.size() + mu.size() + inv_mass.size() + lambda.size() + coef.size() +
-          qd_in.size() + point.size() + frame.size()) *
+  return (J.size() + z.size() + target.size() + mu.size() + inv_mass.size() + lambda.size() + bound.size() +
+          coef.size() + qd_in.size() + point.size() + frame.size()) *
              sizeof(V) +
          active.size() * sizeof(IntLanes<T>) +
-         (limit_row.size() + contact.size() + normal.size() + nonzero_begin.size() + nonzero_end.size()) * sizeof(int) +
+         (limit_row.size() + friction_row.size() + contact.size() + normal.size() + nonzero_begin.size() +
+          nonzero_end.size()) *
+             sizeof(int) +
          kind.size() * sizeof(RowKind);
 }
 
@@ -56,7 +58,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const Step
       const IntLanes<T> on = mine & finite(limit[2 * m + side]) & limit_row_on(gap, sign * w.qd[k], dt);
       R.limit_row[2 * m + side] = -1;
       if (!any_lane<T>(on)) continue;
-      const V<T> warm = limit_row_warm_start(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), step.rows);
+      const V<T> warm = row_warm_start(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), step.rows);
       const int r = add_row(R, RowKind::Unilateral, on, limit_row_target(gap, step.rows, dt), warm);
       R.limit_row[2 * m + side] = r;
       V<T>* J = R.J_row(r);
@@ -68,6 +70,33 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const Step
       batch_solve_unit(topo, H, k, z);
       for (int j = 0; j < nv; ++j) z[j] *= sign;
     }
+  }
+}
+
+// a row per dof with dry friction, J = e_k, in the lanes `mine` whose world has it: its velocity driven to
+// zero with at most frictionloss dt of impulse either way
+template <typename T>
+void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const StepContext& step,
+                       const IntLanes<T>& mine, RowWork<T>& R) {
+  const int nf = static_cast<int>(G.frictional.size()), nv = G.topo.dof_count;
+  const V<T>* loss = G.frictionloss.data() + static_cast<size_t>(b) * nf;
+  const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
+  for (int m = 0; m < nf; ++m) {
+    const int k = G.frictional[m];
+    const IntLanes<T> on = mine & (loss[m] > 0);
+    R.friction_row[m] = -1;
+    if (!any_lane<T>(on)) continue;
+    V<T> kept;
+    gather_lanes<T>(&G.qd_off[b * kLanes<T>], step.friction_impulse + k, 1, &kept);
+    const int r = add_row(R, RowKind::Bounded, on, V<T>{}, row_warm_start(kept, step.rows));
+    R.bound[r] = friction_loss_bound(loss[m], dt);
+    R.friction_row[m] = r;
+    V<T>* J = R.J_row(r);
+    std::fill(J, J + nv, V<T>{});
+    J[k] = on ? V<T>{} + 1 : V<T>{};
+    R.nonzero_begin[r] = k;
+    R.nonzero_end[r] = k + 1;
+    batch_solve_unit(G.topo, H, k, R.z_row(r));
   }
 }
 
@@ -185,6 +214,7 @@ void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
   rows.MinvJT = R.z.data();
   rows.target = R.target.data();
   rows.mu = R.mu.data();
+  rows.bound = R.bound.data();
   rows.active = R.active.data();
   rows.inv_mass = R.inv_mass.data();
   rows.lambda = R.lambda.data();
@@ -199,8 +229,13 @@ void keep_impulses(const BatchGroup<T>& G, int b, int slots, const IntLanes<T>& 
   Scalar* kept = step.limit_impulse + G.impulse_base + static_cast<size_t>(b) * 2 * nl * kLanes<T>;
   for (int m = 0; m < 2 * nl; ++m) {
     const int r = R.limit_row[m];
-    const V<T> x = r >= 0 ? limit_impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
+    const V<T> x = r >= 0 ? impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
     doubles_from_lanes<T>(x, mine, kept + m * kLanes<T>);
+  }
+  for (size_t m = 0; m < G.frictional.size(); ++m) {
+    const int r = R.friction_row[m];
+    const V<T> x = r >= 0 ? impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
+    scatter_lanes<T>(&G.qd_off[b * kLanes<T>], &x, 1, mine, step.friction_impulse + G.frictional[m]);
   }
   for (int t = 0; t < slots; ++t) {
     V<T> P[3];
@@ -227,7 +262,8 @@ template <typename T>
 void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const StepContext& step, BatchWork<T>& w,
                 RowWork<T>& R, bool carried, bool carry_on, RowPhaseSeconds* phases) {
   constexpr int W = kLanes<T>;
-  const int nl = static_cast<int>(G.limited.size()), nv = G.topo.dof_count, lanes = G.lanes_in(b);
+  const int nl = static_cast<int>(G.limited.size()), nf = static_cast<int>(G.frictional.size());
+  const int nv = G.topo.dof_count, lanes = G.lanes_in(b);
   const int* qd_off = &G.qd_off[b * W];
   // the lanes whose rows are solved here (the others' are the islands'), each one's contacts, their most
   IntLanes<T> mine{};
@@ -239,7 +275,7 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
     listed[l] = step.lists.start[a + 1] - step.lists.start[a];
     slots = std::max(slots, listed[l]);
   }
-  if (!any_lane<T>(mine) || (nl == 0 && slots == 0)) {
+  if (!any_lane<T>(mine) || (nl == 0 && nf == 0 && slots == 0)) {
     if (carried && !carry_on) scatter_lanes<T>(qd_off, w.qd.data(), nv, real_lanes(G, b), step.qd);
     return;
   }
@@ -248,9 +284,10 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
     gather_lanes<T>(qd_off, step.qd, nv, w.qd.data());
   }
   Clock::time_point mark = phases ? Clock::now() : Clock::time_point{};
-  R.resize(2 * nl + 3 * slots, nv, slots);
+  R.resize(2 * nl + nf + 3 * slots, nv, slots);
   R.rows = 0;
   add_limit_rows(G, b, kin.H, step, w, mine, R);
+  add_friction_rows(G, b, kin.H, step, mine, R);
   if (phases) phases->limits += seconds_since(&mark);
   if (slots > 0) gather_lanes<T>(qd_off, step.in->joint_qd.data(), nv, R.qd_in.data());
   for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);

@@ -172,6 +172,7 @@ int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOp
     fail(item, ": limits must satisfy limit_lower <= limit_upper, got [", dof.limit_lower, ", ", dof.limit_upper, "]");
   check_nonnegative(item, "armature", dof.armature);
   check_nonnegative(item, "damping", dof.damping);
+  check_nonnegative(item, "frictionloss", dof.frictionloss);
   check_nonnegative(item, "stiffness", dof.stiffness);
   check_nonnegative(item, "target_ke", dof.target_ke);
   check_nonnegative(item, "target_kd", dof.target_kd);
@@ -481,6 +482,7 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
   for (int k = 0; k < joint_dof_count(joint.type); ++k) {
     model.joint_armature[qd + k] = dof.armature;
     model.joint_damping[qd + k] = dof.damping;
+    model.joint_frictionloss[qd + k] = dof.frictionloss;
     model.joint_stiffness[qd + k] = dof.stiffness;
     model.joint_limit_lower[qd + k] = dof.limit_lower;
     model.joint_limit_upper[qd + k] = dof.limit_upper;

@@ -27,7 +27,8 @@ struct JointDofConfig {
   Scalar limit_upper = std::numeric_limits<Scalar>::infinity();
   Scalar armature = 0;
   Scalar damping = 0;
-  Scalar stiffness = 0;  // spring towards q_ref, Revolute and Prismatic joints
+  Scalar frictionloss = 0;  // dry friction: each dof's generalised friction force at most this either way
+  Scalar stiffness = 0;     // spring towards q_ref, Revolute and Prismatic joints
   Scalar q_ref = 0;
   Scalar target_ke = 0;  // PD drive gains (Control.joint_target_ke/kd start here)
   Scalar target_kd = 0;

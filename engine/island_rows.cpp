@@ -19,6 +19,7 @@ IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& 
       limited_start_(limited_start),
       limit_cell_(limit_cell) {
   limit_row_.assign(2 * static_cast<size_t>(model.joint_dof_count), -1);
+  friction_row_.assign(model.joint_dof_count, -1);
 }
 
 void IslandRows::begin(const std::vector<StepRoute*>& route) {
@@ -82,6 +83,11 @@ void IslandRows::finish_row(int r, Scalar cfm) {
 void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>& articulations) {
   const Scalar dt = step.dt;
   for (const int a : articulations)
+    for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
+      const int r = friction_row_[g];
+      step.friction_impulse[g] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+    }
+  for (const int a : articulations)
     for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
       const int j = limited_joints_[m], g = model_.joint_qd_start[j];
       const Scalar q = step.in->joint_q[model_.joint_q_start[j]];
@@ -93,9 +99,23 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
         if (!std::isfinite(limit) || !limit_row_on(gap, sign * step.qd[g], dt)) continue;
         const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, dt));
         row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
-        rows_[r].lambda = limit_row_warm_start(step.limit_impulse[limit_cell_[2 * m + side]], step.rows);
+        rows_[r].lambda = row_warm_start(step.limit_impulse[limit_cell_[2 * m + side]], step.rows);
         limit_row_[2 * g + side] = r;
       }
+    }
+}
+
+void IslandRows::add_friction_rows(const StepContext& step, const std::vector<int>& articulations) {
+  for (const int a : articulations)
+    for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
+      friction_row_[g] = -1;
+      const Scalar loss = model_.joint_frictionloss[g];
+      if (!(loss > 0)) continue;
+      const int r = begin_row(a, -1, RowKind::Bounded, 0);
+      row_jacobian(r, a)[g - art_[a].qd_begin()] = 1;
+      rows_[r].bound = friction_loss_bound(loss, step.dt);
+      rows_[r].lambda = row_warm_start(step.friction_impulse[g], step.rows);
+      friction_row_[g] = r;
     }
 }
 
@@ -177,14 +197,14 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
       const int g = model_.joint_qd_start[limited_joints_[m]];
       for (int side = 0; side < 2; ++side) {
         const int r = limit_row_[2 * g + side];
-        step.limit_impulse[limit_cell_[2 * m + side]] = limit_impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+        step.limit_impulse[limit_cell_[2 * m + side]] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
       }
     }
 }
 
 std::size_t IslandRows::bytes() const {
   return (J_.size() + MinvJT_.size()) * sizeof(Scalar) + rows_.size() * sizeof(PgsRow) +
-         (limit_row_.size() + contact_row_.size()) * sizeof(int);
+         (limit_row_.size() + friction_row_.size() + contact_row_.size()) * sizeof(int);
 }
 
 }  // namespace novaphy

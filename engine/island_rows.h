@@ -22,8 +22,9 @@ class IslandRows {
 
   // this step's rows afresh; route[a]: the route stepping articulation a
   void begin(const std::vector<StepRoute*>& route);
-  // the limit rows of `articulations`, then the rows of `contacts`
+  // the limit rows and then the friction-loss rows of `articulations`, then the rows of `contacts`
   void add_limit_rows(const StepContext& step, const std::vector<int>& articulations);
+  void add_friction_rows(const StepContext& step, const std::vector<int>& articulations);
   void add_contact_rows(const StepContext& step, const std::vector<int>& contacts);
   // the islands swept on `threads` threads; the impulses kept (contacts in contact_impulse, limits in
   // step.limit_impulse for `articulations`)
@@ -52,8 +53,9 @@ class IslandRows {
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;  // the rows' pools
   int pool_size_ = 0;
-  std::vector<int> limit_row_;    // [dof][2] the row of each active limit, -1
-  std::vector<int> contact_row_;  // [contact] the first row of each contact added
+  std::vector<int> limit_row_;     // [dof][2] the row of each active limit, -1
+  std::vector<int> friction_row_;  // [dof] its friction-loss row, -1
+  std::vector<int> contact_row_;   // [contact] the first row of each contact added
   // islands (articulations joined by rows, named by their lowest articulation): island i's rows are
   // island_rows_[island_start_[i] .. island_start_[i + 1])
   std::vector<int> island_parent_, island_of_row_, island_start_, island_rows_, fill_;

@@ -137,6 +137,7 @@ class MjcfImporter {
     dof.axis = vec3(m_->jnt_axis + 3 * j);
     dof.armature = m_->dof_armature[da];
     dof.damping = m_->dof_damping[da];
+    dof.frictionloss = m_->dof_frictionloss[da];
     if (m_->jnt_limited[j] && (m_->jnt_type[j] == mjJNT_HINGE || m_->jnt_type[j] == mjJNT_SLIDE)) {
       dof.limit_lower = m_->jnt_range[2 * j];
       dof.limit_upper = m_->jnt_range[2 * j + 1];
@@ -150,7 +151,6 @@ class MjcfImporter {
                          Transform& body_xform) {
     const Vec3 anchor = vec3(m_->jnt_pos + 3 * j);
     const int qa = m_->jnt_qposadr[j];
-    const int da = m_->jnt_dofadr[j];
     JointDofConfig& dof = options.dof;
     JointType type = JointType::Fixed;
     switch (m_->jnt_type[j]) {
@@ -185,8 +185,6 @@ class MjcfImporter {
         if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': free joint stiffness is not modelled");
         break;
     }
-    for (int d = 0; d < joint_dof_count(type); ++d)
-      if (m_->dof_frictionloss[da + d] != 0) warn("joint '" + joint_name + "': frictionloss is not modelled");
     return type;
   }
 

@@ -45,6 +45,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_q_ref, joint_coord_count, 1)             \
   X(Scalar, joint_armature, joint_dof_count, 1)            \
   X(Scalar, joint_damping, joint_dof_count, 1)             \
+  X(Scalar, joint_frictionloss, joint_dof_count, 1)        \
   X(Scalar, joint_stiffness, joint_dof_count, 1)           \
   X(Scalar, joint_limit_lower, joint_dof_count, 1)         \
   X(Scalar, joint_limit_upper, joint_dof_count, 1)         \

@@ -256,6 +256,7 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.qd = data_.qd.data();
   step.q_next = data_.q_next.data();
   step.limit_impulse = data_.limit_impulse.data();
+  step.friction_impulse = data_.friction_impulse.data();
   step.diverged = data_.diverged.data();
   step.factor_failure = data_.factor_failure.data();
   std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
@@ -411,6 +412,7 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
 void SolverFeatherstone::solve_islands(const StepContext& step) {
   islands_->begin(route_);
   islands_->add_limit_rows(step, island_articulations_);
+  islands_->add_friction_rows(step, island_articulations_);
   lap(stage_seconds_.limit_rows);
   islands_->add_contact_rows(step, island_contacts_);
   lap(stage_seconds_.contact_rows);

@@ -56,6 +56,7 @@ struct SolverCounts {
   X(Scalar, actuator_damping, n.dofs, "the actuators' damping on each dof, taken implicitly")                      \
   X(std::uint8_t, affine_run, n.runs, "1 where an actuator of the run's dofs has a position or velocity term")     \
   X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")         \
+  X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")     \
   X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                     \
   X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                         \
   X(std::uint8_t, touched, n.articulations, "1 where a contact joins it to another moving articulation this step") \

@@ -66,11 +66,12 @@ struct StepContext {
   bool profile = false;  // the rows stage times its phases (stage_seconds)
 
   // the step's vectors, in the model's numbering
-  Scalar* qd = nullptr;              // [dof] velocities between the stages of split passes
-  Scalar* q_next = nullptr;          // [coord] coordinates after the step, likewise
-  Scalar* limit_impulse = nullptr;   // [limit cell] warm starts of limit rows
-  std::uint8_t* diverged = nullptr;  // [articulation]
-  int* factor_failure = nullptr;     // [articulation] dof whose pivot failed, else -1
+  Scalar* qd = nullptr;                // [dof] velocities between the stages of split passes
+  Scalar* q_next = nullptr;            // [coord] coordinates after the step, likewise
+  Scalar* limit_impulse = nullptr;     // [limit cell] warm starts of limit rows
+  Scalar* friction_impulse = nullptr;  // [dof] warm starts of friction-loss rows
+  std::uint8_t* diverged = nullptr;    // [articulation]
+  int* factor_failure = nullptr;       // [articulation] dof whose pivot failed, else -1
 };
 
 // where each body and dof sits among the articulations the kernels see

@@ -52,8 +52,10 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
       const int r = order[k];
       PgsRow& row = rows[r];
       // a row touching a diverged articulation yields no impulse, so NaN does not spread through contacts
-      if (row.kind == RowKind::Unilateral) {
-        const Scalar lambda = std::max<Scalar>(0, row.lambda + step(row));
+      if (row.kind != RowKind::FrictionPair) {
+        const Scalar unclamped = row.lambda + step(row);
+        const Scalar lambda = row.kind == RowKind::Unilateral ? std::max<Scalar>(0, unclamped)
+                                                              : std::clamp(unclamped, -row.bound, row.bound);
         if (!std::isfinite(lambda) || lambda == row.lambda) continue;
         apply_impulse(row, MinvJT, lambda - row.lambda, qd);
         moving |= moved(row, lambda - row.lambda);

@@ -9,7 +9,9 @@
 
 namespace novaphy {
 
-enum class RowKind : int { Unilateral = 0, FrictionPair = 1 };
+// Unilateral: impulse >= 0 (a contact's normal, a limit); FrictionPair: two tangent rows bounded together by
+// mu times their normal row's impulse; Bounded: |impulse| <= bound (a joint's dry friction)
+enum class RowKind : int { Unilateral = 0, FrictionPair = 1, Bounded = 2 };
 
 struct PgsRow {
   RowKind kind = RowKind::Unilateral;  // a FrictionPair row is followed by its second tangent row
@@ -22,6 +24,7 @@ struct PgsRow {
   Scalar lambda = 0;     // accumulated impulse
   int normal = -1;       // FrictionPair: the row holding the normal impulse
   Scalar mu = 0;         // FrictionPair: friction coefficient
+  Scalar bound = 0;      // Bounded: the largest |impulse|
 };
 
 struct PgsSettings {

@@ -33,16 +33,24 @@ inline V limit_row_target(const V& gap, const RowParams& p, const V& dt) {
   return select<V>(gap >= 0, -gap / dt, static_cast<Element<V>>(p.erp) * select<V>(depth > 0, depth, zero) / dt);
 }
 
-// the impulse a side's row starts from: a share of the last step's
+// the impulse a limit or friction-loss row starts from: a share of the last step's
 template <typename V>
-inline V limit_row_warm_start(const V& kept, const RowParams& p) {
+inline V row_warm_start(const V& kept, const RowParams& p) {
   return p.use_warmstarting ? static_cast<Element<V>>(p.warmstarting_factor) * kept : V{};
 }
 
-// the impulse kept for the next step: 0 where the row was off or its impulse is not finite
+// the impulse a limit or friction-loss row keeps for the next step: 0 where it was off or is not finite
 template <typename V>
-inline V limit_impulse_kept(const V& lambda, const Mask<V>& on) {
+inline V impulse_kept(const V& lambda, const Mask<V>& on) {
   return select<V>(both(on, finite(lambda)), lambda, V{});
+}
+
+// ---- dry friction (frictionloss): one row per dof, J = e_k, driving its velocity to zero with an impulse of at
+// most frictionloss dt either way
+
+template <typename V>
+inline V friction_loss_bound(const V& frictionloss, const V& dt) {
+  return frictionloss * dt;
 }
 
 // ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame

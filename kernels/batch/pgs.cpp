@@ -76,9 +76,15 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
     M<T> moving{};
     for (int r = 0; r < rows.count; ++r) {
       // a lane gone non-finite keeps its impulse, so NaN does not spread through the rows
-      if (rows.kind[r] == RowKind::Unilateral) {
+      if (rows.kind[r] != RowKind::FrictionPair) {
         const V<T> sum = lambda[r] + step(r);
-        const V<T> next = sum > 0 ? sum : V<T>{};
+        V<T> next;
+        if (rows.kind[r] == RowKind::Unilateral) {
+          next = sum > 0 ? sum : V<T>{};
+        } else {
+          const V<T> b = rows.bound[r];
+          next = sum < -b ? -b : (sum > b ? b : sum);
+        }
         const M<T> on = live & rows.active[r] & finite<T>(next) & (next != lambda[r]);
         if (!any_lane<T>(on)) continue;
         apply<T>(z(r), next - lambda[r], on, n, qd);

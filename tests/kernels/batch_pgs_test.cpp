@@ -310,5 +310,83 @@ TEST(BatchPgs, NonFiniteRowsSpreadNothing) {
   }
 }
 
+// Bounded rows (a joint's dry friction): each lane's impulses within +-bound, as the scalar twin clamps them
+template <typename T>
+void expect_bounded_rows_match_the_scalar_solve() {
+  using V = Lanes<T>;
+  constexpr int kBounded = 3;
+  const RowKind kinds[kBounded] = {RowKind::Bounded, RowKind::Bounded, RowKind::Bounded};
+  const int normals[kBounded] = {-1, -1, -1};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<V> J(kBounded * kDofs), z(kBounded * kDofs), target(kBounded), mu(kBounded), bound(kBounded),
+      inv_mass(kBounded), lambda(kBounded), qd(kDofs);
+  std::vector<IntLanes<T>> active(kBounded, ~IntLanes<T>{});
+  std::vector<int> begin(kBounded, 0), end(kBounded, kDofs);
+  std::vector<Eigen::LLT<Eigen::MatrixXd>> llt;
+  for (int l = 0; l < kLanes<T>; ++l) {
+    Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(kDofs, kDofs, [&] { return u(rng); });
+    llt.emplace_back(A * A.transpose() + Eigen::MatrixXd::Identity(kDofs, kDofs));
+    for (int k = 0; k < kDofs; ++k) qd[k][l] = static_cast<T>(3 * u(rng));
+    for (int r = 0; r < kBounded; ++r) {
+      Eigen::VectorXd j = Eigen::VectorXd::Zero(kDofs);
+      j[2 * r] = 1;  // J = e_k, a dof's row
+      const Eigen::VectorXd x = llt.back().solve(j);
+      for (int k = 0; k < kDofs; ++k)
+        J[r * kDofs + k][l] = static_cast<T>(j[k]), z[r * kDofs + k][l] = static_cast<T>(x[k]);
+      bound[r][l] = static_cast<T>(0.05 + 0.1 * (1 + u(rng)));
+      lambda[r][l] = static_cast<T>(0.05 * u(rng));
+    }
+  }
+  PgsSettings settings;
+  settings.iterations = 12;
+  settings.cfm = 1e-6;
+  std::vector<V> lanes_qd = qd, lanes_lambda = lambda;
+  BatchRows<T> rows;
+  rows.count = kBounded;
+  rows.dofs = kDofs;
+  rows.kind = kinds;
+  rows.normal = normals;
+  rows.J = J.data();
+  rows.nonzero_begin = begin.data();
+  rows.nonzero_end = end.data();
+  rows.MinvJT = z.data();
+  rows.target = target.data();
+  rows.mu = mu.data();
+  rows.bound = bound.data();
+  rows.active = active.data();
+  rows.inv_mass = inv_mass.data();
+  rows.lambda = lanes_lambda.data();
+  batch_pgs_solve(rows, settings, lanes_qd.data());
+  for (int l = 0; l < kLanes<T>; ++l) {
+    std::vector<PgsRow> scalar(kBounded);
+    std::vector<Scalar> Jp, zp, v(kDofs);
+    std::vector<int> order(kBounded);
+    for (int k = 0; k < kDofs; ++k) v[k] = qd[k][l];
+    for (int r = 0; r < kBounded; ++r) {
+      scalar[r].kind = RowKind::Bounded;
+      scalar[r].dof_count[0] = kDofs;
+      scalar[r].pool[0] = static_cast<int>(Jp.size());
+      Scalar W = 0;
+      for (int k = 0; k < kDofs; ++k)
+        Jp.push_back(J[r * kDofs + k][l]), zp.push_back(z[r * kDofs + k][l]), W += Jp.back() * zp.back();
+      scalar[r].inv_mass = 1 / (W + settings.cfm);
+      scalar[r].bound = bound[r][l];
+      scalar[r].lambda = lambda[r][l];
+      order[r] = r;
+    }
+    for (int r = 0; r < kBounded; ++r) apply_impulse(scalar[r], zp, scalar[r].lambda, v.data());
+    pgs_solve(scalar, order.data(), kBounded, Jp, zp, settings, v.data());
+    for (int r = 0; r < kBounded; ++r) {
+      EXPECT_LE(std::abs(lanes_lambda[r][l]), bound[r][l]) << "lane " << l << " row " << r;
+      EXPECT_NEAR(lanes_lambda[r][l], scalar[r].lambda, 64 * kEps<T>) << "lane " << l << " row " << r;
+    }
+    for (int k = 0; k < kDofs; ++k) EXPECT_NEAR(lanes_qd[k][l], v[k], 64 * kEps<T> * 4) << "lane " << l;
+  }
+}
+
+TEST(BatchPgs, BoundedRowsMatchTheScalarSolveFloat64) { expect_bounded_rows_match_the_scalar_solve<double>(); }
+TEST(BatchPgs, BoundedRowsMatchTheScalarSolveFloat32) { expect_bounded_rows_match_the_scalar_solve<float>(); }
+
 }  // namespace
 }  // namespace novaphy
