@@ -13,15 +13,9 @@ namespace {
 ActuatorOptions actuator_options(Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
                                  Scalar force_upper, const std::string& name, Scalar gain = 1,
                                  const Vec3& bias = Vec3::Zero()) {
-  ActuatorOptions a;
-  a.gear = gear;
+  ActuatorOptions a = ActuatorOptions::motor(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name);
   a.gain = gain;
   a.bias = bias;
-  a.ctrl_lower = ctrl_lower;
-  a.ctrl_upper = ctrl_upper;
-  a.force_lower = force_lower;
-  a.force_upper = force_upper;
-  a.name = name;
   return a;
 }
 

@@ -256,14 +256,8 @@ int ModelBuilder::add_velocity(int joint, Scalar kv, const ActuatorOptions& opti
 
 int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
                             Scalar force_upper, const std::string& name) {
-  ActuatorOptions motor;
-  motor.gear = gear;
-  motor.ctrl_lower = ctrl_lower;
-  motor.ctrl_upper = ctrl_upper;
-  motor.force_lower = force_lower;
-  motor.force_upper = force_upper;
-  motor.name = name;
-  return add_actuator_of("a motor", joint, motor);
+  return add_actuator_of("a motor", joint,
+                         ActuatorOptions::motor(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name));
 }
 
 int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, const ShapeOptions& options) {

@@ -51,6 +51,15 @@ struct ActuatorOptions {
   Scalar ctrl_lower = -std::numeric_limits<Scalar>::infinity(), ctrl_upper = std::numeric_limits<Scalar>::infinity();
   Scalar force_lower = -std::numeric_limits<Scalar>::infinity(), force_upper = std::numeric_limits<Scalar>::infinity();
   std::string name;
+
+  // a motor's options: unit gain, no bias
+  static ActuatorOptions motor(Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
+                               Scalar force_upper, const std::string& name) {
+    ActuatorOptions a;
+    a.gear = gear, a.ctrl_lower = ctrl_lower, a.ctrl_upper = ctrl_upper;
+    a.force_lower = force_lower, a.force_upper = force_upper, a.name = name;
+    return a;
+  }
 };
 
 struct ImportOptions {

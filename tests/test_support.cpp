@@ -66,6 +66,19 @@ void randomize_state(const Model& model, State& state, std::mt19937& rng, bool w
   for (Scalar& f : state.body_f) f = wrenches ? uniform(rng, -3, 3) : 0;
 }
 
+State run_steps(const Model& model, const Control& control, int steps, Scalar dt,
+                const SolverFeatherstoneSettings& settings) {
+  SolverFeatherstone solver(model, settings);
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  State state = model.state();
+  for (int k = 0; k < steps; ++k) {
+    pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, dt);
+  }
+  return state;
+}
+
 Model random_builder_tree(std::mt19937& rng, int links, int roots) {
   ModelBuilder builder(random_vec(rng, 10));
   for (int r = 0; r < roots; ++r) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "engine/builder.h"
+#include "engine/solver_featherstone.h"
 
 namespace novaphy::test {
 
@@ -16,6 +17,10 @@ void randomize_state(const Model& model, State& state, std::mt19937& rng, bool w
 
 // a random tree built directly with ModelBuilder: every joint type, rotated parent and child joint
 // frames, offset centres of mass, full inertias; `roots` articulations of `links` links each
+// `steps` steps of dt from model.state(), colliding each step, under `control`: the state after
+State run_steps(const Model& model, const Control& control, int steps, Scalar dt,
+                const SolverFeatherstoneSettings& settings = {});
+
 Model random_builder_tree(std::mt19937& rng, int links, int roots = 1);
 
 // a random tree written as MJCF text: hinge/slide/ball joints (several on one body, and refs),

@@ -85,19 +85,14 @@ TEST(Actuators, AStiffPositionServoHoldsItsTargetAtALargeStep) {
   // kp 1e4 on a link of 1.3e-3 kg m^2 about its hinge: omega dt = 46 at dt = 1/60 s, where an explicit step
   // diverges; taken implicitly the servo settles on its target, on the blocks and on the dense route
   const Model model = servo_link(1e4, 5, std::numeric_limits<Scalar>::infinity());
+  Control control = model.control();
+  control.actuator_ctrl[0] = 0.7;
   for (const bool blocks : {true, false}) {
     SolverFeatherstoneSettings settings;
     settings.use_batch_kernels = blocks;
     settings.angular_damping = 0;
-    SolverFeatherstone solver(model, settings);
-    CollisionPipeline pipeline(model);
-    Contacts contacts = pipeline.contacts();
-    State state = model.state();
-    Control control = model.control();
-    control.actuator_ctrl[0] = 0.7;
-    for (int k = 0; k < 180; ++k) solver.step(state, state, control, contacts, 1.0 / 60);
-    EXPECT_NEAR(state.joint_q[0], 0.7, 1e-6) << (blocks ? "blocks" : "dense");
-    EXPECT_EQ(solver.diverged()[0], 0);
+    EXPECT_NEAR(test::run_steps(model, control, 180, 1.0 / 60, settings).joint_q[0], 0.7, 1e-6)
+        << (blocks ? "blocks" : "dense");
   }
 }
 
@@ -133,14 +128,7 @@ TEST(Actuators, PerWorldGainsAndEachWorldStepsAsItDoesAlone) {
     model.actuator_force_lower[u] = -model.actuator_force_upper[u];
     control.actuator_ctrl[u] = std::sin(0.7 * w);
   };
-  auto run = [](const Model& model, const Control& control) {
-    SolverFeatherstone solver(model);
-    CollisionPipeline pipeline(model);
-    Contacts contacts = pipeline.contacts();
-    State state = model.state();
-    for (int k = 0; k < 100; ++k) solver.step(state, state, control, contacts, 0.01);
-    return state;
-  };
+  auto run = [](const Model& model, const Control& control) { return test::run_steps(model, control, 100, 0.01); };
   for (const Precision precision : {Precision::Float32, Precision::Float64}) {
     Model batch = servo_link(1, 0, 1, kWorlds, precision);
     Control control = batch.control();

@@ -8,6 +8,7 @@
 #include "engine/builder.h"
 #include "engine/dynamics.h"
 #include "engine/solver_featherstone.h"
+#include "test_support.h"
 
 namespace novaphy {
 namespace {
@@ -27,16 +28,11 @@ Model turning_link(Scalar loss, int worlds = 1, Precision precision = Precision:
   return batch.finalize();
 }
 
-State step(const Model& model, const Control& control, int steps, bool blocks, Scalar dt = 0.01) {
+State step(const Model& model, const Control& control, int steps, bool blocks) {
   SolverFeatherstoneSettings settings;
   settings.use_batch_kernels = blocks;
   settings.angular_damping = 0;
-  SolverFeatherstone solver(model, settings);
-  CollisionPipeline pipeline(model);
-  Contacts contacts = pipeline.contacts();
-  State state = model.state();
-  for (int k = 0; k < steps; ++k) solver.step(state, state, control, contacts, dt);
-  return state;
+  return test::run_steps(model, control, steps, 0.01, settings);
 }
 
 TEST(FrictionLoss, HoldsAJointAgainstASmallerTorqueAndTakesItsShareOfALargerOne) {
