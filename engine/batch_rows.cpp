@@ -203,21 +203,20 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
 // the sweeps over the block's rows
 template <typename T>
 void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
-  BatchRows<T> rows;
-  rows.count = R.rows;
-  rows.dofs = nv;
-  rows.kind = R.kind.data();
-  rows.normal = R.normal.data();
-  rows.J = R.J.data();
-  rows.nonzero_begin = R.nonzero_begin.data();
-  rows.nonzero_end = R.nonzero_end.data();
-  rows.MinvJT = R.z.data();
-  rows.target = R.target.data();
-  rows.mu = R.mu.data();
-  rows.bound = R.bound.data();
-  rows.active = R.active.data();
-  rows.inv_mass = R.inv_mass.data();
-  rows.lambda = R.lambda.data();
+  const BatchRows<T> rows{R.rows,
+                          nv,
+                          R.kind.data(),
+                          R.normal.data(),
+                          R.J.data(),
+                          R.nonzero_begin.data(),
+                          R.nonzero_end.data(),
+                          R.z.data(),
+                          R.target.data(),
+                          R.mu.data(),
+                          R.bound.data(),
+                          R.active.data(),
+                          R.inv_mass.data(),
+                          R.lambda.data()};
   batch_pgs_solve(rows, pgs, qd);
 }
 
