@@ -175,6 +175,40 @@ void bind_builder(py::module_& m) {
           py::arg("joint"), py::kw_only(), py::arg("kv"), py::arg("gear") = 1.0, py::arg("ctrl_lower") = -INFINITY,
           py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY,
           py::arg("name") = "", "Velocity servo (MuJoCo's velocity actuator): gain kv, bias [0, 0, -kv].")
+      .def(
+          "add_tendon",
+          [](ModelBuilder& self, const std::vector<int>& joints, const std::vector<Scalar>& coefs, Scalar stiffness,
+             Scalar damping, Scalar rest_length, Scalar limit_lower, Scalar limit_upper, const std::string& name) {
+            return self.add_tendon(joints, coefs, {stiffness, damping, rest_length, limit_lower, limit_upper, name});
+          },
+          py::arg("joints"), py::arg("coefs"), py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
+          py::arg("rest_length") = NAN, py::arg("limit_lower") = -INFINITY, py::arg("limit_upper") = INFINITY,
+          py::arg("name") = "",
+          "Fixed tendon: length = sum coefs[i] * q(joints[i]) over Revolute/Prismatic joints of one articulation, "
+          "with a spring (rest_length NaN: its length at the initial coordinates) and damper, taken explicitly, and "
+          "limits kept by rows of the step.")
+      .def(
+          "add_tendon_actuator",
+          [](ModelBuilder& self, int tendon, Scalar gear, Scalar gain, const Vec3& bias, Scalar ctrl_lower,
+             Scalar ctrl_upper, Scalar force_lower, Scalar force_upper, const std::string& name) {
+            return self.add_tendon_actuator(
+                tendon, actuator_options(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name, gain, bias));
+          },
+          py::arg("tendon"), py::kw_only(), py::arg("gear") = 1.0, py::arg("gain") = 1.0,
+          py::arg("bias") = Vec3::Zero(), py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY,
+          py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY, py::arg("name") = "",
+          "add_actuator's affine actuator on a tendon (its length and velocity in place of a joint's), taken "
+          "explicitly.")
+      .def_property_readonly("tendon_count", &ModelBuilder::tendon_count)
+      .def("add_connect", &ModelBuilder::add_connect, py::arg("body1"), py::arg("body2"), py::arg("anchor"),
+           py::arg("name") = "", py::arg("anchor2") = Vec3::Constant(NAN),
+           "Equality (MuJoCo's connect): the point anchor of body1 (its frame) stays on the point of body2 (-1: the "
+           "world) that coincides with it at the initial coordinates, or on anchor2 (body2's frame) if given.")
+      .def("add_joint_coupling", &ModelBuilder::add_joint_coupling, py::arg("joint1"), py::arg("joint2"),
+           py::arg("poly"), py::arg("name") = "",
+           "Equality (MuJoCo's joint): q1 - q1_0 = poly[0] + poly[1] x + ... + poly[4] x^4, x = q2 - q2_0, for "
+           "Revolute/Prismatic joints (joint2 -1: x = 0).")
+      .def_property_readonly("equality_count", &ModelBuilder::equality_count)
       .def_property("collision_filter", &ModelBuilder::collision_filter, &ModelBuilder::set_collision_filter,
                     "The rule shape collision groups and masks filter pairs by; add_mjcf sets Mujoco.")
       .def("exclude_shapes", &ModelBuilder::exclude_shapes, py::arg("a"), py::arg("b"), "Shapes a and b never collide.")

@@ -87,7 +87,9 @@ void bind_counts(Class& c) {
       .def_readonly("joint_dof_count", &ModelCounts::joint_dof_count)
       .def_readonly("articulation_count", &ModelCounts::articulation_count)
       .def_readonly("shape_count", &ModelCounts::shape_count)
-      .def_readonly("actuator_count", &ModelCounts::actuator_count);
+      .def_readonly("actuator_count", &ModelCounts::actuator_count)
+      .def_readonly("tendon_count", &ModelCounts::tendon_count)
+      .def_readonly("equality_count", &ModelCounts::equality_count);
 }
 
 }  // namespace
@@ -177,6 +179,8 @@ void bind_model(py::module_& m) {
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("joint_name", &Model::joint_name)
       .def_readonly("actuator_name", &Model::actuator_name)
+      .def_readonly("tendon_name", &Model::tendon_name)
+      .def_readonly("equality_name", &Model::equality_name)
       .def_readonly("collision_filter", &Model::collision_filter, "The rule shape_collision_group/_mask filter by.")
       .def_readonly("keyframes", &Model::keyframe_name, "The keyframes' names (rows of keyframe_q, _qd, _ctrl).")
       .def(

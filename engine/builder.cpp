@@ -4,46 +4,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/builder_checks.h"
 #include "engine/dynamics.h"
 #include "engine/error.h"
 
 namespace novaphy {
 
 namespace {
-
-std::string label(const char* kind, int index, const std::string& name) {
-  std::string s = std::string(kind) + " " + std::to_string(index);
-  if (!name.empty()) s += " ('" + name + "')";
-  return s;
-}
-
-void check_finite(const std::string& item, const char* what, Scalar x) {
-  if (!std::isfinite(x)) fail(item, ": ", what, " is not finite: ", x);
-}
-
-void check_finite(const std::string& item, const char* what, const Vec3& x) {
-  for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(x[k])) fail(item, ": ", what, "[", k, "] is not finite: ", x[k]);
-}
-
-Transform checked_transform(const std::string& item, const char* what, const Transform& T) {
-  check_finite(item, what, T.p);
-  const Eigen::Vector4d q = T.q.coeffs();
-  for (int k = 0; k < 4; ++k)
-    if (!std::isfinite(q[k])) fail(item, ": ", what, " rotation[", k, "] is not finite: ", q[k]);
-  if (q.norm() < 1e-9) fail(item, ": ", what, " rotation quaternion has zero length");
-  Transform out = T;
-  out.q.normalize();
-  return out;
-}
-
-void check_nonnegative(const std::string& item, const char* what, Scalar x) {
-  if (!(x >= 0) || !std::isfinite(x)) fail(item, ": ", what, " must be finite and >= 0, got ", x);
-}
-
-void check_positive(const std::string& item, const char* what, Scalar x) {
-  if (!(x > 0) || !std::isfinite(x)) fail(item, ": ", what, " must be finite and > 0, got ", x);
-}
 
 void check_rigid_body(const std::string& item, const RigidBody& body, bool allow_massless) {
   check_finite(item, "mass", body.mass);
@@ -229,13 +196,7 @@ int ModelBuilder::add_actuator_of(const char* kind, int joint, const ActuatorOpt
   const JointType type = joints_[joint].type;
   if (type != JointType::Revolute && type != JointType::Prismatic)
     fail(item, ": ", kind, " drives a Revolute or Prismatic joint, joint ", joint, " is ", joint_type_name(type));
-  check_finite(item, "gear", options.gear);
-  check_finite(item, "gain", options.gain);
-  for (int k = 0; k < 3; ++k) check_finite(item, "bias", options.bias[k]);
-  if (std::isnan(options.ctrl_lower) || std::isnan(options.ctrl_upper) || options.ctrl_lower > options.ctrl_upper)
-    fail(item, ": control range must satisfy lower <= upper, got [", options.ctrl_lower, ", ", options.ctrl_upper, "]");
-  if (std::isnan(options.force_lower) || std::isnan(options.force_upper) || options.force_lower > options.force_upper)
-    fail(item, ": force range must satisfy lower <= upper, got [", options.force_lower, ", ", options.force_upper, "]");
+  check_actuator(item, options);
   actuators_.push_back({joint, options});
   return actuator_count() - 1;
 }
@@ -401,8 +362,19 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
     keyframes_.push_back(std::move(key));
   }
   for (ActuatorRecord actuator : other.actuators_) {
-    actuator.joint += joint0;
+    if (actuator.joint >= 0) actuator.joint += joint0;
+    if (actuator.tendon >= 0) actuator.tendon += tendon_count();
     actuators_.push_back(actuator);
+  }
+  for (EqualityRecord e : other.equalities_) {
+    const int offset = e.type == EqualityType::Connect ? body0 : joint0;
+    for (int& object : e.object)
+      if (object >= 0) object += offset;
+    equalities_.push_back(e);
+  }
+  for (TendonRecord tendon : other.tendons_) {
+    for (int& j : tendon.joints) j += joint0;
+    tendons_.push_back(std::move(tendon));
   }
   world_count_ = std::max(world_count_, world + 1);
 }
@@ -529,6 +501,7 @@ void ModelBuilder::lay_out_actuators(Model& model) const {
   for (int u = 0; u < actuator_count(); ++u) {
     const ActuatorOptions& a = actuators_[u].options;
     model.actuator_joint[u] = actuators_[u].joint;
+    model.actuator_tendon[u] = actuators_[u].tendon;
     model.actuator_gear[u] = a.gear;
     model.actuator_gain[u] = a.gain;
     for (int k = 0; k < 3; ++k) model.actuator_bias[3 * u + k] = a.bias[k];
@@ -561,12 +534,14 @@ Model ModelBuilder::finalize() const {
   lay_out_joints(joints, model);
   lay_out_bodies(model);
   lay_out_shapes(model);
+  lay_out_tendons(model);
   lay_out_actuators(model);
   lay_out_keyframes(model);
   model.collision_filter = collision_filter_;
   model.exclude_count = static_cast<int>(excluded_.size());
   model.exclude_shape.clear();
   for (const auto& [a, b] : excluded_) model.exclude_shape.insert(model.exclude_shape.end(), {a, b});
+  lay_out_equalities(model);
   model.check_sizes();
   return model;
 }

@@ -2,6 +2,7 @@
 // Error naming the item; finalize() lays the scene out as a Model.
 #pragma once
 
+#include <array>
 #include <limits>
 #include <string>
 #include <vector>
@@ -60,6 +61,14 @@ struct ActuatorOptions {
     a.force_lower = force_lower, a.force_upper = force_upper, a.name = name;
     return a;
   }
+};
+
+// a fixed tendon's parameters (add_tendon): a spring and damper along it, and its range
+struct TendonOptions {
+  Scalar stiffness = 0, damping = 0;
+  Scalar rest_length = std::numeric_limits<Scalar>::quiet_NaN();  // NaN: its length at the initial coordinates
+  Scalar limit_lower = -std::numeric_limits<Scalar>::infinity(), limit_upper = std::numeric_limits<Scalar>::infinity();
+  std::string name;
 };
 
 struct ImportOptions {
@@ -123,6 +132,23 @@ class ModelBuilder {
                 Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
                 Scalar force_upper = std::numeric_limits<Scalar>::infinity(), const std::string& name = "");
 
+  // a fixed tendon (model.h): length = sum coefs[i] q(joints[i]) over Revolute or Prismatic joints of one
+  // articulation, with a spring, a damper (both taken explicitly) and limits (rows of the step, as a joint's)
+  int add_tendon(const std::vector<int>& joints, const std::vector<Scalar>& coefs, const TendonOptions& options = {});
+  // an actuator on tendon `tendon`: add_actuator's force with the tendon's length and velocity in place of a
+  // joint's, pulling along the tendon; taken explicitly
+  int add_tendon_actuator(int tendon, const ActuatorOptions& options = {});
+
+  // an equality constraint (model.h), held by rows of the step: the point `anchor` of body1 (its frame) stays
+  // on the point of body2 (-1: the world) that coincides with it at the initial coordinates, or on `anchor2`
+  // (body2's frame) where that is finite (MuJoCo's connect)
+  int add_connect(int body1, int body2, const Vec3& anchor, const std::string& name = "",
+                  const Vec3& anchor2 = Vec3::Constant(std::numeric_limits<Scalar>::quiet_NaN()));
+  // joint1's coordinate follows the polynomial poly (a0 .. a4) of joint2's, both from their initial
+  // coordinates (joint2 -1: joint1 stays at a0 from its own); Revolute or Prismatic joints (MuJoCo's joint
+  // equality)
+  int add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly, const std::string& name = "");
+
   // the rule shape_collision_group and shape_collision_mask filter pairs by (model.h); add_mjcf sets Mujoco
   void set_collision_filter(CollisionFilter filter) { collision_filter_ = filter; }
   CollisionFilter collision_filter() const { return collision_filter_; }
@@ -154,6 +180,8 @@ class ModelBuilder {
   int joint_count() const { return static_cast<int>(joints_.size()); }
   int shape_count() const { return static_cast<int>(shapes_.size()); }
   int actuator_count() const { return static_cast<int>(actuators_.size()); }
+  int tendon_count() const { return static_cast<int>(tendons_.size()); }
+  int equality_count() const { return static_cast<int>(equalities_.size()); }
 
   // bodies no joint names as their child get an implicit Free joint in an articulation of their own
   Model finalize() const;
@@ -192,6 +220,9 @@ class ModelBuilder {
   void lay_out_shapes(Model& model) const;
   // the Model's actuator table
   void lay_out_actuators(Model& model) const;
+  // the Model's tendon and equality tables (builder_constraints.cpp; equalities after the other tables)
+  void lay_out_tendons(Model& model) const;
+  void lay_out_equalities(Model& model) const;
   // the Model's keyframes, by name in the order first added
   void lay_out_keyframes(Model& model) const;
   // add_actuator, its errors naming the kind of actuator ("a motor")
@@ -211,9 +242,23 @@ class ModelBuilder {
   std::vector<JointRecord> joints_;
   std::vector<ShapeRecord> shapes_;
   struct ActuatorRecord {
-    int joint;
+    int joint;  // -1 on a tendon
     ActuatorOptions options;
+    int tendon = -1;
   };
+  struct TendonRecord {
+    std::vector<int> joints;
+    std::vector<Scalar> coefs;
+    TendonOptions options;
+  };
+  std::vector<TendonRecord> tendons_;
+  struct EqualityRecord {
+    EqualityType type;
+    int object[2];  // bodies or joints
+    Scalar data[7];
+    std::string name;
+  };
+  std::vector<EqualityRecord> equalities_;
   std::vector<ActuatorRecord> actuators_;
   // a keyframe's values for joints [joint_begin, joint_end) and actuators from actuator_begin
   struct KeyframeRecord {

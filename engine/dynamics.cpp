@@ -11,6 +11,7 @@
 #include "engine/articulation_batches.h"
 #include "engine/error.h"
 #include "engine/parts/actuator.h"
+#include "engine/parts/tendon.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -241,14 +242,31 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
 
 void control_force(const Model& model, const Control& control, const State* state, Scalar* tau) {
   std::copy(control.joint_f.begin(), control.joint_f.end(), tau);
-  for (int u = 0; u < model.actuator_count; ++u) {
-    const int j = model.actuator_joint[u], dof = model.joint_qd_start[j];
+  auto needs_state = [&](int u) {
     if (!state && (model.actuator_bias[3 * u + 1] != 0 || model.actuator_bias[3 * u + 2] != 0))
       fail("actuator ", u, " '", model.actuator_name[u],
-           "' depends on its joint's position or velocity: its force needs the state (eval_control_force(model, "
-           "control, state))");
+           "' depends on its joint's or tendon's position or velocity: its force needs the state "
+           "(eval_control_force(model, control, state))");
+  };
+  for (int u = 0; u < model.actuator_count; ++u) {
+    const int j = model.actuator_joint[u];
+    if (j < 0) continue;
+    needs_state(u);
+    const int dof = model.joint_qd_start[j];
     const Scalar q = state ? state->joint_q[model.joint_q_start[j]] : 0, qd = state ? state->joint_qd[dof] : 0;
     tau[dof] += actuator_joint_force(model, u, control.actuator_ctrl[u], q, qd);
+  }
+  // tendons (engine/parts/tendon.h): their springs and dampers with the state, the actuators on them
+  for (int t = 0; t < model.tendon_count; ++t) {
+    const Scalar length = state ? tendon_length(model, t, state->joint_q.data()) : 0;
+    const Scalar velocity = state ? tendon_velocity(model, t, state->joint_qd.data()) : 0;
+    Scalar force = state ? tendon_passive_force(model, t, length, velocity) : 0;
+    for (int u = 0; u < model.actuator_count; ++u)
+      if (model.actuator_tendon[u] == t) {
+        needs_state(u);
+        force += actuator_joint_force(model, u, control.actuator_ctrl[u], length, velocity);
+      }
+    add_tendon_force(model, t, force, tau);
   }
 }
 

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "engine/parallel.h"
 #include "engine/parts/rows.h"
+#include "engine/parts/tendon.h"
 
 namespace novaphy {
 
@@ -20,6 +22,8 @@ IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& 
       limit_cell_(limit_cell) {
   limit_row_.assign(2 * static_cast<size_t>(model.joint_dof_count), -1);
   friction_row_.assign(model.joint_dof_count, -1);
+  equality_row_.assign(model.equality_count, -1);
+  tendon_row_.assign(2 * static_cast<size_t>(model.tendon_count), -1);
 }
 
 void IslandRows::begin(const std::vector<StepRoute*>& route) {
@@ -145,6 +149,84 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
   }
 }
 
+void IslandRows::add_constraint_rows(const StepContext& step) {
+  for (int e = 0; e < model_.equality_count; ++e) {
+    if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Connect)
+      add_connect_rows(step, e);
+    else
+      add_coupling_row(step, e);
+  }
+  for (int t = 0; t < model_.tendon_count; ++t) add_tendon_limit_rows(step, t);
+}
+
+void IslandRows::add_connect_rows(const StepContext& step, int e) {
+  // the anchors in the world at the step's body poses; rows along x, y and z of the second's velocity less
+  // the first's at their midpoint, each driving its part of the gap p2 - p1 to zero
+  const int b1 = model_.equality_object[2 * e], b2 = model_.equality_object[2 * e + 1];
+  const Scalar* data = &model_.equality_data[7 * e];
+  auto anchor = [&](int b, const Scalar* x) {
+    const Vec3 a(x[0], x[1], x[2]);
+    return b < 0 ? a : Transform::from_array(&step.in->body_q[7 * b]).apply(a);
+  };
+  const Vec3 p1 = anchor(b1, data), p2 = anchor(b2, data + 3), gap = p2 - p1;
+  equality_row_[e] = row_count_;
+  for (int k = 0; k < 3; ++k) {
+    const int r = add_row(b1, b2, (p1 + p2) / 2, Vec3::Unit(k), RowKind::Bounded);
+    rows_[r].bound = std::numeric_limits<Scalar>::infinity();
+    rows_[r].target = equality_row_target(gap[k], step.rows, step.dt);
+    rows_[r].lambda = row_warm_start(step.equality_impulse[3 * e + k], step.rows);
+  }
+}
+
+void IslandRows::add_coupling_row(const StepContext& step, int e) {
+  const int j1 = model_.equality_object[2 * e], j2 = model_.equality_object[2 * e + 1];
+  const int d1 = model_.joint_qd_start[j1], d2 = j2 < 0 ? -1 : model_.joint_qd_start[j2];
+  const Scalar* q = step.in->joint_q.data();
+  Scalar slope = 0;
+  const Scalar error =
+      joint_coupling_error(&model_.equality_data[7 * e], q[model_.joint_q_start[j1]],
+                           j2 < 0 ? model_.equality_data[7 * e + 6] : q[model_.joint_q_start[j2]], &slope);
+  const int a1 = index_.dof_articulation[d1], a2 = d2 < 0 ? -1 : index_.dof_articulation[d2];
+  const int r = begin_row(a1, a2 == a1 ? -1 : a2, RowKind::Bounded, equality_row_target(error, step.rows, step.dt));
+  row_jacobian(r, a1)[d1 - art_[a1].qd_begin()] += 1;
+  if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
+  rows_[r].bound = std::numeric_limits<Scalar>::infinity();
+  rows_[r].lambda = row_warm_start(step.equality_impulse[3 * e], step.rows);
+  equality_row_[e] = r;
+}
+
+void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
+  // as a joint's limit rows, over the tendon's length and velocity
+  const Scalar length = tendon_length(model_, t, step.in->joint_q.data());
+  const Scalar velocity = tendon_velocity(model_, t, step.qd);
+  const int first = model_.tendon_start[t], a = index_.dof_articulation[model_.tendon_dof[first]];
+  for (int side = 0; side < 2; ++side) {
+    tendon_row_[2 * t + side] = -1;
+    const Scalar sign = side == 0 ? 1 : -1;
+    const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
+    const Scalar gap = sign * (length - limit);
+    if (!std::isfinite(limit) || !limit_row_on(gap, sign * velocity, step.dt)) continue;
+    const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, step.dt));
+    Scalar* J = row_jacobian(r, a);
+    for (int e = first; e < model_.tendon_start[t + 1]; ++e)
+      J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
+    rows_[r].lambda = row_warm_start(step.tendon_impulse[2 * t + side], step.rows);
+    tendon_row_[2 * t + side] = r;
+  }
+}
+
+void IslandRows::keep_constraint_impulses(const StepContext& step) const {
+  for (int e = 0; e < model_.equality_count; ++e) {
+    const int rows = static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Connect ? 3 : 1;
+    for (int k = 0; k < rows; ++k)
+      step.equality_impulse[3 * e + k] = impulse_kept(rows_[equality_row_[e] + k].lambda, true);
+  }
+  for (int t = 0; t < 2 * model_.tendon_count; ++t) {
+    const int r = tendon_row_[t];
+    step.tendon_impulse[t] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+  }
+}
+
 void IslandRows::group_islands() {
   // articulations joined by rows (union-find), then each island's rows in row order, a counting sort
   const int n = static_cast<int>(art_.size());
@@ -192,6 +274,7 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
     contact_impulse_kept(lambda, d, P);
     std::copy_n(P, 3, &step.contacts->contact_impulse[3 * c]);
   }
+  keep_constraint_impulses(step);
   for (const int a : articulations)
     for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
       const int g = model_.joint_qd_start[limited_joints_[m]];
@@ -204,7 +287,8 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
 
 std::size_t IslandRows::bytes() const {
   return (J_.size() + MinvJT_.size()) * sizeof(Scalar) + rows_.size() * sizeof(PgsRow) +
-         (limit_row_.size() + friction_row_.size() + contact_row_.size()) * sizeof(int);
+         (limit_row_.size() + friction_row_.size() + contact_row_.size() + equality_row_.size() + tendon_row_.size()) *
+             sizeof(int);
 }
 
 }  // namespace novaphy

@@ -1,7 +1,8 @@
 // The rows the blocks do not solve: those of the dense route's articulations, and every row of an
 // articulation a contact joins to another moving one this step. A row acts on the dofs of one or two
 // articulations through J and M^-1 J^T, each side's from the route that steps it; the contact and limit
-// rows are the parts of engine/parts/rows.h. Articulations joined by rows form islands, each swept by
+// rows are the parts of engine/parts/rows.h, as are the rows of equality constraints and tendon limits,
+// which the islands build for either route. Articulations joined by rows form islands, each swept by
 // kernels/pgs on one thread, the islands in parallel (the same bits as one sweep over all rows).
 #pragma once
 
@@ -26,6 +27,8 @@ class IslandRows {
   void add_limit_rows(const StepContext& step, const std::vector<int>& articulations);
   void add_friction_rows(const StepContext& step, const std::vector<int>& articulations);
   void add_contact_rows(const StepContext& step, const std::vector<int>& contacts);
+  // the rows of the model's equality constraints and of its tendons that would cross a limit
+  void add_constraint_rows(const StepContext& step);
   // the islands swept on `threads` threads; the impulses kept (contacts in contact_impulse, limits in
   // step.limit_impulse for `articulations`)
   void solve(const StepContext& step, const std::vector<int>& articulations, const std::vector<int>& contacts,
@@ -56,6 +59,13 @@ class IslandRows {
   std::vector<int> limit_row_;     // [dof][2] the row of each active limit, -1
   std::vector<int> friction_row_;  // [dof] its friction-loss row, -1
   std::vector<int> contact_row_;   // [contact] the first row of each contact added
+  std::vector<int> equality_row_;  // [equality] its first row, -1
+  std::vector<int> tendon_row_;    // [tendon][2] the row of each active limit, -1
+  // the rows of equality e (connect, joint coupling), of a tendon's limit, and their impulses kept
+  void add_connect_rows(const StepContext& step, int e);
+  void add_coupling_row(const StepContext& step, int e);
+  void add_tendon_limit_rows(const StepContext& step, int t);
+  void keep_constraint_impulses(const StepContext& step) const;
   // islands (articulations joined by rows, named by their lowest articulation): island i's rows are
   // island_rows_[island_start_[i] .. island_start_[i + 1])
   std::vector<int> island_parent_, island_of_row_, island_start_, island_rows_, fill_;

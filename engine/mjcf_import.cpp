@@ -58,10 +58,13 @@ class MjcfImporter {
     geom_shape_.assign(m_->ngeom, -1);
     for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
     add_exclusions();
+    tendon_index_.assign(m_->ntendon, -1);
+    for (int t = 0; t < m_->ntendon; ++t) add_tendon(t);
     out_.actuator_map.assign(m_->nu, -1);
     const int actuator0 = builder_.actuator_count();
     for (int u = 0; u < m_->nu; ++u) add_actuator(u);
     for (int k = 0; k < m_->nkey; ++k) add_keyframe(k, joint0, actuator0);
+    for (int e = 0; e < m_->neq; ++e) add_equality(e);
     report_unmodelled();
     return out_;
   }
@@ -175,14 +178,14 @@ class MjcfImporter {
         type = JointType::Ball;
         options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor};
         options.child_xform = Transform{anchor};
-        if (m_->jnt_limited[j]) warn("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
-        if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': ball joint stiffness is not modelled");
+        if (m_->jnt_limited[j]) warn_motion("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
+        if (m_->jnt_stiffness[j] != 0) warn_motion("joint '" + joint_name + "': ball joint stiffness is not modelled");
         break;
       case mjJNT_FREE:
         // a free joint places the body frame directly at qpos (MuJoCo ignores its pos)
         type = JointType::Free;
         body_xform = static_pose_[0] * pose(m_->qpos0 + qa, m_->qpos0 + qa + 3);
-        if (m_->jnt_stiffness[j] != 0) warn("joint '" + joint_name + "': free joint stiffness is not modelled");
+        if (m_->jnt_stiffness[j] != 0) warn_motion("joint '" + joint_name + "': free joint stiffness is not modelled");
         break;
     }
     return type;
@@ -211,8 +214,8 @@ class MjcfImporter {
       case mjGEOM_BOX: geom_shape_[g] = builder_.add_shape_box(body, vec3(size), options); break;
       default:
         if (m_->geom_contype[g] != 0 || m_->geom_conaffinity[g] != 0)
-          warn("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
-               " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");
+          warn_motion("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
+                      " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");
     }
   }
 
@@ -227,13 +230,42 @@ class MjcfImporter {
     }
   }
 
+  // a fixed tendon over hinges and slides (model.h); a spatial one, or one over other joints, is reported
+  void add_tendon(int t) {
+    const std::string name = mj_name(m_, mjOBJ_TENDON, t);
+    std::vector<int> joints;
+    std::vector<Scalar> coefs;
+    for (int w = m_->tendon_adr[t]; w < m_->tendon_adr[t] + m_->tendon_num[t]; ++w) {
+      const int j = m_->wrap_objid[w];
+      if (m_->wrap_type[w] != mjWRAP_JOINT || (m_->jnt_type[j] != mjJNT_HINGE && m_->jnt_type[j] != mjJNT_SLIDE)) {
+        warn_motion("tendon '" + name +
+                    "' is spatial or spans a ball or free joint (fixed tendons over hinges and "
+                    "slides only): not modelled");
+        return;
+      }
+      joints.push_back(joint_index_[j]);
+      coefs.push_back(m_->wrap_prm[w]);
+    }
+    if (m_->tendon_frictionloss[t] != 0) warn_motion("tendon '" + name + "': frictionloss is not modelled");
+    TendonOptions options;
+    options.stiffness = m_->tendon_stiffness[t];
+    options.damping = m_->tendon_damping[t];
+    options.rest_length = m_->tendon_lengthspring[t];
+    if (m_->tendon_limited[t]) {
+      options.limit_lower = m_->tendon_range[2 * t];
+      options.limit_upper = m_->tendon_range[2 * t + 1];
+    }
+    options.name = name;
+    tendon_index_[t] = builder_.add_tendon(joints, coefs, options);
+  }
+
   // MuJoCo's affine actuators (motor, position, velocity, general of fixed gain and affine or no bias) on a
-  // hinge or slide without activation dynamics (engine/parts/actuator.h); any other is reported
+  // hinge, slide or fixed tendon without activation dynamics (engine/parts/actuator.h); any other is reported
   void add_actuator(int u) {
     const std::string name = mj_name(m_, mjOBJ_ACTUATOR, u);
     const std::string unsupported = unsupported_actuator(u);
     if (!unsupported.empty()) {
-      warn("actuator '" + name + "' " + unsupported + ": not modelled");
+      warn_motion("actuator '" + name + "' " + unsupported + ": not modelled");
       return;
     }
     constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
@@ -248,7 +280,10 @@ class MjcfImporter {
     a.force_lower = force_limited ? m_->actuator_forcerange[2 * u] : -inf;
     a.force_upper = force_limited ? m_->actuator_forcerange[2 * u + 1] : inf;
     a.name = name;
-    out_.actuator_map[u] = builder_.add_actuator(joint_index_[m_->actuator_trnid[2 * u]], a);
+    const int target = m_->actuator_trnid[2 * u];
+    out_.actuator_map[u] = m_->actuator_trntype[u] == mjTRN_TENDON
+                               ? builder_.add_tendon_actuator(tendon_index_[target], a)
+                               : builder_.add_actuator(joint_index_[target], a);
   }
 
   // keyframe k over the joints and actuators this import added (from joint0 and actuator0): qpos and qvel
@@ -267,9 +302,14 @@ class MjcfImporter {
 
   // why actuator u is not one NovaPhy models ("" when it is)
   std::string unsupported_actuator(int u) const {
-    if (m_->actuator_trntype[u] != mjTRN_JOINT) return "drives a tendon, site or body (joints only are modelled)";
-    const int type = m_->jnt_type[m_->actuator_trnid[2 * u]];
-    if (type != mjJNT_HINGE && type != mjJNT_SLIDE) return "drives a ball or free joint (hinges and slides only)";
+    const int target = m_->actuator_trnid[2 * u];
+    if (m_->actuator_trntype[u] == mjTRN_TENDON) {
+      if (tendon_index_[target] < 0) return "drives tendon '" + mj_name(m_, mjOBJ_TENDON, target) + "', not modelled";
+    } else if (m_->actuator_trntype[u] != mjTRN_JOINT) {
+      return "drives a site or body (joints and fixed tendons only are modelled)";
+    } else if (m_->jnt_type[target] != mjJNT_HINGE && m_->jnt_type[target] != mjJNT_SLIDE) {
+      return "drives a ball or free joint (hinges and slides only)";
+    }
     if (m_->actuator_dyntype[u] != mjDYN_NONE) return "has activation dynamics (dyntype)";
     if (m_->actuator_gaintype[u] != mjGAIN_FIXED) return "has a gain that is not fixed (gaintype)";
     if (m_->actuator_biastype[u] != mjBIAS_NONE && m_->actuator_biastype[u] != mjBIAS_AFFINE)
@@ -277,16 +317,51 @@ class MjcfImporter {
     return "";
   }
 
-  void report_unmodelled() {
-    for (int t = 0; t < m_->ntendon; ++t) warn("tendon '" + mj_name(m_, mjOBJ_TENDON, t) + "' is not modelled");
-    for (int e = 0; e < m_->neq; ++e)
-      warn("equality constraint '" + mj_name(m_, mjOBJ_EQUALITY, e) + "' is not modelled");
-    for (int s = 0; s < m_->nsensor; ++s) warn("sensor '" + mj_name(m_, mjOBJ_SENSOR, s) + "' is not modelled");
-    if (m_->npair > 0) warn(std::to_string(m_->npair) + " explicit contact pair(s) are not modelled");
-    if (m_->opt.density != 0 || m_->opt.viscosity != 0) warn("fluid forces (density, viscosity) are not modelled");
+  // MuJoCo's connect and joint equalities, the active ones (model.h); weld, tendon and distance are reported
+  void add_equality(int e) {
+    const std::string name = mj_name(m_, mjOBJ_EQUALITY, e);
+    const mjtNum* data = m_->eq_data + mjNEQDATA * e;
+    if (!m_->eq_active[e]) return;
+    const int id1 = m_->eq_obj1id[e], id2 = m_->eq_obj2id[e];
+    switch (m_->eq_type[e]) {
+      case mjEQ_CONNECT: {
+        // a body welded to the world is the world, its anchor moved into the world frame
+        Vec3 anchor[2] = {vec3(data), vec3(data + 3)};
+        int body[2] = {id1, id2 < 0 ? 0 : id2};
+        for (int k = 0; k < 2; ++k)
+          if (is_static(body[k])) {
+            anchor[k] = static_pose_[body[k]].apply(anchor[k]);
+            body[k] = -1;
+          } else {
+            body[k] = out_.body_map[body[k]];
+          }
+        if (body[0] < 0) {
+          std::swap(body[0], body[1]);
+          std::swap(anchor[0], anchor[1]);
+        }
+        if (body[0] < 0) return;  // two static bodies: nothing moves
+        builder_.add_connect(body[0], body[1], anchor[0], name, anchor[1]);
+        break;
+      }
+      case mjEQ_JOINT: {
+        std::array<Scalar, 5> poly;
+        std::copy_n(data, 5, poly.begin());
+        builder_.add_joint_coupling(joint_index_[id1], id2 < 0 ? -1 : joint_index_[id2], poly, name);
+        break;
+      }
+      default: warn_motion("equality constraint '" + name + "' (weld, tendon or distance) is not modelled");
+    }
   }
 
-  void warn(const std::string& message) { out_.warnings.push_back(message); }
+  // what the import left out that changes the motion (sensors, cameras and lights do not)
+  void report_unmodelled() {
+    if (m_->npair > 0) warn_motion(std::to_string(m_->npair) + " explicit contact pair(s) are not modelled");
+    if (m_->opt.density != 0 || m_->opt.viscosity != 0)
+      warn_motion("fluid forces (density, viscosity) are not modelled");
+  }
+
+  // a report entry for something left out that changes the motion
+  void warn_motion(const std::string& message) { out_.warnings.push_back(message + " (affects motion)"); }
 
   ModelBuilder& builder_;
   const mjModel* m_;
@@ -295,6 +370,7 @@ class MjcfImporter {
   std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
   std::vector<int> joint_index_;        // MuJoCo joint -> NovaPhy joint
   std::vector<int> geom_shape_;         // MuJoCo geom -> NovaPhy shape (-1: none)
+  std::vector<int> tendon_index_;       // MuJoCo tendon -> NovaPhy tendon (-1: not modelled)
 };
 
 mjModel* load_mujoco_model(const std::string& path) {

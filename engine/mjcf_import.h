@@ -4,7 +4,10 @@
 //   body with no joint        -> a Fixed joint to its parent (static geometry when welded to the world)
 //   hinge / slide / ball / free -> Revolute / Prismatic / Ball / Free, q identical except quaternion
 //   order ([w x y z] -> [x y z w]) and the Free velocity ([v; w_body] -> [w_world; v])
-//   motor, position, velocity, general (fixed gain, affine bias) on a hinge or slide -> add_actuator
+//   motor, position, velocity, general (fixed gain, affine bias) on a hinge or slide -> add_actuator,
+//   on a fixed tendon -> add_tendon_actuator
+//   connect and joint equalities (active ones) -> add_connect, add_joint_coupling
+//   fixed tendon over hinges and slides (stiffness, damping, springlength, range) -> add_tendon
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -17,7 +20,7 @@
 namespace novaphy {
 
 struct MujocoImport {
-  std::vector<std::string> warnings;  // everything in the file the engine does not model, by name
+  std::vector<std::string> warnings;  // everything in the file that changes the motion and is not modelled, by name
   std::vector<int> body_map;          // MuJoCo body id -> NovaPhy body (-1: the world or welded to it)
   std::vector<int> actuator_map;      // MuJoCo actuator id -> NovaPhy motor (-1: not imported)
   int q_begin = 0;                    // first NovaPhy coordinate / dof of the imported joints

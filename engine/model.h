@@ -14,6 +14,8 @@ enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
 
 // the precision the batched kernels step a model in (State, Control and Model arrays stay double;
 // with Float32 the stepped state is rounded to float each step)
+enum class EqualityType : int { Connect = 0, JointCoupling = 1 };
+
 enum class Precision : int { Float64 = 0, Float32 = 1 };
 const char* precision_name(Precision precision);
 
@@ -25,7 +27,16 @@ enum class CollisionFilter : int { GroupAndMask = 0, Mujoco = 1 };
 const char* collision_filter_name(CollisionFilter filter);
 const char* shape_type_name(ShapeType type);
 
-// X(type, name, count, width): `count` is an expression over the Model's counts
+// X(type, name, count, width): `count` is an expression over the Model's counts.
+// A fixed tendon t is a linear combination of Revolute and Prismatic coordinates of one articulation:
+// length = sum of tendon_coef[e] joint_q[tendon_coord[e]] over its entries e in [tendon_start[t],
+// tendon_start[t + 1]); a force f along it is tendon_coef[e] f on dof tendon_dof[e]. An actuator drives
+// joint actuator_joint, or tendon actuator_tendon where actuator_joint is -1.
+// An equality constraint e (MuJoCo's, held by rows of the step) of equality_type Connect keeps the point
+// equality_data[0..3) of body equality_object[0] (its frame) on the point equality_data[3..6) of body
+// equality_object[1] (-1: the world frame); one of type JointCoupling keeps q1 - q1_0 = a0 + a1 x + a2 x^2 +
+// a3 x^3 + a4 x^4, x = q2 - q2_0, for joints q1, q2 (Revolute or Prismatic) of equality_object (joint 2 -1:
+// x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]
 #define NOVAPHY_MODEL_FIELDS(X)                            \
   X(Scalar, body_mass, body_count, 1)                      \
   X(Scalar, body_com, body_count, 3)                       \
@@ -62,7 +73,20 @@ const char* shape_type_name(ShapeType type);
   X(int, shape_collision_mask, shape_count, 1)             \
   X(int, shape_world, shape_count, 1)                      \
   X(int, exclude_shape, exclude_count, 2)                  \
+  X(int, tendon_start, tendon_count + 1, 1)                \
+  X(int, tendon_coord, tendon_entry_count, 1)              \
+  X(int, tendon_dof, tendon_entry_count, 1)                \
+  X(Scalar, tendon_coef, tendon_entry_count, 1)            \
+  X(Scalar, tendon_stiffness, tendon_count, 1)             \
+  X(Scalar, tendon_damping, tendon_count, 1)               \
+  X(Scalar, tendon_rest_length, tendon_count, 1)           \
+  X(Scalar, tendon_limit_lower, tendon_count, 1)           \
+  X(Scalar, tendon_limit_upper, tendon_count, 1)           \
+  X(int, equality_type, equality_count, 1)                 \
+  X(int, equality_object, equality_count, 2)               \
+  X(Scalar, equality_data, equality_count, 7)              \
   X(int, actuator_joint, actuator_count, 1)                \
+  X(int, actuator_tendon, actuator_count, 1)               \
   X(Scalar, actuator_gear, actuator_count, 1)              \
   X(Scalar, actuator_gain, actuator_count, 1)              \
   X(Scalar, actuator_bias, actuator_count, 3)              \
@@ -104,6 +128,9 @@ struct ModelCounts {
   int actuator_count = 0;
   int keyframe_count = 0;
   int exclude_count = 0;
+  int tendon_count = 0;
+  int tendon_entry_count = 0;  // a tendon's joints, all tendons together
+  int equality_count = 0;
 };
 
 bool same_layout(const ModelCounts& a, const ModelCounts& b);
@@ -129,6 +156,8 @@ struct Model : ModelCounts {
   std::vector<std::string> body_name;
   std::vector<std::string> joint_name;
   std::vector<std::string> actuator_name;
+  std::vector<std::string> tendon_name;
+  std::vector<std::string> equality_name;
   std::vector<std::string> keyframe_name;  // keyframe k's joint_q, joint_qd and actuator_ctrl: row k of keyframe_*
 
   // sizes every field from the counts (fields are zero-filled)

@@ -63,7 +63,10 @@ WorldLayout world_layout(const Model& model) {
     dofs.insert(dofs.end(), model.joint_qd_start[j + 1] - model.joint_qd_start[j], joint_world(j));
   }
   for (int a = 0; a < model.articulation_count; ++a) articulations.push_back(joint_world(model.articulation_start[a]));
-  for (int m = 0; m < model.actuator_count; ++m) actuators.push_back(joint_world(model.actuator_joint[m]));
+  for (int m = 0; m < model.actuator_count; ++m) {
+    const int j = model.actuator_joint[m];
+    actuators.push_back(j >= 0 ? joint_world(j) : dofs[model.tendon_dof[model.tendon_start[model.actuator_tendon[m]]]]);
+  }
   layout.body_count = per_world("bodies", model.body_world, model.world_count);
   layout.joint_coord_count = per_world("coordinates", coords, model.world_count);
   layout.joint_dof_count = per_world("dofs", dofs, model.world_count);

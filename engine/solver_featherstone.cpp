@@ -13,6 +13,7 @@
 #include "engine/parallel.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/rows.h"
+#include "engine/parts/tendon.h"
 #include "kernels/stream.h"
 
 namespace novaphy {
@@ -107,12 +108,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     index_.dof_count.push_back(art_[a].dof_count());
     std::fill_n(index_.dof_articulation.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
   }
-  dof_actuators_.resize(model.actuator_count);
-  dof_actuator_start_.resize(model.joint_dof_count + 1);
-  std::vector<int> next(model.joint_dof_count + 1);
-  group_by_key(
-      model.actuator_count, model.joint_dof_count, [&](int u) { return model.joint_qd_start[model.actuator_joint[u]]; },
-      dof_actuator_start_.data(), dof_actuators_.data(), next.data());
+  group_actuators();
 
   // limits kept per limited joint, by articulation: the blocks lay out their articulations' cells, the
   // others follow
@@ -149,12 +145,57 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   dense_ = std::make_unique<DenseArticulations>(model, art_, welded_into_);
   islands_ = std::make_unique<IslandRows>(model, art_, index_, limited_joints_, limited_start_, limit_cell_);
   route_.assign(model.articulation_count, nullptr);
-  counts_ = {model.joint_dof_count, model.joint_coord_count, model.articulation_count, cells, 0, 16 * max_threads_};
+  counts_ = {model.joint_dof_count, model.joint_coord_count, model.articulation_count, cells, 0,
+             16 * max_threads_,     model.tendon_count,      model.equality_count};
   data_.allocate(counts_);
   std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
+  mark_constrained();
   step_bytes_ = static_cast<std::int64_t>(memory_bytes()) +
                 static_cast<std::int64_t>(sizeof(Scalar)) * (model.joint_coord_count + model.joint_dof_count +
                                                              (7 + 6 + 6) * static_cast<std::int64_t>(model.body_count));
+}
+
+void SolverFeatherstone::group_actuators() {
+  dof_actuators_.resize(model_.actuator_count);
+  dof_actuator_start_.resize(model_.joint_dof_count + 1);
+  std::vector<int> next(std::max(model_.joint_dof_count, model_.tendon_count) + 1);
+  group_by_key(
+      model_.actuator_count, model_.joint_dof_count,
+      [&](int u) { return model_.actuator_joint[u] < 0 ? -1 : model_.joint_qd_start[model_.actuator_joint[u]]; },
+      dof_actuator_start_.data(), dof_actuators_.data(), next.data());
+  tendon_actuators_.resize(model_.actuator_count);
+  tendon_actuator_start_.resize(model_.tendon_count + 1);
+  group_by_key(
+      model_.actuator_count, model_.tendon_count, [&](int u) { return model_.actuator_tendon[u]; },
+      tendon_actuator_start_.data(), tendon_actuators_.data(), next.data());
+  dof_entries_.resize(model_.tendon_entry_count);
+  dof_entry_start_.resize(model_.joint_dof_count + 1);
+  group_by_key(
+      model_.tendon_entry_count, model_.joint_dof_count, [&](int e) { return model_.tendon_dof[e]; },
+      dof_entry_start_.data(), dof_entries_.data(), next.data());
+  for (int t = 0; t < model_.tendon_count; ++t)
+    entry_tendon_.insert(entry_tendon_.end(), model_.tendon_start[t + 1] - model_.tendon_start[t], t);
+}
+
+void SolverFeatherstone::mark_constrained() {
+  constrained_.assign(model_.articulation_count, 0);
+  auto mark_body = [&](int body) {
+    if (index_.moving(body) >= 0) constrained_[index_.moving(body)] = 1;
+  };
+  auto mark_dof = [&](int dof) { constrained_[index_.dof_articulation[dof]] = 1; };
+  for (int e = 0; e < model_.equality_count; ++e) {
+    const int* object = &model_.equality_object[2 * e];
+    for (int k = 0; k < 2; ++k) {
+      if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Connect)
+        mark_body(object[k]);
+      else if (object[k] >= 0)
+        mark_dof(model_.joint_qd_start[object[k]]);
+    }
+  }
+  for (int t = 0; t < model_.tendon_count; ++t)
+    if (std::isfinite(model_.tendon_limit_lower[t]) || std::isfinite(model_.tendon_limit_upper[t]))
+      mark_dof(model_.tendon_dof[model_.tendon_start[t]]);
+  std::copy(constrained_.begin(), constrained_.end(), data_.touched.begin());
 }
 
 std::size_t SolverFeatherstone::memory_bytes() const {
@@ -217,6 +258,8 @@ void SolverFeatherstone::plan() {
     dense.push_back(a);
     if (art_[a].dof_count() > 0) dense_rows_.push_back(a);
   }
+  for (int a = 0; a < model_.articulation_count; ++a)
+    if (constrained_[a] && route_[a] == batches_.get()) dense_rows_.push_back(a);
   dense_->assign(dense);
 }
 
@@ -257,6 +300,8 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.q_next = data_.q_next.data();
   step.limit_impulse = data_.limit_impulse.data();
   step.friction_impulse = data_.friction_impulse.data();
+  step.equality_impulse = data_.equality_impulse.data();
+  step.tendon_impulse = data_.tendon_impulse.data();
   step.diverged = data_.diverged.data();
   step.factor_failure = data_.factor_failure.data();
   std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
@@ -267,13 +312,24 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
 
 void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
   step.tau = control.joint_f.data();
-  if (model_.actuator_count == 0) return;
-  // each dof's joint force and its actuators' (engine/parts/actuator.h), in order, the dofs in runs over the
-  // threads; a run notes whether an actuator of its dofs has a position or velocity term (the step's implicit
-  // stiffness and damping)
+  if (model_.actuator_count == 0 && model_.tendon_count == 0) return;
+  const State& in = *step.in;
+  // the force along each tendon (engine/parts/tendon.h), then each dof's joint force with its actuators'
+  // (engine/parts/actuator.h) and its tendons', in order, the dofs in runs over the threads; a run notes
+  // whether an actuator of its dofs has a position or velocity term (the step's implicit stiffness and damping)
+  if (model_.tendon_count > 0)
+    parallel_for(thread_count(), model_.tendon_count, [&](int t) {
+      const Scalar length = tendon_length(model_, t, in.joint_q.data());
+      const Scalar velocity = tendon_velocity(model_, t, in.joint_qd.data());
+      Scalar force = tendon_passive_force(model_, t, length, velocity);
+      for (int k = tendon_actuator_start_[t]; k < tendon_actuator_start_[t + 1]; ++k) {
+        const int u = tendon_actuators_[k];
+        force += actuator_joint_force(model_, u, control.actuator_ctrl[u], length, velocity);
+      }
+      data_.tendon_force[t] = force;
+    });
   const int n = model_.joint_dof_count, runs = std::min(n, counts_.runs);
   const int *start = dof_actuator_start_.data(), *actuator = dof_actuators_.data();
-  const State& in = *step.in;
   parallel_for(thread_count(), runs, [&](int r) {
     const int end = static_cast<int>(static_cast<std::int64_t>(n) * (r + 1) / runs);
     bool affine = false;
@@ -286,6 +342,10 @@ void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
         sum += a.force;
         stiffness += a.stiffness;
         damping += a.damping;
+      }
+      for (int k = dof_entry_start_[d]; k < dof_entry_start_[d + 1]; ++k) {
+        const int e = dof_entries_[k];
+        sum += model_.tendon_coef[e] * data_.tendon_force[entry_tendon_[e]];
       }
       data_.tau[d] = sum;
       data_.actuator_stiffness[d] = stiffness;
@@ -335,12 +395,12 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
   for (int c = 0; c < n; ++c)
     if (data_.contact_owner[c] < 0) island_contacts_.push_back(c);
   for (int a = 0; a < articulations; ++a)
-    if (data_.touched[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
+    if (data_.touched[a] && !constrained_[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
   step.split = !island_articulations_.empty() || !island_contacts_.empty();
 }
 
 void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threads) {
-  std::fill(data_.touched.begin(), data_.touched.end(), 0);
+  std::copy(constrained_.begin(), constrained_.end(), data_.touched.begin());
   int unexpected = -1;  // a contact joining bodies of two worlds
   parallel_for(threads, contacts.contact_count, [&](int c) {
     const int body_a = contacts.contact_body_a[c], body_b = contacts.contact_body_b[c];
@@ -415,6 +475,7 @@ void SolverFeatherstone::solve_islands(const StepContext& step) {
   islands_->add_friction_rows(step, island_articulations_);
   lap(stage_seconds_.limit_rows);
   islands_->add_contact_rows(step, island_contacts_);
+  islands_->add_constraint_rows(step);
   lap(stage_seconds_.contact_rows);
   islands_->solve(step, island_articulations_, island_contacts_, thread_count());
   lap(stage_seconds_.solve);

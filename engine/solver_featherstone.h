@@ -47,26 +47,30 @@ struct JointSupportMatrix {
 struct SolverCounts {
   int dofs = 0, coords = 0, articulations = 0, limit_cells = 0, contacts = 0;
   int runs = 0;  // the runs of dofs the actuators are summed in
+  int tendons = 0, equalities = 0;
 };
-#define NOVAPHY_SOLVER_DATA(X)                                                                                     \
-  X(Scalar, qd, n.dofs, "velocity being solved, between the passes of a step")                                     \
-  X(Scalar, q_next, n.coords, "coordinates after the step, between the passes")                                    \
-  X(Scalar, tau, n.dofs, "the control's joint forces with its actuators'")                                         \
-  X(Scalar, actuator_stiffness, n.dofs, "the actuators' stiffness on each dof, taken implicitly")                  \
-  X(Scalar, actuator_damping, n.dofs, "the actuators' damping on each dof, taken implicitly")                      \
-  X(std::uint8_t, affine_run, n.runs, "1 where an actuator of the run's dofs has a position or velocity term")     \
-  X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")         \
-  X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")     \
-  X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                     \
-  X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                         \
-  X(std::uint8_t, touched, n.articulations, "1 where a contact joins it to another moving articulation this step") \
-  X(int, contact_start, n.articulations + 1, "where each articulation's contacts start in contact_list")           \
-  X(int, contact_list, n.contacts, "the contacts each articulation's unit solves, by articulation")                \
-  X(int, contact_owner, n.contacts, "the articulation whose unit solves the contact, else -1 (the islands)")       \
-  X(int, contact_link_a, n.contacts, "the link holding body a in its articulation, -1 for a static body")          \
-  X(int, contact_link_b, n.contacts, "likewise for body b")                                                        \
-  X(Scalar, contact_mu, n.contacts, "the contact's friction coefficient")                                          \
-  X(Scalar, contact_restitution, n.contacts, "the contact's restitution")                                          \
+#define NOVAPHY_SOLVER_DATA(X)                                                                                      \
+  X(Scalar, qd, n.dofs, "velocity being solved, between the passes of a step")                                      \
+  X(Scalar, q_next, n.coords, "coordinates after the step, between the passes")                                     \
+  X(Scalar, tau, n.dofs, "the control's joint forces with its actuators'")                                          \
+  X(Scalar, actuator_stiffness, n.dofs, "the actuators' stiffness on each dof, taken implicitly")                   \
+  X(Scalar, actuator_damping, n.dofs, "the actuators' damping on each dof, taken implicitly")                       \
+  X(Scalar, tendon_force, n.tendons, "the force along each tendon: its spring's, damper's and actuators'")          \
+  X(std::uint8_t, affine_run, n.runs, "1 where an actuator of the run's dofs has a position or velocity term")      \
+  X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")          \
+  X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")      \
+  X(Scalar, equality_impulse, 3 * n.equalities, "the last step's equality impulses, the warm starts of their rows") \
+  X(Scalar, tendon_impulse, 2 * n.tendons, "the last step's tendon-limit impulses, the warm starts of their rows")  \
+  X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                      \
+  X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                          \
+  X(std::uint8_t, touched, n.articulations, "1 where a contact joins it to another moving articulation this step")  \
+  X(int, contact_start, n.articulations + 1, "where each articulation's contacts start in contact_list")            \
+  X(int, contact_list, n.contacts, "the contacts each articulation's unit solves, by articulation")                 \
+  X(int, contact_owner, n.contacts, "the articulation whose unit solves the contact, else -1 (the islands)")        \
+  X(int, contact_link_a, n.contacts, "the link holding body a in its articulation, -1 for a static body")           \
+  X(int, contact_link_b, n.contacts, "likewise for body b")                                                         \
+  X(Scalar, contact_mu, n.contacts, "the contact's friction coefficient")                                           \
+  X(Scalar, contact_restitution, n.contacts, "the contact's restitution")                                           \
   X(int, fill, n.articulations + 1, "scratch of the counting sorts")
 
 struct SolverData {
@@ -104,6 +108,10 @@ class SolverFeatherstone {
  private:
   // throws Error naming the first bad argument; notes whether the step has wrenches and drives
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
+  // the actuators by dof and by tendon, the tendon entries by dof
+  void group_actuators();
+  // constrained_ and the articulations it marks touched
+  void mark_constrained();
   // the routes: each articulation's, made again when a setting that decides them changed
   void plan();
   StepContext begin_step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt);
@@ -138,6 +146,12 @@ class SolverFeatherstone {
   std::vector<int> limited_joints_, limited_start_, limit_cell_;
   // per dof: the actuators that drive it, in order, dof_actuators_[dof_actuator_start_[d] .. [d + 1])
   std::vector<int> dof_actuator_start_, dof_actuators_;
+  // per tendon: the actuators on it, tendon_actuators_[tendon_actuator_start_[t] .. [t + 1]); per dof: the
+  // tendon entries on it likewise (dof_entries_, dof_entry_start_), entry_tendon_: each entry's tendon
+  std::vector<int> tendon_actuator_start_, tendon_actuators_, dof_entry_start_, dof_entries_, entry_tendon_;
+  // per articulation: 1 where an equality constraint or a tendon limit acts on it (its rows are always the
+  // islands')
+  std::vector<std::uint8_t> constrained_;
   std::unique_ptr<ArticulationBatches> batches_;
   std::unique_ptr<DenseArticulations> dense_;
   std::unique_ptr<IslandRows> islands_;

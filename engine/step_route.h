@@ -70,6 +70,8 @@ struct StepContext {
   Scalar* q_next = nullptr;            // [coord] coordinates after the step, likewise
   Scalar* limit_impulse = nullptr;     // [limit cell] warm starts of limit rows
   Scalar* friction_impulse = nullptr;  // [dof] warm starts of friction-loss rows
+  Scalar* equality_impulse = nullptr;  // [equality][3] warm starts of equality rows
+  Scalar* tendon_impulse = nullptr;    // [tendon][2] warm starts of tendon-limit rows
   std::uint8_t* diverged = nullptr;    // [articulation]
   int* factor_failure = nullptr;       // [articulation] dof whose pivot failed, else -1
 };

@@ -101,7 +101,12 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
     while (start < m.joint_count && kept[start] < model.articulation_start[a]) ++start;
     m.articulation_start[a] = start;
   }
-  for (int& joint : m.actuator_joint) joint = new_index[joint];
+  for (int& joint : m.actuator_joint)
+    if (joint >= 0) joint = new_index[joint];
+  for (int e = 0; e < m.equality_count; ++e)
+    if (static_cast<EqualityType>(m.equality_type[e]) == EqualityType::JointCoupling)
+      for (int k = 0; k < 2; ++k)
+        if (m.equality_object[2 * e + k] >= 0) m.equality_object[2 * e + k] = new_index[m.equality_object[2 * e + k]];
   m.check_sizes();
   return w;
 }

@@ -106,7 +106,15 @@ OracleErrors MujocoOracle::compare_random_state(std::mt19937& rng) {
     H_mj = full;
   }
   e.mass_matrix = relative(T.transpose() * eval_mass_matrix(model_, state) * T, H_mj);
-  const VecX bias_mj = Eigen::Map<const VecX>(d_->qfrc_bias, nv) - Eigen::Map<const VecX>(d_->qfrc_passive, nv);
+  // MuJoCo's passive forces less its tendons' springs and dampers, which NovaPhy counts with the control's
+  // forces (engine/parts/tendon.h): ten_J^T (-k (L - L_spring) - b V)
+  VecX passive = Eigen::Map<const VecX>(d_->qfrc_passive, nv);
+  for (int t = 0; t < m_->ntendon; ++t) {
+    const mjtNum f = -m_->tendon_stiffness[t] * (d_->ten_length[t] - m_->tendon_lengthspring[t]) -
+                     m_->tendon_damping[t] * d_->ten_velocity[t];
+    for (int k = 0; k < nv; ++k) passive[k] -= d_->ten_J[t * nv + k] * f;
+  }
+  const VecX bias_mj = Eigen::Map<const VecX>(d_->qfrc_bias, nv) - passive;
   e.bias = relative(T.transpose() * eval_bias_forces(model_, state), bias_mj);
 
   // accelerations under random joint forces and body wrenches: tau = T^-T tau_mj = T tau_mj

@@ -45,6 +45,21 @@ inline V impulse_kept(const V& lambda, const Mask<V>& on) {
   return select<V>(both(on, finite(lambda)), lambda, V{});
 }
 
+// ---- equality constraints (model.h): bilateral rows (Bounded, no bound) that drive the constraint's error
+// to zero, a share erp of it each step
+
+template <typename V>
+inline V equality_row_target(const V& error, const RowParams& p, const V& dt) {
+  return -static_cast<Element<V>>(p.erp) * error / dt;
+}
+
+// a joint coupling's error q1 - q1_0 - poly(x) and its slope d poly / dx at x = q2 - q2_0 (e: its data)
+inline Scalar joint_coupling_error(const Scalar* e, Scalar q1, Scalar q2, Scalar* slope) {
+  const Scalar x = q2 - e[6];
+  *slope = e[1] + x * (2 * e[2] + x * (3 * e[3] + x * 4 * e[4]));
+  return q1 - e[5] - (e[0] + x * (e[1] + x * (e[2] + x * (e[3] + x * e[4]))));
+}
+
 // ---- dry friction (frictionloss): one row per dof, J = e_k, driving its velocity to zero with an impulse of at
 // most frictionloss dt either way
 

@@ -29,6 +29,25 @@ M<T> finite(const V<T>& x) {
   return lane_abs<T>(x) <= std::numeric_limits<T>::max();
 }
 
+// J qd over the dofs [begin, end) outside which the row is zero, in four sums (the dofs k = 0, 1,
+// 2, 3 mod 4) so that the latency of one does not hold up the others; skipping the zero terms
+// changes no bit
+template <typename T>
+V<T> row_velocity(const V<T>* j, const V<T>* qd, int begin, int end) {
+  V<T> v0{}, v1{}, v2{}, v3{};
+  int k = begin & ~3;
+  for (; k + 4 <= end; k += 4) {
+    v0 += j[k] * qd[k];
+    v1 += j[k + 1] * qd[k + 1];
+    v2 += j[k + 2] * qd[k + 2];
+    v3 += j[k + 3] * qd[k + 3];
+  }
+  if (k < end) v0 += j[k] * qd[k];
+  if (k + 1 < end) v1 += j[k + 1] * qd[k + 1];
+  if (k + 2 < end) v2 += j[k + 2] * qd[k + 2];
+  return (v0 + v1) + (v2 + v3);
+}
+
 }  // namespace
 
 template <typename T>
@@ -44,24 +63,7 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   }
   for (int r = 0; r < rows.count; ++r) apply<T>(z(r), lambda[r], rows.active[r], n, qd);
   // unconstrained step of one row: the impulse that would bring J qd to its target
-  auto velocity = [&](int r) {
-    // four sums, of the dofs k = 0, 1, 2, 3 mod 4, so that the latency of one does not hold up the
-    // others; the dofs outside the row's range (zero terms) are skipped without changing a bit
-    const V<T>* j = J(r);
-    const int end = rows.nonzero_end[r];
-    V<T> v0{}, v1{}, v2{}, v3{};
-    int k = rows.nonzero_begin[r] & ~3;
-    for (; k + 4 <= end; k += 4) {
-      v0 += j[k] * qd[k];
-      v1 += j[k + 1] * qd[k + 1];
-      v2 += j[k + 2] * qd[k + 2];
-      v3 += j[k + 3] * qd[k + 3];
-    }
-    if (k < end) v0 += j[k] * qd[k];
-    if (k + 1 < end) v1 += j[k + 1] * qd[k + 1];
-    if (k + 2 < end) v2 += j[k + 2] * qd[k + 2];
-    return (v0 + v1) + (v2 + v3);
-  };
+  auto velocity = [&](int r) { return row_velocity<T>(J(r), qd, rows.nonzero_begin[r], rows.nonzero_end[r]); };
   auto step = [&](int r) { return -(velocity(r) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
   // a lane sweeps while some row's impulse in it moved by more than tolerance / (J M^-1 J^T) in the
   // sweep before (with tolerance 0: moved at all; a sweep that moves none is a fixed point, which

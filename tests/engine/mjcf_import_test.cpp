@@ -85,21 +85,24 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
     <body name="a" pos="0 0 1">
       <joint name="ja" type="hinge" axis="0 1 0" frictionloss="0.1"/>
       <geom name="can" type="cylinder" size="0.1 0.2"/>
+      <site name="top"/>
       <body name="b" pos="0 0 -0.5">
+        <site name="bottom"/>
         <joint name="jb" type="ball" limited="true" range="0 0.5"/>
         <geom name="ball" type="ellipsoid" size="0.1 0.2 0.3"/>
       </body>
     </body>
   </worldbody>
-  <tendon><fixed name="coupling"><joint joint="ja" coef="1"/></fixed></tendon>
-  <equality><joint name="lock" joint1="ja"/></equality>
+  <tendon><spatial name="coupling"><site site="top"/><site site="bottom"/></spatial></tendon>
+  <equality><weld name="lock" body1="b"/></equality>
+  <sensor><jointpos joint="ja"/></sensor>
   <actuator><position name="servo" joint="ja" kp="10"/><motor name="spin" joint="jb" gear="1 0 0"/></actuator>
 </mujoco>)");
   ModelBuilder builder;
   const std::vector<std::string> warnings = builder.add_mjcf(path);
   std::string all;
   for (const auto& w : warnings) all += w + "\n";
-  EXPECT_NE(all.find("tendon 'coupling'"), std::string::npos) << all;
+  EXPECT_NE(all.find("tendon 'coupling' is spatial"), std::string::npos) << all;
   EXPECT_NE(all.find("equality constraint 'lock'"), std::string::npos) << all;
   EXPECT_NE(all.find("geom 'can'"), std::string::npos) << all;
   EXPECT_NE(all.find("geom 'ball'"), std::string::npos) << all;
@@ -107,6 +110,8 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
   EXPECT_NE(all.find("joint 'jb': ball joint limit"), std::string::npos) << all;
   EXPECT_EQ(all.find("actuator 'servo'"), std::string::npos) << all;  // a position servo on a hinge: modelled
   EXPECT_NE(all.find("actuator 'spin' drives a ball or free joint"), std::string::npos) << all;
+  EXPECT_EQ(all.find("sensor"), std::string::npos) << all;  // sensors do not change the motion
+  for (const auto& w : warnings) EXPECT_NE(w.find("(affects motion)"), std::string::npos) << w;
   EXPECT_EQ(builder.actuator_count(), 1);
   EXPECT_EQ(builder.finalize().joint_frictionloss[0], 0.1);
   std::filesystem::remove(path);

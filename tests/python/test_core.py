@@ -163,13 +163,15 @@ def test_state_from_another_model_is_rejected():
 def test_unmodelled_mjcf_content_warns_by_name(tmp_path):
     path = tmp_path / "tendon.xml"
     path.write_text(
-        '<mujoco><worldbody><body name="a"><joint name="ja" type="hinge"/><geom size="0.1"/>'
-        '</body></worldbody><tendon><fixed name="coupling"><joint joint="ja" coef="1"/></fixed></tendon></mujoco>'
+        '<mujoco><worldbody><body name="a"><joint name="ja" type="hinge"/><geom size="0.1"/><site name="s"/>'
+        '<site name="t" pos="0 0 1"/></body></worldbody>'
+        '<tendon><spatial name="coupling"><site site="s"/><site site="t"/></spatial></tendon>'
+        "</mujoco>"
     )
     builder = novaphy.ModelBuilder()
-    with pytest.warns(UserWarning, match="novaphy: tendon 'coupling' is not modelled"):
+    with pytest.warns(UserWarning, match="novaphy: tendon 'coupling' is spatial"):
         reported = builder.add_mjcf(str(path))
-    assert reported == ["tendon 'coupling' is not modelled"]
+    assert len(reported) == 1 and reported[0].endswith("not modelled (affects motion)")
 
 
 def test_mjcf_errors_pass_mujocos_message_on(tmp_path):

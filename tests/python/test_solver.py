@@ -300,3 +300,29 @@ def test_a_position_servo_holds_its_target_and_its_force_needs_the_state():
     for _ in range(180):
         solver.step(state, state, control, contacts, 1.0 / 60.0)
     assert state.joint_q[0] == pytest.approx(0.7, abs=1e-6)
+
+
+def test_tendons_and_equalities_from_python():
+    # a slide on a slide: a servo on their tendon (the sum), the second coupled to mirror the first
+    builder = novaphy.ModelBuilder(gravity=[0.0, 0.0, 0.0])
+    parent, joints = -1, []
+    for _ in range(2):
+        body = builder.add_body(novaphy.RigidBody.from_box(0.1, [0.01, 0.01, 0.01]))
+        joints.append(builder.add_joint_prismatic(parent=parent, child=body, axis=[1.0, 0.0, 0.0]))
+        parent = body
+    tendon = builder.add_tendon(joints, [1.0, 1.0], damping=0.1, name="sum")
+    servo = builder.add_tendon_actuator(tendon, gain=50.0, bias=[0.0, -50.0, -5.0], name="servo")
+    builder.add_joint_coupling(joints[1], joints[0], [0.0, 1.0, 0.0, 0.0, 0.0], name="mirror")
+    model = builder.finalize()
+    assert model.tendon_count == 1 and model.tendon_name == ["sum"] and model.equality_name == ["mirror"]
+    assert model.actuator_joint[servo] == -1 and model.actuator_tendon[servo] == tendon
+    state, control = model.state(), model.control()
+    control.actuator_ctrl[servo] = 0.06
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    contacts = novaphy.CollisionPipeline(model).contacts()
+    for _ in range(2000):
+        solver.step(state, state, control, contacts, 0.002)
+    assert state.joint_q[0] + state.joint_q[1] == pytest.approx(0.06, abs=1e-4)
+    assert state.joint_q[1] == pytest.approx(state.joint_q[0], abs=1e-5)
+    with pytest.raises(ValueError, match="tendon 1: joint index 5 out of range"):
+        builder.add_tendon([5], [1.0])

@@ -1,0 +1,124 @@
+// ModelBuilder's fixed tendons, the actuators on them and equality constraints (model.h).
+#include <cmath>
+
+#include "engine/builder.h"
+#include "engine/builder_checks.h"
+#include "engine/dynamics.h"
+
+namespace novaphy {
+
+int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<Scalar>& coefs,
+                             const TendonOptions& options) {
+  const std::string item = label("tendon", tendon_count(), options.name);
+  if (joints.empty()) fail(item, ": a tendon needs at least one joint");
+  if (joints.size() != coefs.size())
+    fail(item, ": ", joints.size(), " joints but ", coefs.size(), " coefficients (one per joint)");
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const int j = joints[i];
+    if (j < 0 || j >= joint_count()) fail(item, ": joint index ", j, " out of range [0, ", joint_count(), ")");
+    const JointType type = joints_[j].type;
+    if (type != JointType::Revolute && type != JointType::Prismatic)
+      fail(item, ": a fixed tendon spans Revolute or Prismatic joints, joint ", j, " is ", joint_type_name(type));
+    check_finite(item, "coefficient", coefs[i]);
+  }
+  check_nonnegative(item, "stiffness", options.stiffness);
+  check_nonnegative(item, "damping", options.damping);
+  if (std::isinf(options.rest_length)) fail(item, ": rest_length is not finite: ", options.rest_length);
+  check_range(item, "limit range", options.limit_lower, options.limit_upper);
+  tendons_.push_back({joints, coefs, options});
+  return tendon_count() - 1;
+}
+
+int ModelBuilder::add_tendon_actuator(int tendon, const ActuatorOptions& options) {
+  const std::string item = label("actuator", actuator_count(), options.name);
+  if (tendon < 0 || tendon >= tendon_count())
+    fail(item, ": tendon index ", tendon, " out of range [0, ", tendon_count(), ")");
+  check_actuator(item, options);
+  actuators_.push_back({-1, options, tendon});
+  return actuator_count() - 1;
+}
+
+void ModelBuilder::lay_out_tendons(Model& model) const {
+  model.tendon_start.assign(1, 0);
+  for (const TendonRecord& tendon : tendons_) {
+    const int t = static_cast<int>(model.tendon_name.size());
+    const std::string item = label("tendon", t, tendon.options.name);
+    Scalar length = 0;
+    for (size_t i = 0; i < tendon.joints.size(); ++i) {
+      const int j = tendon.joints[i];
+      if (model.joint_articulation[j] != model.joint_articulation[tendon.joints[0]])
+        fail(item, ": its joints ", tendon.joints[0], " and ", j, " are in different articulations (one only)");
+      model.tendon_coord.push_back(model.joint_q_start[j]);
+      model.tendon_dof.push_back(model.joint_qd_start[j]);
+      model.tendon_coef.push_back(tendon.coefs[i]);
+      length += tendon.coefs[i] * model.joint_q0[model.joint_q_start[j]];
+    }
+    model.tendon_start.push_back(static_cast<int>(model.tendon_coef.size()));
+    const TendonOptions& o = tendon.options;
+    model.tendon_stiffness.push_back(o.stiffness);
+    model.tendon_damping.push_back(o.damping);
+    model.tendon_rest_length.push_back(std::isnan(o.rest_length) ? length : o.rest_length);
+    model.tendon_limit_lower.push_back(o.limit_lower);
+    model.tendon_limit_upper.push_back(o.limit_upper);
+    model.tendon_name.push_back(o.name);
+  }
+  model.tendon_count = tendon_count();
+  model.tendon_entry_count = static_cast<int>(model.tendon_coef.size());
+}
+
+int ModelBuilder::add_connect(int body1, int body2, const Vec3& anchor, const std::string& name, const Vec3& anchor2) {
+  const std::string item = label("equality", equality_count(), name) + " (connect)";
+  if (body1 < 0 || body1 >= body_count()) fail(item, ": body1 index ", body1, " out of range [0, ", body_count(), ")");
+  if (body2 < -1 || body2 >= body_count())
+    fail(item, ": body2 index ", body2, " out of range [-1, ", body_count(), ")");
+  if (body1 == body2) fail(item, ": connects body ", body1, " to itself");
+  check_finite(item, "anchor", anchor);
+  if (!anchor2.array().isNaN().all()) check_finite(item, "anchor2", anchor2);
+  EqualityRecord e{EqualityType::Connect, {body1, body2}, {}, name};
+  for (int k = 0; k < 3; ++k) e.data[k] = anchor[k], e.data[3 + k] = anchor2[k];
+  equalities_.push_back(e);
+  return equality_count() - 1;
+}
+
+int ModelBuilder::add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly,
+                                     const std::string& name) {
+  const std::string item = label("equality", equality_count(), name) + " (joint coupling)";
+  for (const int j : {joint1, joint2}) {
+    if (j == joint2 && j == -1) continue;
+    if (j < 0 || j >= joint_count()) fail(item, ": joint index ", j, " out of range [0, ", joint_count(), ")");
+    const JointType type = joints_[j].type;
+    if (type != JointType::Revolute && type != JointType::Prismatic)
+      fail(item, ": couples Revolute or Prismatic joints, joint ", j, " is ", joint_type_name(type));
+  }
+  if (joint1 == joint2) fail(item, ": couples joint ", joint1, " to itself");
+  EqualityRecord e{EqualityType::JointCoupling, {joint1, joint2}, {}, name};
+  for (int k = 0; k < 5; ++k) {
+    check_finite(item, "poly", poly[k]);
+    e.data[k] = poly[k];
+  }
+  equalities_.push_back(e);
+  return equality_count() - 1;
+}
+
+void ModelBuilder::lay_out_equalities(Model& model) const {
+  const State initial = equalities_.empty() ? State{} : model.state();
+  for (const EqualityRecord& record : equalities_) {
+    EqualityRecord e = record;
+    if (e.type == EqualityType::Connect && std::isnan(e.data[3])) {
+      // body2's point that coincides with the anchor at the initial coordinates, in body2's frame
+      auto pose = [&](int b) { return b < 0 ? Transform::identity() : Transform::from_array(&initial.body_q[7 * b]); };
+      const Vec3 p = pose(e.object[1]).inverse().apply(pose(e.object[0]).apply(Vec3(e.data[0], e.data[1], e.data[2])));
+      for (int k = 0; k < 3; ++k) e.data[3 + k] = p[k];
+    }
+    if (e.type == EqualityType::JointCoupling)
+      for (int k = 0; k < 2; ++k)
+        e.data[5 + k] = e.object[k] < 0 ? 0 : model.joint_q0[model.joint_q_start[e.object[k]]];
+    model.equality_type.push_back(static_cast<int>(e.type));
+    model.equality_object.insert(model.equality_object.end(), {e.object[0], e.object[1]});
+    model.equality_data.insert(model.equality_data.end(), e.data, e.data + 7);
+    model.equality_name.push_back(e.name);
+  }
+  model.equality_count = equality_count();
+}
+
+}  // namespace novaphy
