@@ -7,11 +7,14 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <random>
 
+#include "engine/collision.h"
 #include "engine/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 #include "test_support_errors.h"
+#include "tools/mujoco_oracle.h"
 
 namespace novaphy {
 namespace {
@@ -87,6 +90,17 @@ TEST(Equalities, AFourBarStaysClosedAndMovesAsMujocosOnAFixedBase) {
   }
   mj_deleteData(d);
   mj_deleteModel(m);
+  std::filesystem::remove(path);
+}
+
+TEST(Equalities, TheFourBarsDynamicsMatchMujocosWithConstraintsOff) {
+  const std::string path = test::write_temp_file("four_bar_oracle.xml", four_bar(R"(<freejoint/>)"));
+  MujocoOracle oracle(path);
+  ASSERT_EQ(oracle.model().equality_count, 1);
+  std::mt19937 rng(11);
+  OracleErrors worst;
+  for (int k = 0; k < 20; ++k) worst.accumulate(oracle.compare_random_state(rng));
+  EXPECT_LT(worst.max(), 1e-9);
   std::filesystem::remove(path);
 }
 
@@ -192,6 +206,65 @@ TEST(Equalities, BadInputIsNamed) {
   <equality><connect body1="a" body2="nowhere" anchor="0 0 0"/></equality></mujoco>)");
   EXPECT_NOVAPHY_ERROR(builder.add_mjcf(path), "nowhere");
   std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace novaphy
+
+namespace novaphy {
+namespace {
+
+// a leg whose thigh and shin (its grandchild, past a knee link) overlap deeply at the knee, as cassie's parts
+// do, their contype and conaffinity keeping them from colliding with each other but not with the floor
+std::string overlapping_leg(const char* conaffinity) {
+  const std::string filter = std::string(R"(contype="1" conaffinity=")") + conaffinity + R"(")";
+  return R"(
+<mujoco>
+  <option gravity="0 0 -9.81" timestep="0.002"/>
+  <worldbody>
+    <geom type="plane" size="5 5 0.1" contype="1" conaffinity="1"/>
+    <body name="thigh" pos="0 0 0.5"><freejoint/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.25" size="0.06" )" +
+         filter + R"(/>
+      <body name="knee" pos="0 0 -0.2">
+        <joint name="knee" type="hinge" axis="0 1 0" range="-0.5 0.5" damping="1"/>
+        <geom type="sphere" size="0.02" contype="0" conaffinity="0"/>
+        <body name="shin">
+          <joint name="ankle" type="hinge" axis="1 0 0" range="-0.3 0.3" damping="1"/>
+          <geom type="capsule" fromto="0 0 0.05 0 0 -0.25" size="0.05" )" +
+         filter + R"(/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)";
+}
+
+TEST(Equalities, AFilteredSelfContactStaysFilteredWhileTheLegFalls) {
+  // with conaffinity 0 on both links MuJoCo's rule filters the knee's overlap; with 1 it would collide
+  for (const char* conaffinity : {"0", "1"}) {
+    const std::string path = test::write_temp_file("overlapping_leg.xml", overlapping_leg(conaffinity));
+    ModelBuilder builder;
+    ASSERT_TRUE(builder.add_mjcf(path).empty());
+    const Model model = builder.finalize();
+    CollisionPipeline pipeline(model);
+    Contacts contacts = pipeline.contacts();
+    pipeline.collide(model.state(), contacts);
+    int self = 0;
+    for (int k = 0; k < contacts.contact_count; ++k)
+      self += contacts.contact_body_a[k] >= 0 && contacts.contact_body_b[k] >= 0;
+    if (std::string(conaffinity) == "1") {
+      EXPECT_GT(self, 0);
+      continue;
+    }
+    EXPECT_EQ(self, 0);
+    // it falls onto the floor and comes to rest there, calm: the knee's overlap never pushes it apart
+    const State s = test::run_steps(model, model.control(), 1000, 0.002);
+    for (const Scalar x : s.joint_qd) EXPECT_LT(std::abs(x), 0.05);
+    EXPECT_GT(s.joint_q[2], 0);
+    EXPECT_LT(s.joint_q[2], 0.5);
+    std::filesystem::remove(path);
+  }
 }
 
 }  // namespace
