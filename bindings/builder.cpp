@@ -118,6 +118,7 @@ void bind_builder(py::module_& m) {
       .def_readwrite("frictionloss", &JointDofConfig::frictionloss)
       .def_readwrite("stiffness", &JointDofConfig::stiffness)
       .def_readwrite("q_ref", &JointDofConfig::q_ref)
+      .def_readwrite("q0", &JointDofConfig::q0, "Initial coordinate (Revolute, Prismatic).")
       .def_readwrite("target_ke", &JointDofConfig::target_ke)
       .def_readwrite("target_kd", &JointDofConfig::target_kd);
 
@@ -204,6 +205,10 @@ void bind_builder(py::module_& m) {
            py::arg("name") = "", py::arg("anchor2") = Vec3::Constant(NAN),
            "Equality (MuJoCo's connect): the point anchor of body1 (its frame) stays on the point of body2 (-1: the "
            "world) that coincides with it at the initial coordinates, or on anchor2 (body2's frame) if given.")
+      .def("add_weld", &ModelBuilder::add_weld, py::arg("body1"), py::arg("body2"), py::arg("name") = "",
+           py::arg("anchor") = Vec3::Zero(), py::arg("relative") = std::nullopt,
+           "Equality (MuJoCo's weld): body2 (-1: the world) held to body1 in the pose relative (body2's frame in "
+           "body1's; default: as at the initial coordinates), its point anchor (its frame) kept in place.")
       .def("add_joint_coupling", &ModelBuilder::add_joint_coupling, py::arg("joint1"), py::arg("joint2"),
            py::arg("poly"), py::arg("name") = "",
            "Equality (MuJoCo's joint): q1 - q1_0 = poly[0] + poly[1] x + ... + poly[4] x^4, x = q2 - q2_0, for "

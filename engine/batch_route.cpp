@@ -155,19 +155,18 @@ class Batches final : public ArticulationBatches {
     batch_solve_packed(G.topo, scratch.factor.data(), x);
   }
 
-  void point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const override {
+  void point_jacobian(int a, int link, const Vec3* p, const Vec3& d, Scalar sign, Scalar* J) const override {
     const Slot& s = slot_[a];
     const BatchGroup<T>& G = groups_[s.group];
     const V* S = G.block_S(s.block);
     const V* o = &G.origin[3 * s.block];
-    const Scalar r[3] = {p.x() - o[0][s.lane], p.y() - o[1][s.lane], p.z() - o[2][s.lane]};
+    const Vec3 r = p ? Vec3(p->x() - o[0][s.lane], p->y() - o[1][s.lane], p->z() - o[2][s.lane]) : Vec3::Zero();
     const auto& topo = G.topo;
     for (int i = link; i >= 0; i = topo.link[i].parent)
       for (int k = topo.link[i].qd_start; k < topo.link[i].qd_start + topo.link[i].dof; ++k) {
         Scalar s6[6], u[3];
         for (int m = 0; m < 6; ++m) s6[m] = S[6 * k + m][s.lane];
-        point_velocity(s6, r, u);
-        J[k] += sign * (d.x() * u[0] + d.y() * u[1] + d.z() * u[2]);
+        J[k] += sign * motion_along(s6, p ? r.data() : nullptr, d.data());
       }
   }
 

@@ -144,6 +144,7 @@ int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOp
   check_nonnegative(item, "target_ke", dof.target_ke);
   check_nonnegative(item, "target_kd", dof.target_kd);
   check_finite(item, "q_ref", dof.q_ref);
+  check_finite(item, "q0", dof.q0);
 
   joints_.push_back(joint);
   body_joint_[child] = joint_count() - 1;
@@ -367,7 +368,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
     actuators_.push_back(actuator);
   }
   for (EqualityRecord e : other.equalities_) {
-    const int offset = e.type == EqualityType::Connect ? body0 : joint0;
+    const int offset = e.type == EqualityType::JointCoupling ? joint0 : body0;
     for (int& object : e.object)
       if (object >= 0) object += offset;
     equalities_.push_back(e);
@@ -458,7 +459,10 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
   Scalar* q0 = model.joint_q0.data() + q;  // past the end for a joint without coordinates
   switch (joint.type) {
     case JointType::Revolute:
-    case JointType::Prismatic: model.joint_q_ref[q] = dof.q_ref; break;
+    case JointType::Prismatic:
+      model.joint_q_ref[q] = dof.q_ref;
+      q0[0] = dof.q0;
+      break;
     case JointType::Ball: q0[3] = model.joint_q_ref[q + 3] = 1; break;
     case JointType::Free: {
       // start at the body's pose: J = X_p^-1 * body_xform * X_c

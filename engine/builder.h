@@ -4,6 +4,7 @@
 
 #include <array>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,7 @@ struct JointDofConfig {
   Scalar frictionloss = 0;  // dry friction: each dof's generalised friction force at most this either way
   Scalar stiffness = 0;     // spring towards q_ref, Revolute and Prismatic joints
   Scalar q_ref = 0;
+  Scalar q0 = 0;         // initial coordinate, Revolute and Prismatic joints (model.joint_q0)
   Scalar target_ke = 0;  // PD drive gains (Control.joint_target_ke/kd start here)
   Scalar target_kd = 0;
 };
@@ -144,6 +146,10 @@ class ModelBuilder {
   // (body2's frame) where that is finite (MuJoCo's connect)
   int add_connect(int body1, int body2, const Vec3& anchor, const std::string& name = "",
                   const Vec3& anchor2 = Vec3::Constant(std::numeric_limits<Scalar>::quiet_NaN()));
+  // body2 (-1: the world) held to body1 in the pose `relative` (body2's frame in body1's), as at the initial
+  // coordinates if not given; the position rows keep body2's point `anchor` (its frame) in place (MuJoCo's weld)
+  int add_weld(int body1, int body2, const std::string& name = "", const Vec3& anchor = Vec3::Zero(),
+               const std::optional<Transform>& relative = std::nullopt);
   // joint1's coordinate follows the polynomial poly (a0 .. a4) of joint2's, both from their initial
   // coordinates (joint2 -1: joint1 stays at a0 from its own); Revolute or Prismatic joints (MuJoCo's joint
   // equality)
@@ -255,7 +261,7 @@ class ModelBuilder {
   struct EqualityRecord {
     EqualityType type;
     int object[2];  // bodies or joints
-    Scalar data[7];
+    Scalar data[10];
     std::string name;
   };
   std::vector<EqualityRecord> equalities_;

@@ -1,5 +1,6 @@
 // ModelBuilder's fixed tendons, the actuators on them and equality constraints (model.h).
 #include <cmath>
+#include <limits>
 
 #include "engine/builder.h"
 #include "engine/builder_checks.h"
@@ -80,6 +81,27 @@ int ModelBuilder::add_connect(int body1, int body2, const Vec3& anchor, const st
   return equality_count() - 1;
 }
 
+int ModelBuilder::add_weld(int body1, int body2, const std::string& name, const Vec3& anchor,
+                           const std::optional<Transform>& relative) {
+  const std::string item = label("equality", equality_count(), name) + " (weld)";
+  for (const int b : {body1, body2})
+    if (b < -1 || b >= body_count()) fail(item, ": body index ", b, " out of range [-1, ", body_count(), ")");
+  if (body1 == body2) fail(item, ": welds body ", body1, " to itself");
+  check_finite(item, "anchor", anchor);
+  // data: the anchor in body1's frame (set by lay_out_equalities without `relative`), in body2's, the orientation
+  EqualityRecord e{EqualityType::Weld, {body1, body2}, {}, name};
+  std::fill(e.data, e.data + 10, std::numeric_limits<Scalar>::quiet_NaN());
+  for (int k = 0; k < 3; ++k) e.data[3 + k] = anchor[k];
+  if (relative) {
+    const Transform T = checked_transform(item, "relative", *relative);
+    const Vec3 p = T.apply(anchor);
+    for (int k = 0; k < 3; ++k) e.data[k] = p[k];
+    Eigen::Map<Eigen::Vector4d>(e.data + 6) = T.q.coeffs();
+  }
+  equalities_.push_back(e);
+  return equality_count() - 1;
+}
+
 int ModelBuilder::add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly,
                                      const std::string& name) {
   const std::string item = label("equality", equality_count(), name) + " (joint coupling)";
@@ -115,7 +137,15 @@ void ModelBuilder::lay_out_equalities(Model& model) const {
         e.data[5 + k] = e.object[k] < 0 ? 0 : model.joint_q0[model.joint_q_start[e.object[k]]];
     model.equality_type.push_back(static_cast<int>(e.type));
     model.equality_object.insert(model.equality_object.end(), {e.object[0], e.object[1]});
-    model.equality_data.insert(model.equality_data.end(), e.data, e.data + 7);
+    if (e.type == EqualityType::Weld && std::isnan(e.data[6])) {
+      // body2's pose in body1's at the initial coordinates
+      auto pose = [&](int b) { return b < 0 ? Transform::identity() : Transform::from_array(&initial.body_q[7 * b]); };
+      const Transform relative = pose(e.object[0]).inverse() * pose(e.object[1]);
+      const Vec3 p = relative.apply(Vec3(e.data[3], e.data[4], e.data[5]));
+      for (int k = 0; k < 3; ++k) e.data[k] = p[k];
+      Eigen::Map<Eigen::Vector4d>(e.data + 6) = relative.q.coeffs();
+    }
+    model.equality_data.insert(model.equality_data.end(), e.data, e.data + 10);
     model.equality_name.push_back(e.name);
   }
   model.equality_count = equality_count();

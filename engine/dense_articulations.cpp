@@ -227,16 +227,13 @@ void DenseArticulations::solve_mass(int a, Scalar* x) {
     cholesky_solve(scratch_[a].H, x);
 }
 
-void DenseArticulations::point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const {
-  // J qd = d . (the velocity of the body-fixed point p), a sum over the dofs that move the link
+void DenseArticulations::point_jacobian(int a, int link, const Vec3* p, const Vec3& d, Scalar sign, Scalar* J) const {
+  // J qd = d . (the velocity of the body-fixed point p, or the angular velocity), over the dofs that move the link
   const ArticulationView& art = art_[a];
   const MatX& S = scratch_[a].S_world;
   for (int i = link; i >= 0; i = art.parent(i))
-    for (int k = art.qd_start(i); k < art.qd_start(i) + art.dof(i); ++k) {
-      Scalar u[3];
-      point_velocity(S.col(k).data(), p.data(), u);
-      J[k] += sign * (d.x() * u[0] + d.y() * u[1] + d.z() * u[2]);
-    }
+    for (int k = art.qd_start(i); k < art.qd_start(i) + art.dof(i); ++k)
+      J[k] += sign * motion_along(S.col(k).data(), p ? p->data() : nullptr, d.data());
 }
 
 std::size_t DenseArticulations::bytes() const {

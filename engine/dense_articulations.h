@@ -33,7 +33,7 @@ class DenseArticulations final : public StepRoute {
   void store(int a, const StepContext& step);
 
   void solve_mass(int a, Scalar* x) override;
-  void point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const override;
+  void point_jacobian(int a, int link, const Vec3* p, const Vec3& d, Scalar sign, Scalar* J) const override;
   std::size_t bytes() const override;
 
  private:

@@ -62,7 +62,7 @@ Scalar* IslandRows::row_jacobian(int r, int art) {
   return nullptr;
 }
 
-int IslandRows::add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind) {
+int IslandRows::add_row(int body_a, int body_b, const Vec3* p, const Vec3& d, RowKind kind) {
   const int art_a = index_.moving(body_a), art_b = index_.moving(body_b);
   const int r = begin_row(art_a, art_b, kind, 0);
   if (art_b >= 0) (*route_)[art_b]->point_jacobian(art_b, index_.body_link[body_b], p, d, 1, row_jacobian(r, art_b));
@@ -133,9 +133,9 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
     Scalar d[9];
     contact_frame(&C.contact_normal[3 * c], d);
-    const int rn = add_row(ba, bb, p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
-    const int r1 = add_row(ba, bb, p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
-    add_row(ba, bb, p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
+    const int rn = add_row(ba, bb, &p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
+    const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
+    add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
     rows_[r1].normal = rn;
     rows_[r1].mu = contact_friction(model_, sa, sb);
     const Scalar v_approach = row_velocity(rows_[rn], J_, step.in->joint_qd.data());
@@ -151,30 +151,36 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
 
 void IslandRows::add_constraint_rows(const StepContext& step) {
   for (int e = 0; e < model_.equality_count; ++e) {
-    if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Connect)
-      add_connect_rows(step, e);
-    else
+    if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::JointCoupling)
       add_coupling_row(step, e);
+    else
+      add_body_rows(step, e);
   }
   for (int t = 0; t < model_.tendon_count; ++t) add_tendon_limit_rows(step, t);
 }
 
-void IslandRows::add_connect_rows(const StepContext& step, int e) {
+void IslandRows::add_body_rows(const StepContext& step, int e) {
   // the anchors in the world at the step's body poses; rows along x, y and z of the second's velocity less
-  // the first's at their midpoint, each driving its part of the gap p2 - p1 to zero
+  // the first's at their midpoint, each driving its part of the gap p2 - p1 to zero; a weld's three more of
+  // their angular velocities, driving the rotation from body 2's held orientation to its own to zero
   const int b1 = model_.equality_object[2 * e], b2 = model_.equality_object[2 * e + 1];
-  const Scalar* data = &model_.equality_data[7 * e];
-  auto anchor = [&](int b, const Scalar* x) {
-    const Vec3 a(x[0], x[1], x[2]);
-    return b < 0 ? a : Transform::from_array(&step.in->body_q[7 * b]).apply(a);
-  };
-  const Vec3 p1 = anchor(b1, data), p2 = anchor(b2, data + 3), gap = p2 - p1;
+  const Scalar* data = &model_.equality_data[10 * e];
+  auto pose = [&](int b) { return b < 0 ? Transform::identity() : Transform::from_array(&step.in->body_q[7 * b]); };
+  const Transform X1 = pose(b1), X2 = pose(b2);
+  const Vec3 p1 = X1.apply(Vec3(data[0], data[1], data[2])), p2 = X2.apply(Vec3(data[3], data[4], data[5]));
+  const Vec3 mid = (p1 + p2) / 2;
+  Vec3 error[2] = {p2 - p1, Vec3::Zero()};
+  const bool weld = static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Weld;
+  if (weld) {
+    const Eigen::AngleAxis<Scalar> turn(X2.q * (X1.q * Quat(data[9], data[6], data[7], data[8])).inverse());
+    error[1] = turn.angle() * turn.axis();
+  }
   equality_row_[e] = row_count_;
-  for (int k = 0; k < 3; ++k) {
-    const int r = add_row(b1, b2, (p1 + p2) / 2, Vec3::Unit(k), RowKind::Bounded);
+  for (int k = 0; k < (weld ? 6 : 3); ++k) {
+    const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), RowKind::Bounded);
     rows_[r].bound = std::numeric_limits<Scalar>::infinity();
-    rows_[r].target = equality_row_target(gap[k], step.rows, step.dt);
-    rows_[r].lambda = row_warm_start(step.equality_impulse[3 * e + k], step.rows);
+    rows_[r].target = equality_row_target(error[k / 3][k % 3], step.rows, step.dt);
+    rows_[r].lambda = row_warm_start(step.equality_impulse[6 * e + k], step.rows);
   }
 }
 
@@ -184,14 +190,14 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   const Scalar* q = step.in->joint_q.data();
   Scalar slope = 0;
   const Scalar error =
-      joint_coupling_error(&model_.equality_data[7 * e], q[model_.joint_q_start[j1]],
-                           j2 < 0 ? model_.equality_data[7 * e + 6] : q[model_.joint_q_start[j2]], &slope);
+      joint_coupling_error(&model_.equality_data[10 * e], q[model_.joint_q_start[j1]],
+                           j2 < 0 ? model_.equality_data[10 * e + 6] : q[model_.joint_q_start[j2]], &slope);
   const int a1 = index_.dof_articulation[d1], a2 = d2 < 0 ? -1 : index_.dof_articulation[d2];
   const int r = begin_row(a1, a2 == a1 ? -1 : a2, RowKind::Bounded, equality_row_target(error, step.rows, step.dt));
   row_jacobian(r, a1)[d1 - art_[a1].qd_begin()] += 1;
   if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
   rows_[r].bound = std::numeric_limits<Scalar>::infinity();
-  rows_[r].lambda = row_warm_start(step.equality_impulse[3 * e], step.rows);
+  rows_[r].lambda = row_warm_start(step.equality_impulse[6 * e], step.rows);
   equality_row_[e] = r;
 }
 
@@ -217,9 +223,10 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
 
 void IslandRows::keep_constraint_impulses(const StepContext& step) const {
   for (int e = 0; e < model_.equality_count; ++e) {
-    const int rows = static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Connect ? 3 : 1;
+    const auto type = static_cast<EqualityType>(model_.equality_type[e]);
+    const int rows = type == EqualityType::Weld ? 6 : type == EqualityType::Connect ? 3 : 1;
     for (int k = 0; k < rows; ++k)
-      step.equality_impulse[3 * e + k] = impulse_kept(rows_[equality_row_[e] + k].lambda, true);
+      step.equality_impulse[6 * e + k] = impulse_kept(rows_[equality_row_[e] + k].lambda, true);
   }
   for (int t = 0; t < 2 * model_.tendon_count; ++t) {
     const int r = tendon_row_[t];

@@ -39,8 +39,9 @@ class IslandRows {
   // a row over the dofs of up to two articulations (-1: none), J zeroed
   int begin_row(int art_a, int art_b, RowKind kind, Scalar target);
   Scalar* row_jacobian(int row, int art);
-  // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world)
-  int add_row(int body_a, int body_b, const Vec3& p, const Vec3& d, RowKind kind);
+  // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world), or with
+  // p null their relative angular velocity
+  int add_row(int body_a, int body_b, const Vec3* p, const Vec3& d, RowKind kind);
   // M^-1 J^T and the effective mass, once J is filled in
   void finish_row(int row, Scalar cfm);
   void group_islands();
@@ -61,8 +62,8 @@ class IslandRows {
   std::vector<int> contact_row_;   // [contact] the first row of each contact added
   std::vector<int> equality_row_;  // [equality] its first row, -1
   std::vector<int> tendon_row_;    // [tendon][2] the row of each active limit, -1
-  // the rows of equality e (connect, joint coupling), of a tendon's limit, and their impulses kept
-  void add_connect_rows(const StepContext& step, int e);
+  // the rows of equality e (connect or weld, joint coupling), of a tendon's limit, and their impulses kept
+  void add_body_rows(const StepContext& step, int e);
   void add_coupling_row(const StepContext& step, int e);
   void add_tendon_limit_rows(const StepContext& step, int t);
   void keep_constraint_impulses(const StepContext& step) const;

@@ -163,6 +163,7 @@ class MjcfImporter {
         type = hinge ? JointType::Revolute : JointType::Prismatic;
         dof.stiffness = m_->jnt_stiffness[j];
         dof.q_ref = m_->qpos_spring[qa];
+        dof.q0 = m_->qpos0[qa];  // MuJoCo starts at qpos0 (a joint's ref)
         // MuJoCo moves the joint by qpos - qpos0: fold -qpos0 into the parent joint frame
         Transform ref;
         const Vec3 axis = dof.axis.normalized();
@@ -317,7 +318,7 @@ class MjcfImporter {
     return "";
   }
 
-  // MuJoCo's connect and joint equalities, the active ones (model.h); weld, tendon and distance are reported
+  // MuJoCo's connect, weld and joint equalities, the active ones (model.h); tendon and distance are reported
   void add_equality(int e) {
     const std::string name = mj_name(m_, mjOBJ_EQUALITY, e);
     const mjtNum* data = m_->eq_data + mjNEQDATA * e;
@@ -349,8 +350,32 @@ class MjcfImporter {
         builder_.add_joint_coupling(joint_index_[id1], id2 < 0 ? -1 : joint_index_[id2], poly, name);
         break;
       }
-      default: warn_motion("equality constraint '" + name + "' (weld, tendon or distance) is not modelled");
+      case mjEQ_WELD: add_weld(e, name); break;
+      default: warn_motion("equality constraint '" + name + "' (tendon or distance) is not modelled");
     }
+  }
+
+  // a weld: MuJoCo's data hold body2's anchor (its frame), that anchor in body1's frame and body2's orientation
+  // in body1's; a body welded to the world stands for the world, the held pose moved accordingly
+  void add_weld(int e, const std::string& name) {
+    const mjtNum* data = m_->eq_data + mjNEQDATA * e;
+    if (data[10] == 0) {
+      warn_motion("equality constraint '" + name + "': a weld of torquescale 0 is not modelled");
+      return;
+    }
+    const int id1 = m_->eq_obj1id[e], id2 = m_->eq_obj2id[e] < 0 ? 0 : m_->eq_obj2id[e];
+    Transform relative;
+    relative.q = quat_wxyz(data + 6).normalized();
+    relative.p = vec3(data + 3) - relative.q * vec3(data);
+    Vec3 anchor = vec3(data);
+    if (is_static(id1)) relative = static_pose_[id1] * relative;
+    if (is_static(id2)) {
+      relative = relative * static_pose_[id2].inverse();
+      anchor = static_pose_[id2].apply(anchor);
+    }
+    const int body1 = is_static(id1) ? -1 : out_.body_map[id1], body2 = is_static(id2) ? -1 : out_.body_map[id2];
+    if (body1 < 0 && body2 < 0) return;  // two static bodies: nothing moves
+    builder_.add_weld(body1, body2, name, anchor, relative);
   }
 
   // what the import left out that changes the motion (sensors, cameras and lights do not)
@@ -381,6 +406,7 @@ mjModel* load_mujoco_model(const std::string& path) {
   const TranslatedMjcf translated = urdf ? TranslatedMjcf{} : translate_mjcf(path);
   mjModel* m = mj_loadXML(path.c_str(), translated.vfs.get(), error, sizeof(error));
   if (m == nullptr) fail("cannot load '", path, "': ", error);
+  if (translated.dampratio) set_dampratio(m);
   return m;
 }
 

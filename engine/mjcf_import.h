@@ -6,7 +6,7 @@
 //   order ([w x y z] -> [x y z w]) and the Free velocity ([v; w_body] -> [w_world; v])
 //   motor, position, velocity, general (fixed gain, affine bias) on a hinge or slide -> add_actuator,
 //   on a fixed tendon -> add_tendon_actuator
-//   connect and joint equalities (active ones) -> add_connect, add_joint_coupling
+//   connect, weld and joint equalities (active ones) -> add_connect, add_weld, add_joint_coupling
 //   fixed tendon over hinges and slides (stiffness, damping, springlength, range) -> add_tendon
 #pragma once
 

@@ -2,6 +2,7 @@
 
 #include <tinyxml2.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -17,11 +18,10 @@ using tinyxml2::XMLDocument;
 using tinyxml2::XMLElement;
 
 // MuJoCo >= 3 attributes with no translation here: element, attribute
-constexpr const char* kUntranslated[][2] = {{"position", "dampratio"},     {"position", "inheritrange"},
-                                            {"position", "timeconst"},     {"intvelocity", "inheritrange"},
-                                            {"joint", "actuatorfrcrange"}, {"joint", "actuatorgravcomp"},
-                                            {"body", "gravcomp"},          {"general", "actearly"},
-                                            {"compiler", "alignfree"}};
+constexpr const char* kUntranslated[][2] = {{"position", "inheritrange"},    {"position", "timeconst"},
+                                            {"intvelocity", "inheritrange"}, {"joint", "actuatorfrcrange"},
+                                            {"joint", "actuatorgravcomp"},   {"body", "gravcomp"},
+                                            {"general", "actearly"},         {"compiler", "alignfree"}};
 
 std::string where(const std::string& file, const XMLElement* e) {
   return file + " line " + std::to_string(e->GetLineNum()) + ": <" + e->Name() + ">";
@@ -69,8 +69,9 @@ class Translator {
     const std::string dir = std::filesystem::path(path).parent_path().string();
     Defaults defaults(root);
     for_each_element(root, [&](XMLElement* e) { element(path, e, defaults); });
-    for (XMLElement* e : defaults_with_kv_) e->DeleteAttribute("kv");
-    defaults_with_kv_.clear();
+    for (XMLElement* e : defaults_with_damping_)
+      for (const char* a : {"kv", "dampratio"}) e->DeleteAttribute(a);
+    defaults_with_damping_.clear();
     if (main && !has_autolimits_) autolimits(root, path);
     std::vector<std::string> includes;
     for_each_element(root, [&](XMLElement* e) {
@@ -94,7 +95,7 @@ class Translator {
       note(path, e, "integrator=\"implicitfast\" -> \"implicit\"");
     }
     whitespace(path, e);
-    if (std::strcmp(e->Name(), "position") == 0) position_kv(path, e, defaults);
+    if (std::strcmp(e->Name(), "position") == 0) position_servo(path, e, defaults);
   }
 
   // attribute values over several lines (keyframes) on one
@@ -112,27 +113,37 @@ class Translator {
     }
   }
 
-  // MuJoCo 3's position servo with kv (on the element or its class): a general actuator of gain kp and bias
-  // [0, -kp, -kv]; in a default, kv is dropped once its actuators are rewritten
-  void position_kv(const std::string& path, XMLElement* e, const Defaults& defaults) {
+  // MuJoCo 3's position servo with kv or dampratio (on the element, else from its class): a general actuator of
+  // gain kp and bias [0, -kp, -kv], or [0, -kp, dampratio] whose kv load_mujoco_model sets after compiling (out_
+  // .dampratio); in a default, kv and dampratio are dropped once its actuators are rewritten
+  void position_servo(const std::string& path, XMLElement* e, const Defaults& defaults) {
     const bool in_default = e->Parent() && std::strcmp(e->Parent()->ToElement()->Name(), "default") == 0;
     if (in_default) {
-      if (e->Attribute("kv")) defaults_with_kv_.push_back(e);  // dropped once the file's actuators are rewritten
+      if (e->Attribute("kv") || e->Attribute("dampratio")) defaults_with_damping_.push_back(e);
       return;
     }
     const char* cls = e->Attribute("class");
-    const char* kv = e->Attribute("kv") ? e->Attribute("kv") : defaults.find(cls, "position", "kv");
-    if (!kv) return;
+    const char* kv = e->Attribute("kv");
+    const char* ratio = kv ? nullptr : e->Attribute("dampratio");
+    if (!kv && !ratio) kv = defaults.find(cls, "position", "kv");
+    if (!kv && !ratio) ratio = defaults.find(cls, "position", "dampratio");
+    if (!kv && !ratio) return;
     const char* kp_text = e->Attribute("kp") ? e->Attribute("kp") : defaults.find(cls, "position", "kp");
     const std::string kp = kp_text ? kp_text : "1";
     e->SetName("general");
-    e->DeleteAttribute("kp");
-    e->DeleteAttribute("kv");
+    for (const char* a : {"kp", "kv", "dampratio"}) e->DeleteAttribute(a);
     e->SetAttribute("gaintype", "fixed");
     e->SetAttribute("biastype", "affine");
     e->SetAttribute("gainprm", kp.c_str());
-    e->SetAttribute("biasprm", ("0 -" + kp + " -" + std::string(kv)).c_str());
-    note(path, e, "position kp=" + kp + " kv=" + kv + " -> general gainprm, biasprm");
+    if (kv) {
+      e->SetAttribute("biasprm", ("0 -" + kp + " -" + std::string(kv)).c_str());
+      note(path, e, "position kp=" + kp + " kv=" + kv + " -> general gainprm, biasprm");
+    } else {
+      e->SetAttribute("biasprm", ("0 -" + kp + " " + std::string(ratio)).c_str());
+      out_.dampratio = true;
+      note(path, e,
+           "position kp=" + kp + " dampratio=" + ratio + " -> general, kv from the inertia at qpos0 (MuJoCo 3's rule)");
+    }
   }
 
   // MuJoCo 3 limits a joint or actuator that has a range (autolimits="true" is its default)
@@ -164,12 +175,29 @@ class Translator {
   }
 
   TranslatedMjcf& out_;
-  std::vector<XMLElement*> defaults_with_kv_;
+  std::vector<XMLElement*> defaults_with_damping_;
   std::string main_dir_;
   bool has_autolimits_ = false;
 };
 
 }  // namespace
+
+void set_dampratio(mjModel* m) {
+  const std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m), mj_deleteData);
+  mju_copy(d->qpos, m->qpos0, m->nq);
+  mj_fwdPosition(m, d.get());
+  for (int u = 0; u < m->nu; ++u) {
+    const mjtNum kp = m->actuator_gainprm[mjNGAIN * u];
+    mjtNum* bias = m->actuator_biasprm + mjNBIAS * u;
+    if (kp != -bias[1] || bias[2] <= 0) continue;
+    mjtNum mass = 0;
+    for (int j = 0; j < m->nv; ++j) {
+      const mjtNum moment = d->actuator_moment[u * m->nv + j];
+      if (moment * moment > mjMINVAL) mass += d->qM[m->dof_Madr[j]] / (moment * moment);
+    }
+    bias[2] = -2 * bias[2] * std::sqrt(kp * mass);
+  }
+}
 
 TranslatedMjcf translate_mjcf(const std::string& path) {
   TranslatedMjcf out;

@@ -16,7 +16,14 @@ namespace novaphy {
 struct TranslatedMjcf {
   std::unique_ptr<mjVFS, void (*)(mjVFS*)> vfs{nullptr, nullptr};  // the translated files, by base name
   std::vector<std::string> translations;                           // what was rewritten, one line each
+  // a position servo's dampratio is carried as a positive biasprm[2]: set_dampratio turns it into its kv
+  bool dampratio = false;
 };
+
+// MuJoCo 3's damping of a position servo given by a ratio (gain kp = -biasprm[1], biasprm[2] > 0 the ratio):
+// kv = 2 ratio sqrt(kp m), m the inertia its transmission moves at qpos0 (each dof's diagonal of the mass
+// matrix over its moment squared, summed), written as biasprm[2] = -kv
+void set_dampratio(mjModel* m);
 
 // reads `path` (MJCF) and its includes and translates them; throws Error for a MuJoCo >= 3 attribute without a
 // translation. A file that is not well-formed XML gives no file system (vfs null): MuJoCo's parser, reading the

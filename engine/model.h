@@ -14,7 +14,7 @@ enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
 
 // the precision the batched kernels step a model in (State, Control and Model arrays stay double;
 // with Float32 the stepped state is rounded to float each step)
-enum class EqualityType : int { Connect = 0, JointCoupling = 1 };
+enum class EqualityType : int { Connect = 0, JointCoupling = 1, Weld = 2 };
 
 enum class Precision : int { Float64 = 0, Float32 = 1 };
 const char* precision_name(Precision precision);
@@ -36,7 +36,9 @@ const char* shape_type_name(ShapeType type);
 // equality_data[0..3) of body equality_object[0] (its frame) on the point equality_data[3..6) of body
 // equality_object[1] (-1: the world frame); one of type JointCoupling keeps q1 - q1_0 = a0 + a1 x + a2 x^2 +
 // a3 x^3 + a4 x^4, x = q2 - q2_0, for joints q1, q2 (Revolute or Prismatic) of equality_object (joint 2 -1:
-// x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]
+// x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]; one of type Weld keeps, as a connect,
+// equality_data[0..3) on [3..6) and body 2's orientation in body 1's frame at the quaternion equality_data[6..10)
+// ([x, y, z, w]; body 1 -1: the world)
 #define NOVAPHY_MODEL_FIELDS(X)                            \
   X(Scalar, body_mass, body_count, 1)                      \
   X(Scalar, body_com, body_count, 3)                       \
@@ -84,7 +86,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, tendon_limit_upper, tendon_count, 1)           \
   X(int, equality_type, equality_count, 1)                 \
   X(int, equality_object, equality_count, 2)               \
-  X(Scalar, equality_data, equality_count, 7)              \
+  X(Scalar, equality_data, equality_count, 10)             \
   X(int, actuator_joint, actuator_count, 1)                \
   X(int, actuator_tendon, actuator_count, 1)               \
   X(Scalar, actuator_gear, actuator_count, 1)              \

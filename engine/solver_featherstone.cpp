@@ -186,7 +186,7 @@ void SolverFeatherstone::mark_constrained() {
   for (int e = 0; e < model_.equality_count; ++e) {
     const int* object = &model_.equality_object[2 * e];
     for (int k = 0; k < 2; ++k) {
-      if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Connect)
+      if (static_cast<EqualityType>(model_.equality_type[e]) != EqualityType::JointCoupling)
         mark_body(object[k]);
       else if (object[k] >= 0)
         mark_dof(model_.joint_qd_start[object[k]]);

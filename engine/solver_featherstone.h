@@ -59,7 +59,7 @@ struct SolverCounts {
   X(std::uint8_t, affine_run, n.runs, "1 where an actuator of the run's dofs has a position or velocity term")      \
   X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")          \
   X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")      \
-  X(Scalar, equality_impulse, 3 * n.equalities, "the last step's equality impulses, the warm starts of their rows") \
+  X(Scalar, equality_impulse, 6 * n.equalities, "the last step's equality impulses, the warm starts of their rows") \
   X(Scalar, tendon_impulse, 2 * n.tendons, "the last step's tendon-limit impulses, the warm starts of their rows")  \
   X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                      \
   X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                          \

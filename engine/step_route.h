@@ -70,7 +70,7 @@ struct StepContext {
   Scalar* q_next = nullptr;            // [coord] coordinates after the step, likewise
   Scalar* limit_impulse = nullptr;     // [limit cell] warm starts of limit rows
   Scalar* friction_impulse = nullptr;  // [dof] warm starts of friction-loss rows
-  Scalar* equality_impulse = nullptr;  // [equality][3] warm starts of equality rows
+  Scalar* equality_impulse = nullptr;  // [equality][6] warm starts of equality rows
   Scalar* tendon_impulse = nullptr;    // [tendon][2] warm starts of tendon-limit rows
   std::uint8_t* diverged = nullptr;    // [articulation]
   int* factor_failure = nullptr;       // [articulation] dof whose pivot failed, else -1
@@ -105,9 +105,10 @@ class StepRoute {
   virtual void run(int unit, Stage first, Stage last, const StepContext& step) = 0;
 
   // for the islands' rows, after Dynamics: x = M^-1 x with articulation a's factor, and J += sign *
-  // (the row of d . the velocity of the point p riding on `link`) over a's dofs
+  // (the row of d . the velocity of the point p riding on `link`, or with p null of d . the link's angular
+  // velocity) over a's dofs
   virtual void solve_mass(int a, Scalar* x) = 0;
-  virtual void point_jacobian(int a, int link, const Vec3& p, const Vec3& d, Scalar sign, Scalar* J) const = 0;
+  virtual void point_jacobian(int a, int link, const Vec3* p, const Vec3& d, Scalar sign, Scalar* J) const = 0;
 
   // bytes held
   virtual std::size_t bytes() const = 0;

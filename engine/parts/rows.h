@@ -98,6 +98,14 @@ inline void point_velocity(const V* s, const V* p, V* u) {
   u[2] = s[5] + s[0] * p[1] - s[1] * p[0];
 }
 
+// d . (the velocity of the point p moved by the motion s), or with p null d . (its angular velocity): a
+// row's Jacobian entry for the dof of motion s (the islands' rows, one double at a time)
+inline Scalar motion_along(const Scalar* s, const Scalar* p, const Scalar* d) {
+  Scalar u[3] = {s[0], s[1], s[2]};
+  if (p) point_velocity(s, p, u);
+  return d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
+}
+
 // the normal row's target: push the penetration beyond the slop out at erp / dt, let a gap close in one
 // step; a contact that closes within this step faster than the restitution threshold bounces at
 // -restitution times its approach speed (v_approach: J qd of the normal row at the step's start)

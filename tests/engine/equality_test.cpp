@@ -52,7 +52,7 @@ std::string four_bar(const std::string& base) {
 Scalar connect_gap(const Model& model, const State& state, int e) {
   auto anchor = [&](int k) {
     const int b = model.equality_object[2 * e + k];
-    const Vec3 a(&model.equality_data[7 * e + 3 * k]);
+    const Vec3 a(&model.equality_data[10 * e + 3 * k]);
     return b < 0 ? a : Transform::from_array(&state.body_q[7 * b]).apply(a);
   };
   return (anchor(1) - anchor(0)).norm();
@@ -116,6 +116,63 @@ TEST(Equalities, ACassieLikeLoopOnAFreeBaseStaysClosed) {
     EXPECT_LT(connect_gap(model, s, 0), 1e-3) << (blocks ? "blocks" : "dense");
     EXPECT_LT(s.joint_q[2], -5);  // the base fell freely for 2 s (z from 1 m)
   }
+  std::filesystem::remove(path);
+}
+
+// a pendulum driven by a motor, a free box welded to its end (MuJoCo's weld made nearly hard) and a second box
+// welded to the world in the air
+constexpr const char* kWeldedPendulum = R"(
+<mujoco model="welded pendulum">
+  <option gravity="0 0 -9.81" timestep="0.002"/>
+  <worldbody>
+    <body name="arm" pos="0 0 1">
+      <joint name="swing" type="hinge" axis="0 1 0" damping="0.1"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02" mass="0.5"/>
+    </body>
+    <body name="box" pos="0.42 0 0.98" euler="0 20 10"><freejoint/>
+      <geom type="box" size="0.05 0.03 0.02" mass="0.4"/></body>
+    <body name="hung" pos="1 0 2"><freejoint/><geom type="box" size="0.05 0.05 0.05" mass="1"/></body>
+  </worldbody>
+  <equality>
+    <weld name="grip" body1="arm" body2="box" anchor="0.02 0 0" solref="0.004 1" solimp="0.99 0.999 0.001"/>
+    <weld name="hook" body1="hung"/>
+  </equality>
+  <actuator><motor name="drive" joint="swing"/></actuator>
+</mujoco>)";
+
+TEST(Equalities, AWeldHoldsABoxToAPendulumAsMujocosAndAnotherInTheAir) {
+  const std::string path = test::write_temp_file("welded_pendulum.xml", kWeldedPendulum);
+  ModelBuilder builder;
+  ASSERT_TRUE(builder.add_mjcf(path).empty());
+  const Model model = builder.finalize();
+  ASSERT_EQ(model.equality_count, 2);
+  Control control = model.control();
+  control.actuator_ctrl[0] = 0.8;
+  mjModel* m = load_mujoco_model(path);
+  mjData* d = mj_makeData(m);
+  d->ctrl[0] = 0.8;
+  for (int k = 0; k < 500; ++k) mj_step(m, d);
+  const State start = model.state();
+  auto relative = [&](const State& s, int a, int b) {
+    return Transform::from_array(&s.body_q[7 * a]).inverse() * Transform::from_array(&s.body_q[7 * b]);
+  };
+  const int arm = 0, box = 1, hung = 2;
+  for (const bool blocks : {true, false}) {
+    SolverFeatherstoneSettings settings = route(blocks);
+    settings.angular_damping = 0;
+    const State s = test::run_steps(model, control, 500, 0.002, settings);
+    const Transform held = relative(start, arm, box), now = relative(s, arm, box);
+    EXPECT_LT((now.p - held.p).norm(), 1e-3) << (blocks ? "blocks" : "dense");
+    EXPECT_LT(held.q.angularDistance(now.q), 1e-3);
+    EXPECT_GT(std::abs(d->qpos[0]), 0.3);
+    EXPECT_NEAR(s.joint_q[0], d->qpos[0], 0.005);  // the swing as MuJoCo's, box and all
+    const Transform hung0 = Transform::from_array(&start.body_q[7 * hung]);
+    const Transform hung1 = Transform::from_array(&s.body_q[7 * hung]);
+    EXPECT_LT((hung1.p - hung0.p).norm(), 1e-3);  // it did not fall
+    EXPECT_LT(hung0.q.angularDistance(hung1.q), 1e-3);
+  }
+  mj_deleteData(d);
+  mj_deleteModel(m);
   std::filesystem::remove(path);
 }
 

@@ -94,7 +94,7 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
     </body>
   </worldbody>
   <tendon><spatial name="coupling"><site site="top"/><site site="bottom"/></spatial></tendon>
-  <equality><weld name="lock" body1="b"/></equality>
+  <equality><tendon name="lock" tendon1="coupling"/></equality>
   <sensor><jointpos joint="ja"/></sensor>
   <actuator><position name="servo" joint="ja" kp="10"/><motor name="spin" joint="jb" gear="1 0 0"/></actuator>
 </mujoco>)");

@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
+#include "engine/dynamics.h"
 #include "engine/mjcf_import.h"
 #include "test_support.h"
 #include "test_support_errors.h"
@@ -68,14 +70,44 @@ TEST(MjcfTranslate, MujocoThreeSyntaxLoadsAsMujocoThreeMeansIt) {
   std::filesystem::remove(main);
 }
 
-TEST(MjcfTranslate, AnAttributeWithoutATranslationIsNamedWithItsFileAndLine) {
+TEST(MjcfTranslate, ADampingRatioGivesMujocoThreesKvFromTheInertiaAtQpos0) {
+  // kv = 2 dampratio sqrt(kp m), m the joint's diagonal of the mass matrix at qpos0 (armature included) over
+  // the gear squared: NovaPhy's own mass matrix at the initial coordinates is the oracle
   const std::string path = test::write_temp_file("three_dampratio.xml", R"(<mujoco>
-  <worldbody><body><joint name="j" type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
-  <actuator><position joint="j" kp="10" dampratio="1"/></actuator>
+  <default><default class="critical"><position kp="30" dampratio="1"/></default></default>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" armature="0.02"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+      <body name="fore" pos="0.3 0 0">
+        <joint name="elbow" type="hinge" axis="0 1 0" ref="0.4"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="0.5"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position joint="shoulder" kp="10" dampratio="0.5" gear="2"/>
+    <position joint="elbow" class="critical"/>
+  </actuator>
+</mujoco>)");
+  ModelBuilder builder;
+  ASSERT_TRUE(builder.add_mjcf(path).empty());
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.joint_q0[1], 0.4 * M_PI / 180);  // the model starts at MuJoCo's qpos0: ref, in degrees
+  const MatX H = eval_mass_matrix(model, model.state());
+  EXPECT_NEAR(model.actuator_bias[2], -2 * 0.5 * std::sqrt(10 * H(0, 0) / 4), 1e-12);
+  EXPECT_NEAR(model.actuator_bias[5], -2 * 1.0 * std::sqrt(30 * H(1, 1)), 1e-12);
+  EXPECT_EQ(model.actuator_bias[4], -30);
+  std::filesystem::remove(path);
+}
+
+TEST(MjcfTranslate, AnAttributeWithoutATranslationIsNamedWithItsFileAndLine) {
+  const std::string path = test::write_temp_file("three_gravcomp.xml", R"(<mujoco>
+  <worldbody><body gravcomp="1"><joint name="j" type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
 </mujoco>)");
   ModelBuilder builder;
   EXPECT_NOVAPHY_ERROR(builder.add_mjcf(path),
-                       "three_dampratio.xml line 3: <position>: MuJoCo 3's attribute 'dampratio' has no translation");
+                       "three_gravcomp.xml line 2: <body>: MuJoCo 3's attribute 'gravcomp' has no translation");
   std::filesystem::remove(path);
 }
 

@@ -326,3 +326,19 @@ def test_tendons_and_equalities_from_python():
     assert state.joint_q[1] == pytest.approx(state.joint_q[0], abs=1e-5)
     with pytest.raises(ValueError, match="tendon 1: joint index 5 out of range"):
         builder.add_tendon([5], [1.0])
+
+
+def test_a_weld_from_python_holds_a_body_in_the_air():
+    builder = novaphy.ModelBuilder()
+    body = builder.add_body(novaphy.RigidBody.from_box(1.0, [0.1, 0.1, 0.1]), xform=novaphy.Transform([0.0, 2.0, 0.0]))
+    builder.add_weld(body, -1, name="hook", anchor=[0.1, 0.0, 0.0])
+    model = builder.finalize()
+    assert model.equality_count == 1 and model.equality_name == ["hook"]
+    state = model.state()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    contacts = novaphy.CollisionPipeline(model).contacts()
+    for _ in range(500):
+        solver.step(state, state, model.control(), contacts, 0.002)
+    assert np.allclose(state.body_q[body][:3], [0.0, 2.0, 0.0], atol=1e-3)
+    with pytest.raises(ValueError, match=r"equality 1 \('again'\) \(weld\): welds body 0 to itself"):
+        builder.add_weld(body, body, name="again")
