@@ -406,7 +406,12 @@ mjModel* load_mujoco_model(const std::string& path) {
   const TranslatedMjcf translated = urdf ? TranslatedMjcf{} : translate_mjcf(path);
   mjModel* m = mj_loadXML(path.c_str(), translated.vfs.get(), error, sizeof(error));
   if (m == nullptr) fail("cannot load '", path, "': ", error);
-  if (translated.dampratio) set_dampratio(m);
+  try {
+    apply_translation(m, translated);
+  } catch (const Error& e) {
+    mj_deleteModel(m);
+    fail("cannot load '", path, "': ", e.what());
+  }
   return m;
 }
 

@@ -2,9 +2,11 @@
 
 #include <tinyxml2.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <map>
 #include <sstream>
 
@@ -16,12 +18,12 @@ namespace {
 
 using tinyxml2::XMLDocument;
 using tinyxml2::XMLElement;
+using tinyxml2::XMLNode;
 
 // MuJoCo >= 3 attributes with no translation here: element, attribute
-constexpr const char* kUntranslated[][2] = {{"position", "inheritrange"},    {"position", "timeconst"},
-                                            {"intvelocity", "inheritrange"}, {"joint", "actuatorfrcrange"},
-                                            {"joint", "actuatorgravcomp"},   {"body", "gravcomp"},
-                                            {"general", "actearly"},         {"compiler", "alignfree"}};
+constexpr const char* kUntranslated[][2] = {{"position", "timeconst"},     {"intvelocity", "inheritrange"},
+                                            {"joint", "actuatorgravcomp"}, {"body", "gravcomp"},
+                                            {"general", "actearly"},       {"compiler", "alignfree"}};
 
 std::string where(const std::string& file, const XMLElement* e) {
   return file + " line " + std::to_string(e->GetLineNum()) + ": <" + e->Name() + ">";
@@ -72,6 +74,8 @@ class Translator {
     for (XMLElement* e : defaults_with_damping_)
       for (const char* a : {"kv", "dampratio"}) e->DeleteAttribute(a);
     defaults_with_damping_.clear();
+    for (const auto& [e, a] : strip_) e->DeleteAttribute(a);
+    strip_.clear();
     if (main && !has_autolimits_) autolimits(root, path);
     std::vector<std::string> includes;
     for_each_element(root, [&](XMLElement* e) {
@@ -95,7 +99,45 @@ class Translator {
       note(path, e, "integrator=\"implicitfast\" -> \"implicit\"");
     }
     whitespace(path, e);
-    if (std::strcmp(e->Name(), "position") == 0) position_servo(path, e, defaults);
+    if (std::strcmp(e->Name(), "joint") == 0)
+      after_compiling(path, e, defaults, {"actuatorfrcrange", "actuatorfrclimited"}, out_.joint_force_range);
+    if (std::strcmp(e->Name(), "position") == 0) {
+      after_compiling(path, e, defaults, {"inheritrange"}, out_.inherit_range);
+      position_servo(path, e, defaults);
+    }
+  }
+
+  // MuJoCo 3 attributes of a joint or actuator (on it or from its class: its own, else an ancestor's
+  // childclass) that load_mujoco_model applies to the compiled model (by the element's name): taken out of
+  // the file, their values (the first attribute's numbers, or nothing where the second says "false") kept in
+  // `to`; in a default they are dropped once the file is read
+  void after_compiling(const std::string& path, XMLElement* e, const Defaults& defaults,
+                       std::initializer_list<const char*> attributes,
+                       std::vector<std::pair<std::string, std::vector<double>>>& to) {
+    const bool in_default = e->Parent() && std::strcmp(e->Parent()->ToElement()->Name(), "default") == 0;
+    const char* first = *attributes.begin();
+    if (in_default) {
+      for (const char* a : attributes)
+        if (e->Attribute(a)) strip_.push_back({e, a});
+      return;
+    }
+    const char* cls = e->Attribute("class");
+    for (const XMLNode* p = e->Parent(); !cls && p && p->ToElement(); p = p->Parent())
+      cls = p->ToElement()->Attribute("childclass");
+    auto value = [&](const char* a) { return e->Attribute(a) ? e->Attribute(a) : defaults.find(cls, e->Name(), a); };
+    const char* numbers = value(first);
+    const bool off = attributes.size() > 1 && value(attributes.begin()[1]) &&
+                     std::strcmp(value(attributes.begin()[1]), "false") == 0;
+    for (const char* a : attributes) e->DeleteAttribute(a);
+    if (!numbers || off) return;
+    if (!e->Attribute("name"))
+      fail(where(path, e), ": MuJoCo 3's '", first, "' is applied after compiling, by name: name the <", e->Name(),
+           ">");
+    std::istringstream words(numbers);
+    std::vector<double> x;
+    for (double v; words >> v;) x.push_back(v);
+    to.push_back({e->Attribute("name"), x});
+    note(path, e, std::string(first) + "=\"" + numbers + "\" -> applied to the compiled model");
   }
 
   // attribute values over several lines (keyframes) on one
@@ -176,11 +218,53 @@ class Translator {
 
   TranslatedMjcf& out_;
   std::vector<XMLElement*> defaults_with_damping_;
+  std::vector<std::pair<XMLElement*, const char*>> strip_;  // attributes of defaults dropped after the file
   std::string main_dir_;
   bool has_autolimits_ = false;
 };
 
 }  // namespace
+
+void apply_translation(mjModel* m, const TranslatedMjcf& translated) {
+  if (translated.dampratio) set_dampratio(m);
+  auto id = [&](mjtObj type, const std::string& name, const char* what) {
+    const int i = mj_name2id(m, type, name.c_str());
+    if (i < 0) fail("MuJoCo 3's ", what, " of '", name, "': no such element in the compiled model");
+    return i;
+  };
+  // a joint's actuatorfrcrange: the force range of the one actuator on it, over its gear
+  for (const auto& [name, range] : translated.joint_force_range) {
+    const int j = id(mjOBJ_JOINT, name, "actuatorfrcrange");
+    if (range.size() != 2) fail("joint '", name, "': actuatorfrcrange needs two numbers");
+    std::vector<int> on;
+    for (int u = 0; u < m->nu; ++u)
+      if (m->actuator_trntype[u] == mjTRN_JOINT && m->actuator_trnid[2 * u] == j) on.push_back(u);
+    if (on.size() > 1)
+      fail("joint '", name, "': actuatorfrcrange with ", on.size(),
+           " actuators on it has no MuJoCo 2.2.2 equivalent (one actuator: its force range)");
+    if (on.empty() || m->actuator_gear[6 * on[0]] == 0) continue;
+    const int u = on[0];
+    const mjtNum gear = m->actuator_gear[6 * u], a = range[0] / gear, b = range[1] / gear;
+    mjtNum* limit = m->actuator_forcerange + 2 * u;
+    const bool limited = m->actuator_forcelimited[u];
+    limit[0] = limited ? std::max(limit[0], std::min(a, b)) : std::min(a, b);
+    limit[1] = limited ? std::min(limit[1], std::max(a, b)) : std::max(a, b);
+    m->actuator_forcelimited[u] = 1;
+  }
+  // a position servo's inheritrange: its control range the target's range about its middle, scaled
+  for (const auto& [name, factor] : translated.inherit_range) {
+    const int u = id(mjOBJ_ACTUATOR, name, "inheritrange"), target = m->actuator_trnid[2 * u];
+    const bool joint = m->actuator_trntype[u] == mjTRN_JOINT, tendon = m->actuator_trntype[u] == mjTRN_TENDON;
+    const mjtNum* range = joint ? m->jnt_range + 2 * target : tendon ? m->tendon_range + 2 * target : nullptr;
+    if (!range || !(joint ? m->jnt_limited[target] : m->tendon_limited[target]))
+      fail("actuator '", name, "': inheritrange needs a joint or tendon with a range");
+    if (factor.empty() || factor[0] <= 0) continue;
+    const mjtNum middle = (range[0] + range[1]) / 2, half = factor[0] * (range[1] - range[0]) / 2;
+    m->actuator_ctrlrange[2 * u] = middle - half;
+    m->actuator_ctrlrange[2 * u + 1] = middle + half;
+    m->actuator_ctrllimited[u] = 1;
+  }
+}
 
 void set_dampratio(mjModel* m) {
   const std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m), mj_deleteData);

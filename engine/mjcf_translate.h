@@ -18,7 +18,15 @@ struct TranslatedMjcf {
   std::vector<std::string> translations;                           // what was rewritten, one line each
   // a position servo's dampratio is carried as a positive biasprm[2]: set_dampratio turns it into its kv
   bool dampratio = false;
+  // by name: joints' actuatorfrcrange [lower, upper] and position servos' inheritrange [factor], taken out
+  std::vector<std::pair<std::string, std::vector<double>>> joint_force_range, inherit_range;
 };
+
+// the translated attributes that need the compiled model, applied to it (after mj_loadXML): set_dampratio;
+// a joint's actuatorfrcrange as the force range of its one actuator over the gear (intersected with the
+// actuator's own; Error for several actuators); a servo's inheritrange as its control range, the joint's or
+// tendon's range scaled about its middle (Error without a range)
+void apply_translation(mjModel* m, const TranslatedMjcf& translated);
 
 // MuJoCo 3's damping of a position servo given by a ratio (gain kp = -biasprm[1], biasprm[2] > 0 the ratio):
 // kv = 2 ratio sqrt(kp m), m the inertia its transmission moves at qpos0 (each dof's diagonal of the mass

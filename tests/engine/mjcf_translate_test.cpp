@@ -101,6 +101,47 @@ TEST(MjcfTranslate, ADampingRatioGivesMujocoThreesKvFromTheInertiaAtQpos0) {
   std::filesystem::remove(path);
 }
 
+TEST(MjcfTranslate, AJointsActuatorForceRangeAndAServosInheritedRange) {
+  // actuatorfrcrange from a class through a body's childclass, over the gear of the joint's one actuator;
+  // inheritrange scaling the joint's range about its middle; a joint with two actuators cannot be translated
+  auto file = [](const std::string& second_actuator) {
+    return R"(<mujoco>
+  <compiler angle="radian"/>
+  <default><default class="leg"><joint actuatorfrcrange="-6 4" range="-0.5 1.5"/></default></default>
+  <worldbody>
+    <body name="hip" pos="0 0 1" childclass="leg">
+      <joint name="swing" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+      <body name="shin" pos="0.3 0 0">
+        <joint name="knee" type="hinge" axis="0 1 0" actuatorfrclimited="false"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="0.5"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="swing_servo" joint="swing" kp="10" gear="2" inheritrange="0.5" forcelimited="true"
+              forcerange="-1 5"/>
+    <position name="knee_servo" joint="knee" kp="10"/>)" +
+           second_actuator + R"(
+  </actuator>
+</mujoco>)";
+  };
+  const std::string path = test::write_temp_file("three_ranges.xml", file(""));
+  ModelBuilder builder;
+  ASSERT_TRUE(builder.add_mjcf(path).empty());
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.actuator_force_lower[0], -1);         // its own range is narrower below
+  EXPECT_EQ(model.actuator_force_upper[0], 2);          // 4 / gear
+  EXPECT_NEAR(model.actuator_ctrl_lower[0], 0, 1e-15);  // 0.5 -+ 0.5 * 1
+  EXPECT_NEAR(model.actuator_ctrl_upper[0], 1, 1e-15);
+  EXPECT_TRUE(std::isinf(model.actuator_force_upper[1]));  // actuatorfrclimited="false"
+  const std::string two = test::write_temp_file("three_two.xml", file(R"(<motor joint="swing"/>)"));
+  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(two),
+                       "joint 'swing': actuatorfrcrange with 2 actuators on it has no MuJoCo 2.2.2 equivalent");
+  std::filesystem::remove(path);
+  std::filesystem::remove(two);
+}
+
 TEST(MjcfTranslate, AnAttributeWithoutATranslationIsNamedWithItsFileAndLine) {
   const std::string path = test::write_temp_file("three_gravcomp.xml", R"(<mujoco>
   <worldbody><body gravcomp="1"><joint name="j" type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
