@@ -214,6 +214,8 @@ void bind_builder(py::module_& m) {
            "Equality (MuJoCo's joint): q1 - q1_0 = poly[0] + poly[1] x + ... + poly[4] x^4, x = q2 - q2_0, for "
            "Revolute/Prismatic joints (joint2 -1: x = 0).")
       .def_property_readonly("equality_count", &ModelBuilder::equality_count)
+      .def_property("friction_rule", &ModelBuilder::friction_rule, &ModelBuilder::set_friction_rule,
+                    "How contacts combine their shapes' friction; add_mjcf sets Mujoco.")
       .def_property("collision_filter", &ModelBuilder::collision_filter, &ModelBuilder::set_collision_filter,
                     "The rule shape collision groups and masks filter pairs by; add_mjcf sets Mujoco.")
       .def("exclude_shapes", &ModelBuilder::exclude_shapes, py::arg("a"), py::arg("b"), "Shapes a and b never collide.")

@@ -114,6 +114,12 @@ void bind_model(py::module_& m) {
       .value("GroupAndMask", CollisionFilter::GroupAndMask)
       .value("Mujoco", CollisionFilter::Mujoco);
 
+  py::enum_<FrictionRule>(m, "FrictionRule",
+                          "How a contact combines its shapes' friction: GeometricMean sqrt(mu_a mu_b); Mujoco: the "
+                          "shape of higher priority decides, else the larger mu; condim 1: frictionless.")
+      .value("GeometricMean", FrictionRule::GeometricMean)
+      .value("Mujoco", FrictionRule::Mujoco);
+
   py::enum_<ShapeType>(m, "ShapeType", "Collision shape types.")
       .value("Plane", ShapeType::Plane)
       .value("Sphere", ShapeType::Sphere)
@@ -182,6 +188,7 @@ void bind_model(py::module_& m) {
       .def_readonly("tendon_name", &Model::tendon_name)
       .def_readonly("equality_name", &Model::equality_name)
       .def_readonly("collision_filter", &Model::collision_filter, "The rule shape_collision_group/_mask filter by.")
+      .def_readonly("friction_rule", &Model::friction_rule, "How contacts combine their shapes' friction.")
       .def_readonly("keyframes", &Model::keyframe_name, "The keyframes' names (rows of keyframe_q, _qd, _ctrl).")
       .def(
           "state",

@@ -177,6 +177,8 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const S
   if (type != ShapeType::Plane)
     for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
   check_nonnegative(item, "mu", options.mu);
+  if (options.condim != 1 && options.condim != 3 && options.condim != 4 && options.condim != 6)
+    fail(item, ": condim must be 1, 3, 4 or 6, got ", options.condim);
   if (!(options.restitution >= 0 && options.restitution <= 1))
     fail(item, ": restitution must be in [0, 1], got ", options.restitution);
   ShapeRecord shape{type, body, scale, options};
@@ -356,6 +358,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   }
   for (const auto& [a, b] : other.excluded_) excluded_.push_back({a + shape0, b + shape0});
   if (other.collision_filter_ == CollisionFilter::Mujoco) collision_filter_ = CollisionFilter::Mujoco;
+  if (other.friction_rule_ == FrictionRule::Mujoco) friction_rule_ = FrictionRule::Mujoco;
   for (KeyframeRecord key : other.keyframes_) {
     key.joint_begin += joint0;
     key.joint_end += joint0;
@@ -498,6 +501,8 @@ void ModelBuilder::lay_out_shapes(Model& model) const {
     model.shape_restitution[s] = shape.options.restitution;
     model.shape_collision_group[s] = shape.options.collision_group;
     model.shape_collision_mask[s] = shape.options.collision_mask;
+    model.shape_priority[s] = shape.options.priority;
+    model.shape_condim[s] = shape.options.condim;
   }
 }
 
@@ -542,6 +547,7 @@ Model ModelBuilder::finalize() const {
   lay_out_actuators(model);
   lay_out_keyframes(model);
   model.collision_filter = collision_filter_;
+  model.friction_rule = friction_rule_;
   model.exclude_count = static_cast<int>(excluded_.size());
   model.exclude_shape.clear();
   for (const auto& [a, b] : excluded_) model.exclude_shape.insert(model.exclude_shape.end(), {a, b});

@@ -44,6 +44,8 @@ struct ShapeOptions {
   Scalar restitution = 0;
   int collision_group = 1;
   int collision_mask = -1;
+  int priority = 0;  // FrictionRule::Mujoco: the shape of higher priority decides a contact's friction and condim
+  int condim = 3;    // 1: frictionless contacts (MuJoCo's condim; 4 and 6 act as 3: no torsional or rolling rows)
 };
 
 // an actuator's parameters (add_actuator); the defaults make a motor of unit gear, unlimited
@@ -157,6 +159,9 @@ class ModelBuilder {
 
   // the rule shape_collision_group and shape_collision_mask filter pairs by (model.h); add_mjcf sets Mujoco
   void set_collision_filter(CollisionFilter filter) { collision_filter_ = filter; }
+  // how contacts combine their shapes' friction (model.h); add_mjcf sets Mujoco
+  void set_friction_rule(FrictionRule rule) { friction_rule_ = rule; }
+  FrictionRule friction_rule() const { return friction_rule_; }
   CollisionFilter collision_filter() const { return collision_filter_; }
   // shapes a and b never collide (MuJoCo's <exclude>, by shape)
   void exclude_shapes(int a, int b);
@@ -275,6 +280,7 @@ class ModelBuilder {
   std::vector<KeyframeRecord> keyframes_;
   std::vector<std::pair<int, int>> excluded_;  // shape pairs
   CollisionFilter collision_filter_ = CollisionFilter::GroupAndMask;
+  FrictionRule friction_rule_ = FrictionRule::GeometricMean;
   int articulation_count_ = 0;
 };
 

@@ -55,6 +55,7 @@ class MjcfImporter {
     builder_.set_gravity(vec3(m_->opt.gravity));
     for (int b = 1; b < m_->nbody; ++b) add_body(b);
     builder_.set_collision_filter(CollisionFilter::Mujoco);
+    builder_.set_friction_rule(FrictionRule::Mujoco);
     geom_shape_.assign(m_->ngeom, -1);
     for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
     add_exclusions();
@@ -206,6 +207,11 @@ class MjcfImporter {
     options.mu = m_->geom_friction[3 * g];
     options.collision_group = m_->geom_contype[g];
     options.collision_mask = m_->geom_conaffinity[g];
+    options.priority = m_->geom_priority[g];
+    options.condim = m_->geom_condim[g];
+    if (options.condim > 3 && (options.collision_group != 0 || options.collision_mask != 0))
+      warn_motion("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "': condim " + std::to_string(options.condim) +
+                  " (torsional and rolling friction) is modelled as condim 3");
     ShapeOptions along_z = options;  // capsules and plane normals: MuJoCo's Z onto NovaPhy's Y
     along_z.xform = G * y_to_z();
     switch (m_->geom_type[g]) {

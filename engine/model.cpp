@@ -25,6 +25,14 @@ const char* collision_filter_name(CollisionFilter filter) {
   return "unknown";
 }
 
+const char* friction_rule_name(FrictionRule rule) {
+  switch (rule) {
+    case FrictionRule::GeometricMean: return "GeometricMean";
+    case FrictionRule::Mujoco: return "Mujoco";
+  }
+  return "unknown";
+}
+
 const char* precision_name(Precision precision) {
   switch (precision) {
     case Precision::Float64: return "float64";

@@ -24,6 +24,12 @@ const char* precision_name(Precision precision);
 // Mujoco (a model that imported MJCF), MuJoCo's contype/conaffinity: (group_a & mask_b) != 0 or
 // (group_b & mask_a) != 0. Either way a shape that can collide with no shape is visual only
 enum class CollisionFilter : int { GroupAndMask = 0, Mujoco = 1 };
+
+// a contact's friction coefficient from its shapes': GeometricMean (the builder's default) sqrt(mu_a mu_b);
+// Mujoco (a model that imported MJCF), MuJoCo's rule: the shape of higher shape_priority decides, else the
+// larger mu; a contact whose condim (the deciding shape's, else the larger) is 1 is frictionless
+enum class FrictionRule : int { GeometricMean = 0, Mujoco = 1 };
+const char* friction_rule_name(FrictionRule rule);
 const char* collision_filter_name(CollisionFilter filter);
 const char* shape_type_name(ShapeType type);
 
@@ -73,6 +79,8 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, shape_restitution, shape_count, 1)             \
   X(int, shape_collision_group, shape_count, 1)            \
   X(int, shape_collision_mask, shape_count, 1)             \
+  X(int, shape_priority, shape_count, 1)                   \
+  X(int, shape_condim, shape_count, 1)                     \
   X(int, shape_world, shape_count, 1)                      \
   X(int, exclude_shape, exclude_count, 2)                  \
   X(int, tendon_start, tendon_count + 1, 1)                \
@@ -153,6 +161,7 @@ struct Model : ModelCounts {
   Vec3 gravity = Vec3(0, -9.81, 0);
   Precision precision = Precision::Float64;
   CollisionFilter collision_filter = CollisionFilter::GroupAndMask;  // exclude_shape: pairs that never collide
+  FrictionRule friction_rule = FrictionRule::GeometricMean;
   NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
 #undef NOVAPHY_DECLARE
   std::vector<std::string> body_name;

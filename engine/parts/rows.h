@@ -70,9 +70,15 @@ inline V friction_loss_bound(const V& frictionloss, const V& dt) {
 
 // ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame
 
-// friction and restitution of a contact between shapes a and b
+// friction and restitution of a contact between shapes a and b (friction by the model's FrictionRule)
 inline Scalar contact_friction(const Model& model, int a, int b) {
-  return std::sqrt(model.shape_mu[a] * model.shape_mu[b]);
+  if (model.friction_rule == FrictionRule::GeometricMean) return std::sqrt(model.shape_mu[a] * model.shape_mu[b]);
+  const int pa = model.shape_priority[a], pb = model.shape_priority[b];
+  const int decides = pa > pb ? a : pb > pa ? b : -1;
+  const int condim =
+      decides >= 0 ? model.shape_condim[decides] : std::max(model.shape_condim[a], model.shape_condim[b]);
+  if (condim == 1) return 0;
+  return decides >= 0 ? model.shape_mu[decides] : std::max(model.shape_mu[a], model.shape_mu[b]);
 }
 inline Scalar contact_restitution(const Model& model, int a, int b) {
   return std::max(model.shape_restitution[a], model.shape_restitution[b]);

@@ -9,6 +9,7 @@
 
 #include "engine/builder.h"
 #include "engine/mjcf_import.h"
+#include "engine/parts/rows.h"
 #include "test_support.h"
 #include "test_support_errors.h"
 
@@ -475,6 +476,70 @@ TEST(CollisionPipelineFiltering, ExcludedShapePairsNeverCollideInEveryWorld) {
     EXPECT_FALSE((x == a && y == b) || (x == b && y == a)) << "contact " << k;
   }
   EXPECT_EQ(contacts.contact_count, 3 * 2);  // a-c and b-c in each world
+}
+
+}  // namespace
+}  // namespace novaphy
+
+namespace novaphy {
+namespace {
+
+TEST(ContactFriction, MujocosRuleMatchesMujocosContactsPairByPair) {
+  // overlapping sphere pairs: equal priorities (the larger friction), a higher priority with the lower friction
+  // (it decides), condim 1 against 3 (the larger: with friction), condim 1 of the higher priority (frictionless);
+  // each contact's friction against MuJoCo 2.2.2's own contact of the same two geoms (friction[0], or 0 where
+  // its dim is 1)
+  const std::string path = test::write_temp_file("friction_pairs.xml", R"(
+<mujoco>
+  <option gravity="0 0 0"/>
+  <worldbody>
+    <body pos="0 0 0"><freejoint/><geom type="sphere" size="0.1" friction="0.3"/></body>
+    <body pos="0.15 0 0"><freejoint/><geom type="sphere" size="0.1" friction="0.9"/></body>
+    <body pos="0 1 0"><freejoint/><geom type="sphere" size="0.1" friction="0.2" priority="1"/></body>
+    <body pos="0.15 1 0"><freejoint/><geom type="sphere" size="0.1" friction="0.7"/></body>
+    <body pos="0 2 0"><freejoint/><geom type="sphere" size="0.1" friction="0.4" condim="1"/></body>
+    <body pos="0.15 2 0"><freejoint/><geom type="sphere" size="0.1" friction="0.5"/></body>
+    <body pos="0 3 0"><freejoint/><geom type="sphere" size="0.1" friction="0.6" condim="1" priority="2"/></body>
+    <body pos="0.15 3 0"><freejoint/><geom type="sphere" size="0.1" friction="0.8" priority="1"/></body>
+  </worldbody>
+</mujoco>)");
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  ASSERT_TRUE(import.warnings.empty());
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.friction_rule, FrictionRule::Mujoco);
+  mjModel* m = load_mujoco_model(path);
+  mjData* d = mj_makeData(m);
+  mj_forward(m, d);
+  ASSERT_EQ(d->ncon, 4);
+  auto shape_of = [&](int geom) {
+    const int body = import.body_map[m->geom_bodyid[geom]];
+    for (int s = 0; s < model.shape_count; ++s)
+      if (model.shape_body[s] == body) return s;
+    return -1;
+  };
+  std::set<Scalar> seen;
+  for (int c = 0; c < d->ncon; ++c) {
+    const mjContact& contact = d->contact[c];
+    const Scalar mujoco = contact.dim == 1 ? 0 : contact.friction[0];
+    EXPECT_EQ(contact_friction(model, shape_of(contact.geom1), shape_of(contact.geom2)), mujoco) << "contact " << c;
+    seen.insert(mujoco);
+  }
+  EXPECT_EQ(seen, (std::set<Scalar>{0, 0.2, 0.5, 0.9}));  // the four cases, each as MuJoCo has it
+  mj_deleteData(d);
+  mj_deleteModel(m);
+  std::filesystem::remove(path);
+  // the builder's default: the geometric mean, and a condim it does not know is an error
+  ModelBuilder own;
+  ShapeOptions quarter, one;
+  quarter.mu = 0.25, one.mu = 1;
+  const int a = own.add_shape_sphere(own.add_body(RigidBody::from_sphere(1, 0.1)), 0.1, quarter);
+  const int b = own.add_shape_sphere(own.add_body(RigidBody::from_sphere(1, 0.1)), 0.1, one);
+  EXPECT_EQ(contact_friction(own.finalize(), a, b), 0.5);
+  ShapeOptions options;
+  options.condim = 2;
+  EXPECT_NOVAPHY_ERROR(own.add_shape_sphere(own.add_body(RigidBody::from_sphere(1, 0.1)), 0.1, options),
+                       "condim must be 1, 3, 4 or 6, got 2");
 }
 
 }  // namespace
