@@ -64,8 +64,11 @@ void def_joint(Class& c, const char* method, JointType type, const char* doc) {
         py::arg("target_ke") = py::none(), py::arg("target_kd") = py::none(), py::arg("name") = "", doc);
 }
 
-ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar restitution, int group, int mask) {
+ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar restitution, int group, int mask,
+                           int priority, int condim) {
   ShapeOptions options;
+  options.priority = priority;
+  options.condim = condim;
   options.xform = xform.value_or(Transform::identity());
   options.mu = mu;
   options.restitution = restitution;
@@ -76,8 +79,9 @@ ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar res
 
 // keyword arguments shared by every add_shape_* and plane
 #define XFORM_KWARG py::kw_only(), py::arg("xform") = py::none()
-#define SHAPE_KWARGS \
-  py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("collision_group") = 1, py::arg("collision_mask") = -1
+#define SHAPE_KWARGS                                                                                                 \
+  py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("collision_group") = 1, py::arg("collision_mask") = -1, \
+  py::arg("priority") = 0, py::arg("condim") = 3
 
 // runs an importer and passes each of its warnings to Python's warnings module
 template <std::vector<std::string> (ModelBuilder::*importer)(const std::string&, const ImportOptions&)>
@@ -238,38 +242,43 @@ void bind_builder(py::module_& m) {
            py::arg("spacing") = Vec3::Zero(), "world_count copies of other, copy i shifted by i * spacing.")
       .def(
           "add_ground_plane",
-          [](ModelBuilder& self, Scalar y, Scalar mu, Scalar restitution, int group, int mask) {
-            return self.add_ground_plane(y, shape_options(std::nullopt, mu, restitution, group, mask));
+          [](ModelBuilder& self, Scalar y, Scalar mu, Scalar restitution, int group, int mask, int priority,
+             int condim) {
+            return self.add_ground_plane(y,
+                                         shape_options(std::nullopt, mu, restitution, group, mask, priority, condim));
           },
           py::arg("y") = 0.0, py::kw_only(), SHAPE_KWARGS, "Static plane y = const with normal +Y.")
       .def(
           "add_plane",
-          [](ModelBuilder& self, const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, int group,
-             int mask) {
-            return self.add_plane(normal, offset, shape_options(std::nullopt, mu, restitution, group, mask));
+          [](ModelBuilder& self, const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, int group, int mask,
+             int priority, int condim) {
+            return self.add_plane(normal, offset,
+                                  shape_options(std::nullopt, mu, restitution, group, mask, priority, condim));
           },
           py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(), SHAPE_KWARGS,
           "Static plane {x : normal . x = offset}.")
       .def(
           "add_shape_box",
           [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution, int group, int mask) {
-            return self.add_shape_box(body, half_extents, shape_options(xform, mu, restitution, group, mask));
+             Scalar restitution, int group, int mask, int priority, int condim) {
+            return self.add_shape_box(body, half_extents,
+                                      shape_options(xform, mu, restitution, group, mask, priority, condim));
           },
           py::arg("body"), py::arg("half_extents"), XFORM_KWARG, SHAPE_KWARGS)
       .def(
           "add_shape_sphere",
           [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu, Scalar restitution,
-             int group, int mask) {
-            return self.add_shape_sphere(body, radius, shape_options(xform, mu, restitution, group, mask));
+             int group, int mask, int priority, int condim) {
+            return self.add_shape_sphere(body, radius,
+                                         shape_options(xform, mu, restitution, group, mask, priority, condim));
           },
           py::arg("body"), py::arg("radius"), XFORM_KWARG, SHAPE_KWARGS)
       .def(
           "add_shape_capsule",
           [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution, int group, int mask) {
+             Scalar restitution, int group, int mask, int priority, int condim) {
             return self.add_shape_capsule(body, radius, half_height,
-                                          shape_options(xform, mu, restitution, group, mask));
+                                          shape_options(xform, mu, restitution, group, mask, priority, condim));
           },
           py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
           "Capsule along the shape frame's local Y axis.")

@@ -342,3 +342,16 @@ def test_a_weld_from_python_holds_a_body_in_the_air():
     assert np.allclose(state.body_q[body][:3], [0.0, 2.0, 0.0], atol=1e-3)
     with pytest.raises(ValueError, match=r"equality 1 \('again'\) \(weld\): welds body 0 to itself"):
         builder.add_weld(body, body, name="again")
+
+
+def test_mujocos_friction_rule_from_python():
+    builder = novaphy.ModelBuilder()
+    builder.friction_rule = novaphy.FrictionRule.Mujoco
+    bodies = [builder.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1)) for _ in range(2)]
+    builder.add_shape_sphere(bodies[0], 0.1, mu=0.2, priority=1, condim=1)
+    builder.add_shape_sphere(bodies[1], 0.1, mu=0.9)
+    model = builder.finalize()
+    assert model.friction_rule == novaphy.FrictionRule.Mujoco
+    assert list(model.shape_priority) == [1, 0] and list(model.shape_condim) == [1, 3]
+    with pytest.raises(ValueError, match="condim must be 1, 3, 4 or 6, got 5"):
+        builder.add_shape_sphere(bodies[1], 0.1, condim=5)

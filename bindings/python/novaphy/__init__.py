@@ -7,6 +7,7 @@ from . import solvers
 from .worlds import world_view
 from ._novaphy import (
     CollisionFilter,
+    FrictionRule,
     CollisionPipeline,
     Contacts,
     Control,
@@ -42,6 +43,7 @@ from ._novaphy import (
 __all__ = [
     "CollisionPipeline",
     "CollisionFilter",
+    "FrictionRule",
     "Contacts",
     "Control",
     "Error",
