@@ -192,13 +192,17 @@ int ModelBuilder::add_actuator(int joint, const ActuatorOptions& options) {
   return add_actuator_of("an actuator", joint, options);
 }
 
-int ModelBuilder::add_actuator_of(const char* kind, int joint, const ActuatorOptions& options) {
-  const std::string item = label("actuator", actuator_count(), options.name);
+void ModelBuilder::check_scalar_joint(const std::string& item, const std::string& needs, int joint) const {
   if (joint < 0 || joint >= joint_count())
     fail(item, ": joint index ", joint, " out of range [0, ", joint_count(), ")");
   const JointType type = joints_[joint].type;
   if (type != JointType::Revolute && type != JointType::Prismatic)
-    fail(item, ": ", kind, " drives a Revolute or Prismatic joint, joint ", joint, " is ", joint_type_name(type));
+    fail(item, ": ", needs, ", joint ", joint, " is ", joint_type_name(type));
+}
+
+int ModelBuilder::add_actuator_of(const char* kind, int joint, const ActuatorOptions& options) {
+  const std::string item = label("actuator", actuator_count(), options.name);
+  check_scalar_joint(item, std::string(kind) + " drives a Revolute or Prismatic joint", joint);
   check_actuator(item, options);
   actuators_.push_back({joint, options});
   return actuator_count() - 1;

@@ -238,6 +238,9 @@ class ModelBuilder {
   void lay_out_keyframes(Model& model) const;
   // add_actuator, its errors naming the kind of actuator ("a motor")
   int add_actuator_of(const char* kind, int joint, const ActuatorOptions& options);
+  // fails (item: ...) unless `joint` is the index of a Revolute or Prismatic joint; `needs` says what needs one
+  // ("a motor drives a Revolute or Prismatic joint")
+  void check_scalar_joint(const std::string& item, const std::string& needs, int joint) const;
 
   Vec3 gravity_;
   Precision precision_ = Precision::Float64;

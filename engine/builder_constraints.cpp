@@ -15,11 +15,7 @@ int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<S
   if (joints.size() != coefs.size())
     fail(item, ": ", joints.size(), " joints but ", coefs.size(), " coefficients (one per joint)");
   for (size_t i = 0; i < joints.size(); ++i) {
-    const int j = joints[i];
-    if (j < 0 || j >= joint_count()) fail(item, ": joint index ", j, " out of range [0, ", joint_count(), ")");
-    const JointType type = joints_[j].type;
-    if (type != JointType::Revolute && type != JointType::Prismatic)
-      fail(item, ": a fixed tendon spans Revolute or Prismatic joints, joint ", j, " is ", joint_type_name(type));
+    check_scalar_joint(item, "a fixed tendon spans Revolute or Prismatic joints", joints[i]);
     check_finite(item, "coefficient", coefs[i]);
   }
   check_nonnegative(item, "stiffness", options.stiffness);
@@ -105,13 +101,8 @@ int ModelBuilder::add_weld(int body1, int body2, const std::string& name, const 
 int ModelBuilder::add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly,
                                      const std::string& name) {
   const std::string item = label("equality", equality_count(), name) + " (joint coupling)";
-  for (const int j : {joint1, joint2}) {
-    if (j == joint2 && j == -1) continue;
-    if (j < 0 || j >= joint_count()) fail(item, ": joint index ", j, " out of range [0, ", joint_count(), ")");
-    const JointType type = joints_[j].type;
-    if (type != JointType::Revolute && type != JointType::Prismatic)
-      fail(item, ": couples Revolute or Prismatic joints, joint ", j, " is ", joint_type_name(type));
-  }
+  for (const int j : {joint1, joint2})
+    if (j != joint2 || j != -1) check_scalar_joint(item, "couples Revolute or Prismatic joints", j);
   if (joint1 == joint2) fail(item, ": couples joint ", joint1, " to itself");
   EqualityRecord e{EqualityType::JointCoupling, {joint1, joint2}, {}, name};
   for (int k = 0; k < 5; ++k) {
@@ -128,8 +119,9 @@ void ModelBuilder::lay_out_equalities(Model& model) const {
     EqualityRecord e = record;
     if (e.type == EqualityType::Connect && std::isnan(e.data[3])) {
       // body2's point that coincides with the anchor at the initial coordinates, in body2's frame
-      auto pose = [&](int b) { return b < 0 ? Transform::identity() : Transform::from_array(&initial.body_q[7 * b]); };
-      const Vec3 p = pose(e.object[1]).inverse().apply(pose(e.object[0]).apply(Vec3(e.data[0], e.data[1], e.data[2])));
+      const Vec3 p = body_pose(initial, e.object[1])
+                         .inverse()
+                         .apply(body_pose(initial, e.object[0]).apply(Vec3(e.data[0], e.data[1], e.data[2])));
       for (int k = 0; k < 3; ++k) e.data[3 + k] = p[k];
     }
     if (e.type == EqualityType::JointCoupling)
@@ -139,8 +131,7 @@ void ModelBuilder::lay_out_equalities(Model& model) const {
     model.equality_object.insert(model.equality_object.end(), {e.object[0], e.object[1]});
     if (e.type == EqualityType::Weld && std::isnan(e.data[6])) {
       // body2's pose in body1's at the initial coordinates
-      auto pose = [&](int b) { return b < 0 ? Transform::identity() : Transform::from_array(&initial.body_q[7 * b]); };
-      const Transform relative = pose(e.object[0]).inverse() * pose(e.object[1]);
+      const Transform relative = body_pose(initial, e.object[0]).inverse() * body_pose(initial, e.object[1]);
       const Vec3 p = relative.apply(Vec3(e.data[3], e.data[4], e.data[5]));
       for (int k = 0; k < 3; ++k) e.data[k] = p[k];
       Eigen::Map<Eigen::Vector4d>(e.data + 6) = relative.q.coeffs();

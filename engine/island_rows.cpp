@@ -165,8 +165,7 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
   // their angular velocities, driving the rotation from body 2's held orientation to its own to zero
   const int b1 = model_.equality_object[2 * e], b2 = model_.equality_object[2 * e + 1];
   const Scalar* data = &model_.equality_data[10 * e];
-  auto pose = [&](int b) { return b < 0 ? Transform::identity() : Transform::from_array(&step.in->body_q[7 * b]); };
-  const Transform X1 = pose(b1), X2 = pose(b2);
+  const Transform X1 = body_pose(*step.in, b1), X2 = body_pose(*step.in, b2);
   const Vec3 p1 = X1.apply(Vec3(data[0], data[1], data[2])), p2 = X2.apply(Vec3(data[3], data[4], data[5]));
   const Vec3 mid = (p1 + p2) / 2;
   Vec3 error[2] = {p2 - p1, Vec3::Zero()};

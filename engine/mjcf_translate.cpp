@@ -71,9 +71,6 @@ class Translator {
     const std::string dir = std::filesystem::path(path).parent_path().string();
     Defaults defaults(root);
     for_each_element(root, [&](XMLElement* e) { element(path, e, defaults); });
-    for (XMLElement* e : defaults_with_damping_)
-      for (const char* a : {"kv", "dampratio"}) e->DeleteAttribute(a);
-    defaults_with_damping_.clear();
     for (const auto& [e, a] : strip_) e->DeleteAttribute(a);
     strip_.clear();
     if (main && !has_autolimits_) autolimits(root, path);
@@ -114,11 +111,9 @@ class Translator {
   void after_compiling(const std::string& path, XMLElement* e, const Defaults& defaults,
                        std::initializer_list<const char*> attributes,
                        std::vector<std::pair<std::string, std::vector<double>>>& to) {
-    const bool in_default = e->Parent() && std::strcmp(e->Parent()->ToElement()->Name(), "default") == 0;
     const char* first = *attributes.begin();
-    if (in_default) {
-      for (const char* a : attributes)
-        if (e->Attribute(a)) strip_.push_back({e, a});
+    if (in_default(e)) {
+      strip_after_file(e, attributes);
       return;
     }
     const char* cls = e->Attribute("class");
@@ -140,6 +135,16 @@ class Translator {
     note(path, e, std::string(first) + "=\"" + numbers + "\" -> applied to the compiled model");
   }
 
+  static bool in_default(const XMLElement* e) {
+    return e->Parent() && e->Parent()->ToElement() && std::strcmp(e->Parent()->ToElement()->Name(), "default") == 0;
+  }
+
+  // a default's attributes, dropped once the file's elements have read them
+  void strip_after_file(XMLElement* e, std::initializer_list<const char*> attributes) {
+    for (const char* a : attributes)
+      if (e->Attribute(a)) strip_.push_back({e, a});
+  }
+
   // attribute values over several lines (keyframes) on one
   void whitespace(const std::string& path, XMLElement* e) {
     for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
@@ -159,9 +164,8 @@ class Translator {
   // gain kp and bias [0, -kp, -kv], or [0, -kp, dampratio] whose kv load_mujoco_model sets after compiling (out_
   // .dampratio); in a default, kv and dampratio are dropped once its actuators are rewritten
   void position_servo(const std::string& path, XMLElement* e, const Defaults& defaults) {
-    const bool in_default = e->Parent() && std::strcmp(e->Parent()->ToElement()->Name(), "default") == 0;
-    if (in_default) {
-      if (e->Attribute("kv") || e->Attribute("dampratio")) defaults_with_damping_.push_back(e);
+    if (in_default(e)) {
+      strip_after_file(e, {"kv", "dampratio"});
       return;
     }
     const char* cls = e->Attribute("class");
@@ -217,7 +221,6 @@ class Translator {
   }
 
   TranslatedMjcf& out_;
-  std::vector<XMLElement*> defaults_with_damping_;
   std::vector<std::pair<XMLElement*, const char*>> strip_;  // attributes of defaults dropped after the file
   std::string main_dir_;
   bool has_autolimits_ = false;

@@ -192,4 +192,9 @@ struct Model : ModelCounts {
   void check(const Control& control) const;
 };
 
+// body b's pose in the state (its frame in the world), the world frame for b = -1
+inline Transform body_pose(const State& state, int b) {
+  return b < 0 ? Transform::identity() : Transform::from_array(&state.body_q[7 * static_cast<size_t>(b)]);
+}
+
 }  // namespace novaphy
