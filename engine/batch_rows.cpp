@@ -40,12 +40,28 @@ int add_row(RowWork<T>& R, RowKind kind, const IntLanes<T>& on, const V<T>& targ
   return r;
 }
 
+// row r's J = sign e_k in the lanes `on` (0 in the others) and its M^-1 J^T, from the block's factor H
+template <typename T>
+void unit_row(const BatchTopology<T>& topo, const Lanes<T>* H, int k, T sign, const IntLanes<T>& on, int r,
+              RowWork<T>& R) {
+  const int nv = topo.dof_count;
+  V<T>* J = R.J_row(r);
+  V<T>* z = R.z_row(r);
+  std::fill(J, J + nv, V<T>{});
+  J[k] = on ? V<T>{} + sign : V<T>{};
+  R.nonzero_begin[r] = k;
+  R.nonzero_end[r] = k + 1;
+  batch_solve_unit(topo, H, k, z);
+  if (sign != 1)
+    for (int j = 0; j < nv; ++j) z[j] *= sign;
+}
+
 // the rows of the limited dofs in dof order, J = +-e_k, in the lanes `mine` whose joint would cross a limit
 template <typename T>
 void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const StepContext& step, const BatchWork<T>& w,
                     const IntLanes<T>& mine, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
-  const int nl = static_cast<int>(G.limited.size()), nv = topo.dof_count;
+  const int nl = static_cast<int>(G.limited.size());
   const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
   const V<T>* limit = G.limits.data() + static_cast<size_t>(b) * 2 * nl;  // (empty without limits)
   const Scalar* kept = step.limit_impulse + G.impulse_base + static_cast<size_t>(b) * 2 * nl * kLanes<T>;
@@ -61,14 +77,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const Step
       const V<T> warm = row_warm_start(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), step.rows);
       const int r = add_row(R, RowKind::Unilateral, on, limit_row_target(gap, step.rows, dt), warm);
       R.limit_row[2 * m + side] = r;
-      V<T>* J = R.J_row(r);
-      V<T>* z = R.z_row(r);
-      std::fill(J, J + nv, V<T>{});
-      J[k] = on ? V<T>{} + sign : V<T>{};
-      R.nonzero_begin[r] = k;
-      R.nonzero_end[r] = k + 1;
-      batch_solve_unit(topo, H, k, z);
-      for (int j = 0; j < nv; ++j) z[j] *= sign;
+      unit_row(topo, H, k, sign, on, r, R);
     }
   }
 }
@@ -78,7 +87,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const Step
 template <typename T>
 void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const StepContext& step,
                        const IntLanes<T>& mine, RowWork<T>& R) {
-  const int nf = static_cast<int>(G.frictional.size()), nv = G.topo.dof_count;
+  const int nf = static_cast<int>(G.frictional.size());
   const V<T>* loss = G.frictionloss.data() + static_cast<size_t>(b) * nf;
   const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
   for (int m = 0; m < nf; ++m) {
@@ -91,12 +100,7 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const S
     const int r = add_row(R, RowKind::Bounded, on, V<T>{}, row_warm_start(kept, step.rows));
     R.bound[r] = friction_loss_bound(loss[m], dt);
     R.friction_row[m] = r;
-    V<T>* J = R.J_row(r);
-    std::fill(J, J + nv, V<T>{});
-    J[k] = on ? V<T>{} + 1 : V<T>{};
-    R.nonzero_begin[r] = k;
-    R.nonzero_end[r] = k + 1;
-    batch_solve_unit(G.topo, H, k, R.z_row(r));
+    unit_row(G.topo, H, k, T(1), on, r, R);
   }
 }
 
