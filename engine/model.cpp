@@ -97,15 +97,24 @@ ArticulationView Model::articulation(int a) const {
   return art;
 }
 
-State Model::state() const {
+namespace {
+
+// a state of `model` at the coordinates q and velocities qd (nullptr: zero), body_q and body_qd from FK
+State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
   State s;
-  static_cast<ModelCounts&>(s) = *this;
-#define NOVAPHY_ALLOCATE_MEMBER(T, name, count, width) s.name.assign(static_cast<size_t>(count) * (width), T{});
-  NOVAPHY_STATE_FIELDS(NOVAPHY_ALLOCATE_MEMBER)
-  s.joint_q = joint_q0;
-  eval_fk(*this, s);
+  static_cast<ModelCounts&>(s) = model;
+#define NOVAPHY_ALLOCATE_STATE(T, name, count, width) s.name.assign(static_cast<size_t>(model.count) * (width), T{});
+  NOVAPHY_STATE_FIELDS(NOVAPHY_ALLOCATE_STATE)
+#undef NOVAPHY_ALLOCATE_STATE
+  std::copy_n(q, model.joint_coord_count, s.joint_q.begin());
+  if (qd) std::copy_n(qd, model.joint_dof_count, s.joint_qd.begin());
+  eval_fk(model, s);
   return s;
 }
+
+}  // namespace
+
+State Model::state() const { return state_at(*this, joint_q0.data(), nullptr); }
 
 int Model::keyframe(const std::string& name) const {
   for (int k = 0; k < keyframe_count; ++k)
@@ -117,24 +126,23 @@ int Model::keyframe(const std::string& name) const {
 
 State Model::state(const std::string& name) const {
   const int k = keyframe(name);
-  State s = state();
-  std::copy_n(&keyframe_q[static_cast<size_t>(k) * joint_coord_count], joint_coord_count, s.joint_q.begin());
-  std::copy_n(&keyframe_qd[static_cast<size_t>(k) * joint_dof_count], joint_dof_count, s.joint_qd.begin());
-  eval_fk(*this, s);
-  return s;
+  return state_at(*this, keyframe_q.data() + static_cast<size_t>(k) * joint_coord_count,
+                  keyframe_qd.data() + static_cast<size_t>(k) * joint_dof_count);
 }
 
 Control Model::control(const std::string& name) const {
   const int k = keyframe(name);
   Control c = control();
-  std::copy_n(&keyframe_ctrl[static_cast<size_t>(k) * actuator_count], actuator_count, c.actuator_ctrl.begin());
+  std::copy_n(keyframe_ctrl.data() + static_cast<size_t>(k) * actuator_count, actuator_count, c.actuator_ctrl.begin());
   return c;
 }
 
 Control Model::control() const {
   Control s;
   static_cast<ModelCounts&>(s) = *this;
+#define NOVAPHY_ALLOCATE_MEMBER(T, name, count, width) s.name.assign(static_cast<size_t>(count) * (width), T{});
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_ALLOCATE_MEMBER)
+#undef NOVAPHY_ALLOCATE_MEMBER
   s.joint_target_ke = joint_target_ke;
   s.joint_target_kd = joint_target_kd;
   return s;
