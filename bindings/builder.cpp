@@ -282,6 +282,43 @@ void bind_builder(py::module_& m) {
           },
           py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
           "Capsule along the shape frame's local Y axis.")
+      .def(
+          "add_shape_cylinder",
+          [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
+             Scalar restitution, int group, int mask, int priority, int condim) {
+            return self.add_shape_cylinder(body, radius, half_height,
+                                           shape_options(xform, mu, restitution, group, mask, priority, condim));
+          },
+          py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
+          "Cylinder along the shape frame's local Y axis.")
+      .def(
+          "add_shape_ellipsoid",
+          [](ModelBuilder& self, int body, const Vec3& radii, std::optional<Transform> xform, Scalar mu,
+             Scalar restitution, int group, int mask, int priority, int condim) {
+            return self.add_shape_ellipsoid(body, radii,
+                                            shape_options(xform, mu, restitution, group, mask, priority, condim));
+          },
+          py::arg("body"), py::arg("radii"), XFORM_KWARG, SHAPE_KWARGS,
+          "Ellipsoid of semi-axes radii along the shape frame's X, Y and Z.")
+      .def(
+          "add_mesh",
+          [](ModelBuilder& self, const Eigen::Matrix<Scalar, Eigen::Dynamic, 3, Eigen::RowMajor>& vertices,
+             const std::string& name) {
+            std::vector<Vec3> points(vertices.rows());
+            for (Eigen::Index i = 0; i < vertices.rows(); ++i) points[i] = vertices.row(i).transpose();
+            return self.add_mesh(points, name);
+          },
+          py::arg("vertices"), py::kw_only(), py::arg("name") = "",
+          "A mesh from its vertices (n x 3) for add_shape_mesh; it collides as their convex hull.")
+      .def(
+          "add_shape_mesh",
+          [](ModelBuilder& self, int body, int mesh, std::optional<Transform> xform, Scalar mu, Scalar restitution,
+             int group, int mask, int priority, int condim) {
+            return self.add_shape_mesh(body, mesh,
+                                       shape_options(xform, mu, restitution, group, mask, priority, condim));
+          },
+          py::arg("body"), py::arg("mesh"), XFORM_KWARG, SHAPE_KWARGS,
+          "A shape of mesh `mesh` (add_mesh), colliding as its convex hull.")
       .def("add_mjcf", &import_file<&ModelBuilder::add_mjcf>, py::arg("path"), py::kw_only(),
            py::arg("xform") = py::none(), py::arg("static_shapes") = true,
            "Imports an MJCF file through MuJoCo's parser, its world frame placed at xform (static_shapes=False "

@@ -124,7 +124,10 @@ void bind_model(py::module_& m) {
       .value("Plane", ShapeType::Plane)
       .value("Sphere", ShapeType::Sphere)
       .value("Box", ShapeType::Box)
-      .value("Capsule", ShapeType::Capsule);
+      .value("Capsule", ShapeType::Capsule)
+      .value("Cylinder", ShapeType::Cylinder)
+      .value("Ellipsoid", ShapeType::Ellipsoid)
+      .value("Mesh", ShapeType::Mesh);
 
   py::class_<Transform>(m, "Transform", "Rigid transform: position and rotation quaternion [x, y, z, w].")
       .def(py::init([](const Vec3& position, const Eigen::Vector4d& rotation) {

@@ -164,7 +164,7 @@ class Batches final : public ArticulationBatches {
     const auto& topo = G.topo;
     for (int i = link; i >= 0; i = topo.link[i].parent)
       for (int k = topo.link[i].qd_start; k < topo.link[i].qd_start + topo.link[i].dof; ++k) {
-        Scalar s6[6], u[3];
+        Scalar s6[6];
         for (int m = 0; m < 6; ++m) s6[m] = S[6 * k + m][s.lane];
         J[k] += sign * motion_along(s6, p ? r.data() : nullptr, d.data());
       }

@@ -171,23 +171,6 @@ int ModelBuilder::add_articulation(const std::vector<int>& joints) {
   return articulation_count_++;
 }
 
-int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options) {
-  const std::string item = label("shape", shape_count(), "") + " (" + shape_type_name(type) + ")";
-  if (body < -1 || body >= body_count()) fail(item, ": body index ", body, " out of range [-1, ", body_count(), ")");
-  if (type != ShapeType::Plane)
-    for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
-  check_nonnegative(item, "mu", options.mu);
-  if (options.condim != 1 && options.condim != 3 && options.condim != 4 && options.condim != 6)
-    fail(item, ": condim must be 1, 3, 4 or 6, got ", options.condim);
-  if (!(options.restitution >= 0 && options.restitution <= 1))
-    fail(item, ": restitution must be in [0, 1], got ", options.restitution);
-  ShapeRecord shape{type, body, scale, options};
-  shape.options.xform = checked_transform(item, "xform", options.xform);
-  shapes_.push_back(shape);
-  shape_world_.push_back(body < 0 ? -1 : body_world_[body]);
-  return shape_count() - 1;
-}
-
 int ModelBuilder::add_actuator(int joint, const ActuatorOptions& options) {
   return add_actuator_of("an actuator", joint, options);
 }
@@ -226,34 +209,6 @@ int ModelBuilder::add_motor(int joint, Scalar gear, Scalar ctrl_lower, Scalar ct
                             Scalar force_upper, const std::string& name) {
   return add_actuator_of("a motor", joint,
                          ActuatorOptions::motor(gear, ctrl_lower, ctrl_upper, force_lower, force_upper, name));
-}
-
-int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, const ShapeOptions& options) {
-  check_finite("plane", "normal", normal);
-  check_finite("plane", "offset", offset);
-  if (normal.norm() < 1e-9) fail("plane: normal has zero length");
-  const Vec3 n = normal.normalized();
-  // plane shapes are the local XZ plane, normal +Y
-  ShapeOptions plane = options;
-  plane.xform.q = Quat::FromTwoVectors(Vec3::UnitY(), n);
-  plane.xform.p = offset * n;
-  return add_shape(ShapeType::Plane, -1, Vec3::Ones(), plane);
-}
-
-int ModelBuilder::add_ground_plane(Scalar y, const ShapeOptions& options) {
-  return add_plane(Vec3::UnitY(), y, options);
-}
-
-int ModelBuilder::add_shape_box(int body, const Vec3& half_extents, const ShapeOptions& options) {
-  return add_shape(ShapeType::Box, body, half_extents, options);
-}
-
-int ModelBuilder::add_shape_sphere(int body, Scalar radius, const ShapeOptions& options) {
-  return add_shape(ShapeType::Sphere, body, Vec3::Constant(radius), options);
-}
-
-int ModelBuilder::add_shape_capsule(int body, Scalar radius, Scalar half_height, const ShapeOptions& options) {
-  return add_shape(ShapeType::Capsule, body, Vec3(radius, half_height, radius), options);
 }
 
 ModelBuilder::JointRecord ModelBuilder::free_joint(int body) const {
@@ -351,8 +306,11 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
     body_joint_[b] = joint_count() - 1;
   }
   articulation_count_ += other.articulation_count_;
+  const int mesh0 = static_cast<int>(meshes_.size());
+  meshes_.insert(meshes_.end(), other.meshes_.begin(), other.meshes_.end());
   for (int s = 0; s < other.shape_count(); ++s) {
     ShapeRecord shape = other.shapes_[s];
+    if (shape.mesh >= 0) shape.mesh += mesh0;
     if (shape.body < 0)
       shape.options.xform = place * shape.options.xform;
     else
@@ -494,22 +452,6 @@ void ModelBuilder::lay_out_bodies(Model& model) const {
   model.shape_world = shape_world_;
 }
 
-void ModelBuilder::lay_out_shapes(Model& model) const {
-  for (int s = 0; s < shape_count(); ++s) {
-    const ShapeRecord& shape = shapes_[s];
-    model.shape_type[s] = static_cast<int>(shape.type);
-    model.shape_body[s] = shape.body;
-    shape.options.xform.to_array(&model.shape_transform[7 * s]);
-    Eigen::Map<Vec3>(&model.shape_scale[3 * s]) = shape.scale;
-    model.shape_mu[s] = shape.options.mu;
-    model.shape_restitution[s] = shape.options.restitution;
-    model.shape_collision_group[s] = shape.options.collision_group;
-    model.shape_collision_mask[s] = shape.options.collision_mask;
-    model.shape_priority[s] = shape.options.priority;
-    model.shape_condim[s] = shape.options.condim;
-  }
-}
-
 void ModelBuilder::lay_out_actuators(Model& model) const {
   for (int u = 0; u < actuator_count(); ++u) {
     const ActuatorOptions& a = actuators_[u].options;
@@ -547,6 +489,7 @@ Model ModelBuilder::finalize() const {
   lay_out_joints(joints, model);
   lay_out_bodies(model);
   lay_out_shapes(model);
+  lay_out_meshes(model);
   lay_out_tendons(model);
   lay_out_actuators(model);
   lay_out_keyframes(model);

@@ -4,11 +4,13 @@
 
 #include <array>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/model.h"
+#include "kernels/hull.h"
 
 namespace novaphy {
 
@@ -119,8 +121,15 @@ class ModelBuilder {
   int add_ground_plane(Scalar y = 0, const ShapeOptions& options = {});
   int add_shape_box(int body, const Vec3& half_extents, const ShapeOptions& options = {});
   int add_shape_sphere(int body, Scalar radius, const ShapeOptions& options = {});
-  // capsule along the shape frame's local Y axis
+  // capsule and cylinder along the shape frame's local Y axis
   int add_shape_capsule(int body, Scalar radius, Scalar half_height, const ShapeOptions& options = {});
+  int add_shape_cylinder(int body, Scalar radius, Scalar half_height, const ShapeOptions& options = {});
+  // ellipsoid of semi-axes radii along the shape frame's X, Y and Z
+  int add_shape_ellipsoid(int body, const Vec3& radii, const ShapeOptions& options = {});
+  // a mesh (its vertices, in the frame of the shapes that will use it) for add_shape_mesh; it collides as its
+  // convex hull (fails naming it where the points span no volume, are fewer than 4 or not finite)
+  int add_mesh(const std::vector<Vec3>& vertices, const std::string& name = "");
+  int add_shape_mesh(int body, int mesh, const ShapeOptions& options = {});
 
   // an actuator on a Revolute or Prismatic joint, MuJoCo's affine one (engine/parts/actuator.h):
   // force = clamp(gain clamp(ctrl, ctrl range) + bias[0] + bias[1] gear q + bias[2] gear qd, force range),
@@ -210,11 +219,18 @@ class ModelBuilder {
     int body;
     Vec3 scale;
     ShapeOptions options;
+    int mesh = -1;
+  };
+  // a mesh's hull centred on origin (the point of its vertices' frame its shapes' frames move to); reach: the
+  // hull's largest |coordinate| along each axis (a Mesh shape's scale, for its bounds)
+  struct MeshRecord {
+    std::shared_ptr<const ConvexHull> hull;
+    Vec3 origin, reach;
   };
 
   // massless links are allowed for imported bodies that carry several MuJoCo joints
   int add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name, bool allow_massless);
-  int add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options);
+  int add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh = -1);
   // the implicit Free joint of a body no joint names as its child
   JointRecord free_joint(int body) const;
 
@@ -227,8 +243,9 @@ class ModelBuilder {
   void lay_out_joint_dofs(const JointRecord& joint, int q, int qd, Model& model) const;
   // the Model's body mass properties, names and worlds
   void lay_out_bodies(Model& model) const;
-  // the Model's shape table
+  // the Model's shape table, and the hulls of its meshes
   void lay_out_shapes(Model& model) const;
+  void lay_out_meshes(Model& model) const;
   // the Model's actuator table
   void lay_out_actuators(Model& model) const;
   // the Model's tendon and equality tables (builder_constraints.cpp; equalities after the other tables)
@@ -255,6 +272,7 @@ class ModelBuilder {
   int world_count_ = 0;
   std::vector<JointRecord> joints_;
   std::vector<ShapeRecord> shapes_;
+  std::vector<MeshRecord> meshes_;
   struct ActuatorRecord {
     int joint;  // -1 on a tendon
     ActuatorOptions options;

@@ -381,6 +381,28 @@ void CollisionPipeline::find_contacts(int count, Contacts& contacts, int grain, 
   contacts.contact_dropped += static_cast<int>(total) - kept;
 }
 
+const HullView& CollisionPipeline::hull_view(int s, HullView* view) const {
+  const int mesh = model_.shape_mesh[s];
+  const int face0 = model_.mesh_face_start[mesh];
+  view->vertex = &model_.mesh_vertex[3 * static_cast<size_t>(model_.mesh_vertex_start[mesh])];
+  view->vertex_count = model_.mesh_vertex_start[mesh + 1] - model_.mesh_vertex_start[mesh];
+  view->face_plane = &model_.mesh_face_plane[4 * static_cast<size_t>(face0)];
+  view->corner_start = &model_.mesh_corner_start[face0];
+  view->corner = model_.mesh_corner.data();
+  view->face_count = model_.mesh_face_start[mesh + 1] - face0;
+  return *view;
+}
+
+ConvexShape CollisionPipeline::convex_shape(int s, const Transform& pose, HullView* hull) const {
+  static constexpr ConvexKind kKind[] = {ConvexKind::Sphere,  ConvexKind::Sphere,   ConvexKind::Box,
+                                         ConvexKind::Capsule, ConvexKind::Cylinder, ConvexKind::Ellipsoid,
+                                         ConvexKind::Hull};
+  const auto type = static_cast<ShapeType>(model_.shape_type[s]);
+  ConvexShape shape{kKind[static_cast<int>(type)], pose, Eigen::Map<const Vec3>(&model_.shape_scale[3 * s]), nullptr};
+  if (type == ShapeType::Mesh) shape.hull = &hull_view(s, hull);
+  return shape;
+}
+
 void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b,
                                      std::vector<Found>& out) const {
   const bool swap = model_.shape_type[a] > model_.shape_type[b];
@@ -410,7 +432,21 @@ void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, cons
         for (int k = 0; k < count; ++k) points[k].normal = -points[k].normal;
       }
       break;
-    case ShapeType::Capsule: count = collide_capsule_capsule(Xa, sa.x(), sa.y(), Xb, sb.x(), sb.y(), m, points); break;
+    case ShapeType::Capsule:
+      if (tb == ShapeType::Capsule) count = collide_capsule_capsule(Xa, sa.x(), sa.y(), Xb, sb.x(), sb.y(), m, points);
+      break;
+    default: break;
+  }
+  if (tb >= ShapeType::Cylinder) {
+    HullView hull_a, hull_b;
+    if (ta == ShapeType::Plane && tb == ShapeType::Cylinder)
+      count = collide_plane_cylinder(Xa, Xb, sb.x(), sb.y(), m, points);
+    else if (ta == ShapeType::Plane && tb == ShapeType::Ellipsoid)
+      count = collide_plane_ellipsoid(Xa, Xb, sb, m, points);
+    else if (ta == ShapeType::Plane)
+      count = collide_plane_hull(Xa, Xb, hull_view(b, &hull_b), m, points);
+    else
+      count = collide_convex(convex_shape(a, Xa, &hull_a), convex_shape(b, Xb, &hull_b), m, points);
   }
   for (int k = 0; k < count; ++k) out.push_back({a, b, points[k]});
 }

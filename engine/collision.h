@@ -8,6 +8,7 @@
 
 #include "engine/model.h"
 #include "kernels/collide.h"
+#include "kernels/convex.h"
 
 namespace novaphy {
 
@@ -113,6 +114,10 @@ class CollisionPipeline {
   // its k-th own plane, -1 - j the j-th of no world
   std::vector<int> plane_order(int w) const;
   int plane_of(int w, int code) const { return code >= 0 ? world_planes_[w][code] : shared_planes_[-1 - code]; }
+  // shape s (a Mesh) as the narrow phase sees its hull: into *view, returned
+  const HullView& hull_view(int s, HullView* view) const;
+  // shape s at a pose as the convex narrow phase sees it (a Mesh's hull into *hull)
+  ConvexShape convex_shape(int s, const Transform& pose, HullView* hull) const;
   // shapes a < b at those poses
   void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it

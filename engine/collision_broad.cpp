@@ -131,6 +131,10 @@ BoundsKind bounds_kind(int type) {
     case ShapeType::Sphere: return BoundsKind::Sphere;
     case ShapeType::Box: return BoundsKind::Box;
     case ShapeType::Capsule: return BoundsKind::Capsule;
+    // (a cylinder, an ellipsoid and a mesh's hull lie within the box of their scale)
+    case ShapeType::Cylinder:
+    case ShapeType::Ellipsoid:
+    case ShapeType::Mesh: return BoundsKind::Box;
     case ShapeType::Plane: break;
   }
   return BoundsKind::Plane;

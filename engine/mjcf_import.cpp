@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 
 #include "engine/error.h"
@@ -219,11 +220,28 @@ class MjcfImporter {
       case mjGEOM_SPHERE: geom_shape_[g] = builder_.add_shape_sphere(body, size[0], options); break;
       case mjGEOM_CAPSULE: geom_shape_[g] = builder_.add_shape_capsule(body, size[0], size[1], along_z); break;
       case mjGEOM_BOX: geom_shape_[g] = builder_.add_shape_box(body, vec3(size), options); break;
+      case mjGEOM_CYLINDER: geom_shape_[g] = builder_.add_shape_cylinder(body, size[0], size[1], along_z); break;
+      case mjGEOM_ELLIPSOID: geom_shape_[g] = builder_.add_shape_ellipsoid(body, vec3(size), options); break;
+      case mjGEOM_MESH:  // (a visual mesh is left out: only its mass counts)
+        if (options.collision_group != 0 || options.collision_mask != 0)
+          geom_shape_[g] = builder_.add_shape_mesh(body, mesh(g), options);
+        break;
       default:
         if (m_->geom_contype[g] != 0 || m_->geom_conaffinity[g] != 0)
           warn_motion("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' of type " + std::to_string(m_->geom_type[g]) +
-                      " (ellipsoid, cylinder, mesh or height field) is not modelled for collision; its mass is kept");
+                      " (height field) is not modelled for collision; its mass is kept");
     }
+  }
+
+  // geom g's mesh as a builder mesh (each MuJoCo mesh once); its vertices are in the geom's frame
+  int mesh(int g) {
+    const int id = m_->geom_dataid[g];
+    if (const auto it = mesh_index_.find(id); it != mesh_index_.end()) return it->second;
+    std::vector<Vec3> vertices(m_->mesh_vertnum[id]);
+    const float* v = m_->mesh_vert + 3 * static_cast<size_t>(m_->mesh_vertadr[id]);
+    for (Vec3& x : vertices) x = Vec3(v[0], v[1], v[2]), v += 3;
+    const std::string name = "geom '" + mj_name(m_, mjOBJ_GEOM, g) + "' (mesh '" + mj_name(m_, mjOBJ_MESH, id) + "')";
+    return mesh_index_[id] = builder_.add_mesh(vertices, name);
   }
 
   // MuJoCo's <exclude> body pairs as pairs of their geoms' shapes
@@ -401,6 +419,7 @@ class MjcfImporter {
   std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
   std::vector<int> joint_index_;        // MuJoCo joint -> NovaPhy joint
   std::vector<int> geom_shape_;         // MuJoCo geom -> NovaPhy shape (-1: none)
+  std::map<int, int> mesh_index_;       // MuJoCo mesh -> builder mesh
   std::vector<int> tendon_index_;       // MuJoCo tendon -> NovaPhy tendon (-1: not modelled)
 };
 

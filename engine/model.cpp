@@ -13,6 +13,9 @@ const char* shape_type_name(ShapeType type) {
     case ShapeType::Sphere: return "Sphere";
     case ShapeType::Box: return "Box";
     case ShapeType::Capsule: return "Capsule";
+    case ShapeType::Cylinder: return "Cylinder";
+    case ShapeType::Ellipsoid: return "Ellipsoid";
+    case ShapeType::Mesh: return "Mesh";
   }
   return "Unknown";
 }

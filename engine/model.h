@@ -10,7 +10,8 @@
 
 namespace novaphy {
 
-enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3 };
+// capsules and cylinders run along their frame's Y axis; a Mesh collides as the convex hull of mesh shape_mesh
+enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3, Cylinder = 4, Ellipsoid = 5, Mesh = 6 };
 
 // the precision the batched kernels step a model in (State, Control and Model arrays stay double;
 // with Float32 the stepped state is rounded to float each step)
@@ -45,6 +46,11 @@ const char* shape_type_name(ShapeType type);
 // x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]; one of type Weld keeps, as a connect,
 // equality_data[0..3) on [3..6) and body 2's orientation in body 1's frame at the quaternion equality_data[6..10)
 // ([x, y, z, w]; body 1 -1: the world)
+// A mesh m is a convex hull (kernels/hull.h): its vertices mesh_vertex[mesh_vertex_start[m] ..
+// mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the vertices' mean), its faces
+// [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
+// corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the mesh,
+// counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types.
 #define NOVAPHY_MODEL_FIELDS(X)                            \
   X(Scalar, body_mass, body_count, 1)                      \
   X(Scalar, body_com, body_count, 3)                       \
@@ -82,6 +88,13 @@ const char* shape_type_name(ShapeType type);
   X(int, shape_priority, shape_count, 1)                   \
   X(int, shape_condim, shape_count, 1)                     \
   X(int, shape_world, shape_count, 1)                      \
+  X(int, shape_mesh, shape_count, 1)                       \
+  X(int, mesh_vertex_start, mesh_count + 1, 1)             \
+  X(Scalar, mesh_vertex, mesh_vertex_count, 3)             \
+  X(int, mesh_face_start, mesh_count + 1, 1)               \
+  X(Scalar, mesh_face_plane, mesh_face_count, 4)           \
+  X(int, mesh_corner_start, mesh_face_count + 1, 1)        \
+  X(int, mesh_corner, mesh_corner_count, 1)                \
   X(int, exclude_shape, exclude_count, 2)                  \
   X(int, tendon_start, tendon_count + 1, 1)                \
   X(int, tendon_coord, tendon_entry_count, 1)              \
@@ -141,6 +154,10 @@ struct ModelCounts {
   int tendon_count = 0;
   int tendon_entry_count = 0;  // a tendon's joints, all tendons together
   int equality_count = 0;
+  int mesh_count = 0;
+  int mesh_vertex_count = 0;  // all meshes' hull vertices together
+  int mesh_face_count = 0;
+  int mesh_corner_count = 0;  // all faces' corners together
 };
 
 bool same_layout(const ModelCounts& a, const ModelCounts& b);

@@ -83,32 +83,6 @@ int spheres(const Vec3& ca, Scalar ra, const Vec3& cb, Scalar rb, Scalar margin,
   return 1;
 }
 
-// keeps the deepest point, then repeatedly the point farthest from those kept
-int reduce_to_four(int count, ContactPoint* points) {
-  if (count <= 4) return count;
-  std::array<ContactPoint, kMaxPairContacts * 3> all;
-  std::copy(points, points + count, all.begin());
-  std::array<bool, kMaxPairContacts * 3> used{};
-  int deepest = 0;
-  for (int k = 1; k < count; ++k)
-    if (all[k].depth > all[deepest].depth) deepest = k;
-  points[0] = all[deepest];
-  used[deepest] = true;
-  for (int kept = 1; kept < 4; ++kept) {
-    int best = -1;
-    Scalar best_d = -1;
-    for (int k = 0; k < count; ++k) {
-      if (used[k]) continue;
-      Scalar d = std::numeric_limits<Scalar>::infinity();
-      for (int j = 0; j < kept; ++j) d = std::min(d, (all[k].point - points[j].point).squaredNorm());
-      if (d > best_d) best_d = d, best = k;
-    }
-    points[kept] = all[best];
-    used[best] = true;
-  }
-  return 4;
-}
-
 }  // namespace
 
 Scalar box_signed_distance(const Vec3& p, const Vec3& half, Vec3* normal) {
@@ -124,6 +98,20 @@ Scalar box_signed_distance(const Vec3& p, const Vec3& half, Vec3* normal) {
   *normal = Vec3::Zero();
   (*normal)[k] = p[k] >= 0 ? 1 : -1;
   return dist;
+}
+
+int reduce_to_four(int count, ContactPoint* points) {
+  if (count <= 4) return count;
+  std::array<ContactPoint, 4> kept;
+  const int found = keep_four(
+      count,
+      [&](int k, ContactPoint* p) {
+        *p = points[k];
+        return true;
+      },
+      kept.data());
+  std::copy(kept.begin(), kept.begin() + found, points);
+  return found;
 }
 
 int collide_plane_sphere(const Transform& plane, const Vec3& center, Scalar radius, Scalar margin, ContactPoint* out) {

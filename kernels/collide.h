@@ -9,6 +9,9 @@
 // capsules run along their local Y axis (radius, half height of the segment); boxes take half extents.
 #pragma once
 
+#include <algorithm>
+#include <limits>
+
 #include "kernels/lanes.h"
 #include "kernels/spatial.h"
 
@@ -59,6 +62,32 @@ struct ContactPoint {
 };
 
 constexpr int kMaxPairContacts = 8;
+
+// of the candidate points k < count (point_at(k, &p): whether k is one, and p), up to 4 into out: the deepest,
+// then repeatedly the one farthest from those kept; returns how many
+template <typename PointAt>
+int keep_four(int count, PointAt&& point_at, ContactPoint* out) {
+  int kept[4], found = 0;
+  ContactPoint p, best_point;
+  for (int k = 0; k < count; ++k)
+    if (point_at(k, &p) && (found == 0 || p.depth > out[0].depth)) kept[0] = k, out[0] = p, found = 1;
+  for (; found > 0 && found < 4; ++found) {
+    int best = -1;
+    Scalar best_d = -1;
+    for (int k = 0; k < count; ++k) {
+      if (std::find(kept, kept + found, k) != kept + found || !point_at(k, &p)) continue;
+      Scalar d = std::numeric_limits<Scalar>::infinity();
+      for (int j = 0; j < found; ++j) d = std::min(d, (p.point - out[j].point).squaredNorm());
+      if (d > best_d) best_d = d, best = k, best_point = p;
+    }
+    if (best < 0) break;
+    kept[found] = best;
+    out[found] = best_point;
+  }
+  return found;
+}
+// points[0 .. count) reduced to keep_four's, in their order; returns how many are left
+int reduce_to_four(int count, ContactPoint* points);
 
 int collide_plane_sphere(const Transform& plane, const Vec3& center, Scalar radius, Scalar margin, ContactPoint* out);
 int collide_plane_box(const Transform& plane, const Transform& box, const Vec3& half, Scalar margin, ContactPoint* out);

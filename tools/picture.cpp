@@ -59,6 +59,9 @@ Scalar extent(const Solid& s) {
     case ShapeType::Sphere: return s.scale.x();
     case ShapeType::Box: return s.scale.norm();
     case ShapeType::Capsule: return s.scale.x() + s.scale.y();
+    case ShapeType::Cylinder: return std::hypot(s.scale.x(), s.scale.y());
+    case ShapeType::Ellipsoid: return s.scale.maxCoeff();
+    case ShapeType::Mesh: return s.scale.norm();
     case ShapeType::Plane: return kMiss;
   }
   return kMiss;
@@ -71,6 +74,21 @@ Scalar hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, Scalar r) {
   if (disc < 0) return kMiss;
   const Scalar t = -b - std::sqrt(disc);
   return t > kEpsilon ? t : kMiss;
+}
+
+// the nearest t > 0 where the ray o + t d enters the side of the cylinder of radius r about local Y within
+// |y| <= h (kMiss where it does not), and the outward normal there into n
+Scalar hit_side(const Vec3& o, const Vec3& d, Scalar r, Scalar h, Vec3& n) {
+  const Scalar a = d.x() * d.x() + d.z() * d.z();
+  if (a <= kEpsilon) return kMiss;
+  const Scalar b = o.x() * d.x() + o.z() * d.z(), c = o.x() * o.x() + o.z() * o.z() - r * r;
+  const Scalar disc = b * b - a * c;
+  if (disc < 0) return kMiss;
+  const Scalar side = (-b - std::sqrt(disc)) / a;
+  const Vec3 p = o + side * d;
+  if (side <= kEpsilon || std::abs(p.y()) > h) return kMiss;
+  n = Vec3(p.x(), 0, p.z()) / r;
+  return side;
 }
 
 // the ray's entry into solid s: its distance and the outward normal there (world frame)
@@ -108,22 +126,45 @@ Scalar hit(const Solid& s, const Vec3& o_world, const Vec3& d_world, Vec3& norma
       if (enter <= leave && enter > kEpsilon) t = enter;
       break;
     }
+    case ShapeType::Cylinder: {
+      t = hit_side(o, d, s.scale.x(), s.scale.y(), n);
+      for (const Scalar end : {-s.scale.y(), s.scale.y()}) {
+        if (std::abs(d.y()) < kEpsilon) break;
+        const Scalar cap = (end - o.y()) / d.y();
+        const Vec3 p = o + cap * d;
+        if (cap > kEpsilon && cap < t && p.x() * p.x() + p.z() * p.z() <= s.scale.x() * s.scale.x())
+          t = cap, n = Vec3(0, end > 0 ? 1 : -1, 0);
+      }
+      break;
+    }
+    case ShapeType::Ellipsoid: {  // a unit sphere in coordinates scaled by the semi-axes
+      const Vec3 os = o.cwiseQuotient(s.scale), ds = d.cwiseQuotient(s.scale);
+      const Scalar a = ds.squaredNorm(), b = os.dot(ds), disc = b * b - a * (os.squaredNorm() - 1);
+      if (disc < 0) break;
+      const Scalar enter = (-b - std::sqrt(disc)) / a;
+      if (enter > kEpsilon) t = enter, n = (o + t * d).cwiseQuotient(s.scale.cwiseProduct(s.scale)).normalized();
+      break;
+    }
+    case ShapeType::Mesh: {  // the hull's half-spaces: the last face plane entered before the first left
+      Scalar enter = -kMiss, leave = kMiss;
+      for (size_t f = 0; f < s.planes.size(); f += 4) {
+        const Vec3 face(s.planes[f], s.planes[f + 1], s.planes[f + 2]);
+        const Scalar towards = face.dot(d), gap = s.planes[f + 3] - face.dot(o);
+        if (std::abs(towards) < kEpsilon) {
+          if (gap < 0) return kMiss;
+        } else if (towards < 0 && gap / towards > enter) {
+          enter = gap / towards, n = face;
+        } else if (towards > 0) {
+          leave = std::min(leave, gap / towards);
+        }
+      }
+      if (enter <= leave && enter > kEpsilon) t = enter;
+      break;
+    }
     case ShapeType::Capsule: {
       // the side: the cylinder about local Y within the half height; then the two end spheres
       const Scalar r = s.scale.x(), h = s.scale.y();
-      const Scalar a = d.x() * d.x() + d.z() * d.z();
-      if (a > kEpsilon) {
-        const Scalar b = o.x() * d.x() + o.z() * d.z(), c = o.x() * o.x() + o.z() * o.z() - r * r;
-        const Scalar disc = b * b - a * c;
-        if (disc >= 0) {
-          const Scalar side = (-b - std::sqrt(disc)) / a;
-          const Vec3 p = o + side * d;
-          if (side > kEpsilon && std::abs(p.y()) <= h) {
-            t = side;
-            n = Vec3(p.x(), 0, p.z()) / r;
-          }
-        }
-      }
+      t = hit_side(o, d, r, h, n);
       for (const Scalar end : {-h, h}) {
         const Vec3 c(0, end, 0);
         const Scalar cap = hit_sphere(o, d, c, r);
@@ -353,9 +394,14 @@ std::vector<Solid> world_solids(const Model& model, const State& state, int worl
   for (int s = 0; s < model.shape_count; ++s) {
     if (model.shape_world[s] != world && model.shape_world[s] != -1) continue;
     const int body = model.shape_body[s];
-    Solid solid{static_cast<ShapeType>(model.shape_type[s]), Transform::from_array(&model.shape_transform[7 * s]),
+    Solid solid{static_cast<ShapeType>(model.shape_type[s]),
+                Transform::from_array(&model.shape_transform[7 * s]),
                 Vec3(model.shape_scale[3 * s], model.shape_scale[3 * s + 1], model.shape_scale[3 * s + 2]),
-                body < 0 ? -1 : index[body]};
+                body < 0 ? -1 : index[body],
+                {}};
+    if (const int mesh = model.shape_mesh[s]; mesh >= 0)
+      solid.planes.assign(model.mesh_face_plane.begin() + 4 * model.mesh_face_start[mesh],
+                          model.mesh_face_plane.begin() + 4 * model.mesh_face_start[mesh + 1]);
     if (body >= 0) solid.pose = Transform::from_array(&state.body_q[7 * body]) * solid.pose;
     solids.push_back(solid);
   }

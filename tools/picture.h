@@ -14,9 +14,10 @@ namespace novaphy {
 // a shape placed in the world: what a panel draws
 struct Solid {
   ShapeType type;
-  Transform pose;  // shape frame in the world (a plane: its local XZ plane, normal +Y)
-  Vec3 scale;      // sphere: radius; box: half extents; capsule: radius, half height along local Y
-  int color;       // the body's index among its world's bodies; -1 for a static shape
+  Transform pose;              // shape frame in the world (a plane: its local XZ plane, normal +Y)
+  Vec3 scale;                  // the shape's shape_scale (model.h)
+  int color;                   // the body's index among its world's bodies; -1 for a static shape
+  std::vector<Scalar> planes;  // a mesh: its hull's face planes [face][4] (outward normal, offset)
 };
 
 // world `world`'s shapes, and the shapes every world shares, at the body poses of `state`

@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(cmake g++ make libeigen3-dev libgtest-dev libbenchmark-dev libmujoco-dev libmujoco-samples libtinyxml2-dev
+packages=(cmake g++ make libeigen3-dev libgtest-dev libbenchmark-dev libmujoco-dev libmujoco-samples libtinyxml2-dev libccd-dev libqhull-dev
           pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-pil python3-tqdm
           python3-setuptools python3-pip clang-format clang-14 libclang-rt-14-dev libomp-14-dev
           libopenmpi-dev openmpi-bin python3-mpi4py)

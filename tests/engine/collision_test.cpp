@@ -406,7 +406,7 @@ TEST(CollisionPipelineErrors, BadOptions) {
 
 // MuJoCo's filter on an imported file: a pair collides when either shape's contype meets the other's
 // conaffinity (where the builder's rule needs both); <exclude> keeps two bodies apart; a geom that collides with
-// nothing is visual and not reported, a geom NovaPhy cannot collide that could collide is
+// nothing is visual and not reported
 TEST(CollisionPipelineFiltering, MujocosContypeConaffinityAndExclusions) {
   const std::string path = test::write_temp_file("filtered.xml", R"(
 <mujoco>
@@ -426,8 +426,7 @@ TEST(CollisionPipelineFiltering, MujocosContypeConaffinityAndExclusions) {
   const std::vector<std::string> warnings = builder.add_mjcf(path);
   std::string all;
   for (const std::string& w : warnings) all += w + "\n";
-  EXPECT_NE(all.find("geom 'can'"), std::string::npos) << all;
-  EXPECT_EQ(all.find("type 5"), all.rfind("type 5")) << all;  // the visual cylinder is not reported
+  EXPECT_TRUE(all.empty()) << all;
   const Model model = builder.finalize();
   EXPECT_EQ(model.collision_filter, CollisionFilter::Mujoco);
   CollisionPipeline pipeline(model);

@@ -81,7 +81,9 @@ TEST(MjcfImport, HumanoidStructureAndWarnings) {
 TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
   const std::string path = test::write_temp_file("unmodelled.xml", R"(
 <mujoco>
+  <asset><hfield name="terrain" nrow="2" ncol="2" size="1 1 0.1 0.1"/></asset>
   <worldbody>
+    <geom name="ground" type="hfield" hfield="terrain"/>
     <body name="a" pos="0 0 1">
       <joint name="ja" type="hinge" axis="0 1 0" frictionloss="0.1"/>
       <geom name="can" type="cylinder" size="0.1 0.2"/>
@@ -104,8 +106,9 @@ TEST(MjcfImport, ReportsTendonsEqualitiesAndUnsupportedGeomsByName) {
   for (const auto& w : warnings) all += w + "\n";
   EXPECT_NE(all.find("tendon 'coupling' is spatial"), std::string::npos) << all;
   EXPECT_NE(all.find("equality constraint 'lock'"), std::string::npos) << all;
-  EXPECT_NE(all.find("geom 'can'"), std::string::npos) << all;
-  EXPECT_NE(all.find("geom 'ball'"), std::string::npos) << all;
+  EXPECT_NE(all.find("geom 'ground' of type 1 (height field)"), std::string::npos) << all;
+  EXPECT_EQ(all.find("geom 'can'"), std::string::npos) << all;  // cylinders and ellipsoids collide
+  EXPECT_EQ(all.find("geom 'ball'"), std::string::npos) << all;
   EXPECT_EQ(all.find("frictionloss"), std::string::npos) << all;  // modelled: a friction-loss row
   EXPECT_NE(all.find("joint 'jb': ball joint limit"), std::string::npos) << all;
   EXPECT_EQ(all.find("actuator 'servo'"), std::string::npos) << all;  // a position servo on a hinge: modelled

@@ -74,6 +74,17 @@ def revolved_faces(center, R, profile, segments=8):
     return faces
 
 
+def hull_faces(model, mesh, center, R):
+    """The polygons of mesh `mesh`'s convex hull (model.mesh_*), placed at center and turned by R."""
+    first = model.mesh_vertex_start[mesh]
+    vertices = center + model.mesh_vertex[first : model.mesh_vertex_start[mesh + 1]] @ R.T
+    starts = model.mesh_corner_start
+    return [
+        vertices[model.mesh_corner[starts[f] : starts[f + 1]]]
+        for f in range(model.mesh_face_start[mesh], model.mesh_face_start[mesh + 1])
+    ]
+
+
 def sphere_profile(radius, rings=4):
     t = np.linspace(-np.pi / 2, np.pi / 2, rings + 1)
     return [(radius * np.sin(a), radius * np.cos(a)) for a in t]
@@ -161,6 +172,12 @@ def shape_faces(model, body_q, basis, bounds):
             faces = revolved_faces(p, R, sphere_profile(scale[0]))
         elif kind == ShapeType.Capsule:
             faces = revolved_faces(p, R, capsule_profile(scale[0], scale[1]))
+        elif kind == ShapeType.Cylinder:
+            faces = revolved_faces(p, R, [(-scale[1], 0.0), (-scale[1], scale[0]), (scale[1], scale[0]), (scale[1], 0.0)])
+        elif kind == ShapeType.Ellipsoid:
+            faces = revolved_faces(p, R @ np.diag(scale), sphere_profile(1.0))
+        elif kind == ShapeType.Mesh:
+            faces = hull_faces(model, model.shape_mesh[s], p, R)
         else:
             # a square of the plane under the scene, centred below the scene's centre
             u, v = R[:, 0], R[:, 2]

@@ -1,0 +1,230 @@
+// Cylinders, ellipsoids and convex meshes (kernels/convex, kernels/hull) through the pipeline: each pair against
+// MuJoCo 2.2.2's contacts of the same two geoms, resting on planes and boxes, and their bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "engine/builder.h"
+#include "engine/collision.h"
+#include "engine/mjcf_import.h"
+#include "kernels/convex.h"
+#include "kernels/hull.h"
+#include "solver_test_support.h"
+#include "test_support.h"
+#include "test_support_errors.h"
+
+namespace novaphy {
+namespace {
+
+// a gem: a convex polyhedron of no symmetry, its faces triangles and one quadrilateral
+constexpr const char* kGem =
+    "0.1 0.08 -0.06  -0.09 0.07 -0.05  -0.1 -0.08 -0.06  0.09 -0.07 -0.05  0.02 0.01 0.1  0.11 0 0.02  -0.02 0.1 0.03";
+
+// each kind's size in MJCF and as NovaPhy's convex narrow phase sees it (kernels/convex.h)
+struct Kind {
+  std::string attributes;
+  ConvexKind kind;
+  Vec3 size;
+};
+const std::map<std::string, Kind>& kinds() {
+  static const std::map<std::string, Kind> table = {
+      {"sphere", {"type=\"sphere\" size=\"0.08\"", ConvexKind::Sphere, Vec3::Constant(0.08)}},
+      {"box", {"type=\"box\" size=\"0.1 0.07 0.05\"", ConvexKind::Box, Vec3(0.1, 0.07, 0.05)}},
+      {"capsule", {"type=\"capsule\" size=\"0.05 0.09\"", ConvexKind::Capsule, Vec3(0.05, 0.09, 0)}},
+      {"cylinder", {"type=\"cylinder\" size=\"0.07 0.06\"", ConvexKind::Cylinder, Vec3(0.07, 0.06, 0)}},
+      {"ellipsoid", {"type=\"ellipsoid\" size=\"0.11 0.07 0.05\"", ConvexKind::Ellipsoid, Vec3(0.11, 0.07, 0.05)}},
+      {"mesh", {"type=\"mesh\" mesh=\"gem\"", ConvexKind::Hull, Vec3::Zero()}}};
+  return table;
+}
+
+// a geom of that kind at the pose X as NovaPhy's convex narrow phase sees it
+ConvexShape convex(const std::string& kind, const Transform& X) {
+  static ConvexHull gem;
+  static std::vector<Scalar> planes;
+  static HullView view;
+  if (gem.vertex.empty()) {
+    std::vector<Vec3> points;
+    std::istringstream in(kGem);
+    for (Vec3 p; in >> p.x() >> p.y() >> p.z();) points.push_back(p);
+    convex_hull(points, &gem);
+    for (int f = 0; f < gem.face_count(); ++f)
+      planes.insert(planes.end(),
+                    {gem.face_normal[f].x(), gem.face_normal[f].y(), gem.face_normal[f].z(), gem.face_offset[f]});
+    view = {gem.vertex[0].data(), static_cast<int>(gem.vertex.size()),
+            planes.data(),        gem.corner_start.data(),
+            gem.corner.data(),    gem.face_count()};  // (Vec3 is packed: three numbers a vertex)
+  }
+  const Kind& k = kinds().at(kind);
+  // capsules and cylinders run along MJCF's Z and NovaPhy's Y
+  const Quat along = k.kind == ConvexKind::Capsule || k.kind == ConvexKind::Cylinder
+                         ? Quat(Eigen::AngleAxis<Scalar>(M_PI / 2, Vec3::UnitX()))
+                         : Quat::Identity();
+  return {k.kind, Transform{X.p, X.q * along}, k.size, &view};
+}
+
+// how far from a (at the origin, orientation qa) along u b (orientation qb) first touches a: bisection on
+// whether MPR finds them overlapping
+Scalar touching(const std::string& a, const Quat& qa, const std::string& b, const Quat& qb, const Vec3& u) {
+  Scalar inside = 0, outside = 1;
+  ContactPoint out[4];
+  for (int k = 0; k < 50; ++k) {
+    const Scalar t = 0.5 * (inside + outside);
+    const bool overlap =
+        collide_convex(convex(a, Transform{Vec3::Zero(), qa}), convex(b, Transform{t * u, qb}), 0, out) > 0;
+    (overlap ? inside : outside) = t;
+  }
+  return inside;
+}
+
+Quat euler_xyz(Scalar x, Scalar y, Scalar z) {  // MJCF's default eulerseq="xyz", degrees
+  return Quat(Eigen::AngleAxis<Scalar>(x * M_PI / 180, Vec3::UnitX())) *
+         Quat(Eigen::AngleAxis<Scalar>(y * M_PI / 180, Vec3::UnitY())) *
+         Quat(Eigen::AngleAxis<Scalar>(z * M_PI / 180, Vec3::UnitZ()));
+}
+
+// every pair of a new shape with another (a static geom and a free one overlapping it a little, at generic
+// orientations) against MuJoCo 2.2.2's contacts of the same two geoms: its contact's depth and normal are those
+// of NovaPhy's deepest contact of the pair (both from MPR where neither shape meets the other with a face)
+TEST(ShapePairs, MatchMujocosContacts) {
+  const std::vector<std::string> order = {"sphere", "box", "capsule", "cylinder", "ellipsoid", "mesh"};
+  const Quat qa = euler_xyz(10, 20, 30), qb = euler_xyz(-25, 15, 40);
+  std::string bodies;
+  std::vector<std::string> names;
+  for (size_t i = 0; i < order.size(); ++i)
+    for (size_t j = i; j < order.size(); ++j) {
+      if (j < 3) continue;  // (the primitives' pairs: collide_test)
+      const int pair = static_cast<int>(names.size());
+      const std::string at = std::to_string(pair % 6) + " " + std::to_string(pair / 6) + " 0",
+                        name = std::to_string(pair);
+      // b above a along u, 2 mm closer than where they would touch: a shallow overlap
+      const Vec3 u = Vec3(0.1, 0.05, 1).normalized(), p = (touching(order[i], qa, order[j], qb, u) - 0.002) * u;
+      std::ostringstream pos;
+      pos.precision(17);
+      pos << p.x() << " " << p.y() << " " << p.z();
+      bodies += "<body pos=\"" + at + "\"><geom name=\"a" + name + "\" " + kinds().at(order[i]).attributes +
+                " euler=\"10 20 30\"/></body>";
+      bodies += "<body pos=\"" + at + "\"><freejoint/><geom name=\"b" + name + "\" " + kinds().at(order[j]).attributes +
+                " pos=\"" + pos.str() + "\" euler=\"-25 15 40\"/></body>";
+      names.push_back(order[i] + "-" + order[j]);
+    }
+  const std::string path = test::write_temp_file(
+      "shape_pairs.xml", "<mujoco><option gravity=\"0 0 0\"/><asset><mesh name=\"gem\" vertex=\"" + std::string(kGem) +
+                             "\"/></asset><worldbody>" + bodies + "</worldbody></mujoco>");
+  ModelBuilder builder;
+  import_mjcf(builder, path);
+  const Model model = builder.finalize();
+  CollisionOptions options;
+  options.margin = 0;
+  CollisionPipeline pipeline(model, options);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  const std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m.get()), mj_deleteData);
+  mj_forward(m.get(), d.get());
+  std::map<int, int> deepest;  // pair -> NovaPhy's deepest contact
+  for (int c = 0; c < contacts.contact_count; ++c) {
+    const int pair = model.shape_body[contacts.contact_shape_b[c]];  // (the free bodies, in order: body k of pair k)
+    if (!deepest.count(pair) || contacts.contact_depth[c] > contacts.contact_depth[deepest[pair]]) deepest[pair] = c;
+  }
+  std::map<int, int> mujoco;  // pair -> MuJoCo's contact
+  for (int c = 0; c < d->ncon; ++c) mujoco[std::stoi(mj_id2name(m.get(), mjOBJ_GEOM, d->contact[c].geom2) + 1)] = c;
+  ASSERT_EQ(mujoco.size(), names.size());
+  ASSERT_EQ(deepest.size(), names.size());
+  for (const auto& [pair, c] : mujoco) {
+    const mjContact& mc = d->contact[c];
+    const int k = deepest[pair];
+    // MuJoCo orders a pair's geoms by its own type order: its normal points from geom1 to geom2
+    const Scalar sign = mj_id2name(m.get(), mjOBJ_GEOM, mc.geom1)[0] == 'a' ? 1 : -1;
+    const Vec3 normal = sign * Vec3(mc.frame[0], mc.frame[1], mc.frame[2]), pos(mc.pos[0], mc.pos[1], mc.pos[2]);
+    EXPECT_NEAR(contacts.contact_depth[k], -mc.dist, 5e-5) << names[pair];
+    // within 12 degrees: MuJoCo replaces MPR's normal on smooth shapes by the surface's (mjc_fixNormal); NovaPhy
+    // keeps MPR's (or a face's), which differs most on the ellipsoid's pairs
+    EXPECT_GT(normal.dot(Eigen::Map<const Vec3>(&contacts.contact_normal[3 * k])), std::cos(12 * M_PI / 180))
+        << names[pair];
+    EXPECT_LT((pos - Eigen::Map<const Vec3>(&contacts.contact_point[3 * k])).norm(), 2e-3) << names[pair];
+  }
+  std::filesystem::remove(path);
+}
+
+// a body of shape `add` (on the body, at its origin) released at rest at `pose` on the ground, or on a static box
+// whose top is the ground: it stays within the slop of where it was for 3 s, and at rest (< 1 um/s)
+void expect_rests(const std::string& what, const Transform& pose, const std::function<void(ModelBuilder&, int)>& add,
+                  int least_contacts = 3, bool on_box = false) {
+  using namespace solver_test;
+  ModelBuilder builder;
+  if (on_box)
+    builder.add_shape_box(-1, Vec3(0.5, 0.25, 0.5), ShapeOptions{Transform{Vec3(0, -0.25, 0), Quat::Identity()}});
+  else
+    builder.add_ground_plane();
+  const int body = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.1)), pose);
+  add(builder, body);
+  Scene scene(builder);
+  Scalar worst = 0;
+  scene.run(3, kDt, [&] { worst = std::max(worst, (scene.position(body) - pose.p).norm()); });
+  EXPECT_LE(worst, scene.solver.settings.linear_slop) << what;
+  EXPECT_LT(scene.velocity(body).norm(), 1e-6) << what;
+  EXPECT_GE(scene.contacts.contact_count, least_contacts) << what;
+}
+
+TEST(ShapesResting, CylinderOnItsFaceAndOnItsSide) {
+  expect_rests("on its face", Transform{Vec3(0, 0.05, 0), Quat::Identity()},
+               [](ModelBuilder& b, int body) { b.add_shape_cylinder(body, 0.1, 0.05); });
+  // (on its side it touches along a line: two points)
+  using namespace solver_test;
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  const Transform side{Vec3(0, 0.1, 0), Quat(Eigen::AngleAxis<Scalar>(M_PI / 2, Vec3::UnitX()))};
+  const int body = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.1)), side);
+  builder.add_shape_cylinder(body, 0.1, 0.15);
+  Scene scene(builder);
+  Scalar worst = 0;
+  scene.run(3, kDt, [&] { worst = std::max(worst, (scene.position(body) - side.p).norm()); });
+  EXPECT_LE(worst, scene.solver.settings.linear_slop);
+  EXPECT_LT(scene.velocity(body).norm(), 1e-6);
+  EXPECT_EQ(scene.contacts.contact_count, 2);
+}
+
+TEST(ShapesResting, EllipsoidOnItsShortestAxis) {
+  expect_rests(
+      "ellipsoid", Transform{Vec3(0, 0.08, 0), Quat::Identity()},
+      [](ModelBuilder& b, int body) { b.add_shape_ellipsoid(body, Vec3(0.15, 0.08, 0.12)); }, 1);
+}
+
+TEST(ShapesResting, ConvexMeshOnThePlaneAndOnABox) {
+  // an octagonal prism's vertices, and points inside it (not on the hull)
+  std::vector<Vec3> points;
+  for (int k = 0; k < 8; ++k)
+    for (const Scalar y : {-0.05, 0.05})
+      points.push_back(Vec3(0.12 * std::cos(k * M_PI / 4), y, 0.12 * std::sin(k * M_PI / 4)));
+  points.push_back(Vec3(0.01, 0.02, -0.03));
+  for (const bool on_box : {false, true})
+    expect_rests(
+        on_box ? "mesh on a box" : "mesh on the plane", Transform{Vec3(0, 0.05, 0), Quat::Identity()},
+        [&](ModelBuilder& b, int body) { b.add_shape_mesh(body, b.add_mesh(points, "prism")); }, 4, on_box);
+}
+
+// bad sizes and meshes are errors naming the shape or mesh
+TEST(ShapeErrors, ZeroSizesAndDegenerateMeshesAreNamed) {
+  ModelBuilder builder;
+  const int body = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.1)));
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_cylinder(body, 0, 0.1),
+                       "shape 0 (Cylinder): size must be finite and > 0, got 0");
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_ellipsoid(body, Vec3(0.1, 0, 0.1)),
+                       "shape 0 (Ellipsoid): size must be finite and > 0, got 0");
+  const std::vector<Vec3> flat = {Vec3::Zero(), Vec3::UnitX(), Vec3::UnitZ(), Vec3(1, 0, 1), Vec3(0.5, 0, 0.2)};
+  EXPECT_NOVAPHY_ERROR(builder.add_mesh(flat, "decal"), "mesh 0 ('decal'): the points span no volume");
+  EXPECT_NOVAPHY_ERROR(builder.add_mesh({Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY()}, "tri"),
+                       "mesh 0 ('tri'): a hull needs at least 4 points, got 3");
+  EXPECT_NOVAPHY_ERROR(builder.add_mesh({Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), Vec3(0, 0, NAN)}, "nan"),
+                       "mesh 0 ('nan'): point 3 is not finite");
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_mesh(body, 0), "shape 0 (Mesh): mesh index 0 out of range [0, 0)");
+}
+
+}  // namespace
+}  // namespace novaphy
