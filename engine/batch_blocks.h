@@ -92,15 +92,15 @@ struct alignas(64) RowWork {
   std::vector<int> normal;
   std::vector<int> nonzero_begin, nonzero_end;  // [row]: where J may be nonzero
   std::vector<IntLanes<T>> active;
-  std::vector<V> J, z, target, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
-  std::vector<int> limit_row;                         // [limited][2] its row, or -1
-  std::vector<int> friction_row;                      // [frictional] its row, or -1
-  std::vector<V> bound;                               // [row] a Bounded row's largest |impulse|
-  std::vector<int> contact;                           // [slot][lane] the contact, or -1
-  std::vector<V> frame;                               // [slot][3][3] the normal and tangents
-  std::vector<V> coef, qd_in;                         // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
-  std::vector<V> point;  // [dof][3] the velocity of a slot's contact point moved by each dof
-  int rows = 0;          // rows of the block being built
+  std::vector<V> J, z, target, cfm, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
+  std::vector<int> limit_row;                              // [limited][2] its row, or -1
+  std::vector<int> friction_row;                           // [frictional] its row, or -1
+  std::vector<V> bound;                                    // [row] a Bounded row's largest |impulse|
+  std::vector<int> contact;                                // [slot][lane] the contact, or -1
+  std::vector<V> frame;                                    // [slot][3][3] the normal and tangents
+  std::vector<V> coef, qd_in;  // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
+  std::vector<V> point;        // [dof][3] the velocity of a slot's contact point moved by each dof
+  int rows = 0;                // rows of the block being built
   // room for `rows` rows of `dofs` dofs and `slots` contacts a lane (inline: every block calls it)
   void resize(int rows_, int dofs_, int slots) {
     dofs = dofs_;
@@ -112,7 +112,7 @@ struct alignas(64) RowWork {
       nonzero_end.resize(rows_);
       limit_row.resize(rows_);
       friction_row.resize(rows_);
-      for (auto* x : {&target, &mu, &inv_mass, &lambda, &bound}) x->resize(rows_);
+      for (auto* x : {&target, &cfm, &mu, &inv_mass, &lambda, &bound}) x->resize(rows_);
     }
     for (auto* x : {&J, &z})
       if (x->size() < static_cast<size_t>(rows_) * dofs) x->resize(static_cast<size_t>(rows_) * dofs);

@@ -35,6 +35,7 @@ int add_row(RowWork<T>& R, RowKind kind, const IntLanes<T>& on, const V<T>& targ
   R.target[r] = target;
   R.lambda[r] = on ? warm : V<T>{};
   R.mu[r] = V<T>{};
+  R.cfm[r] = V<T>{};
   R.nonzero_begin[r] = R.dofs;
   R.nonzero_end[r] = 0;
   return r;
@@ -105,8 +106,8 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const S
 }
 
 // slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, depth,
-// mu, restitution, the previous impulse), its links (b, a) per lane; returns the lanes that have one, and in
-// `uniform` the lane whose links every other such lane shares (-2: none does)
+// mu, restitution, the previous impulse, its softness), its links (b, a) per lane; returns the lanes that have one, and
+// in `uniform` the lane whose links every other such lane shares (-2: none does)
 template <typename T>
 IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* listed, const Lanes<T>* o,
                           const StepContext& step, RowWork<T>& R, V<T>* n, V<T>* p, V<T>* in, int (*link)[2],
@@ -129,6 +130,7 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     in[2][l] = static_cast<T>(lists.restitution[c]);
     if (const Scalar* P = C.previous(c))
       for (int m = 0; m < 3; ++m) in[3 + m][l] = static_cast<T>(P[m]);
+    for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(lists.softness[5 * static_cast<size_t>(c) + m]);
     link[l][0] = lists.link_b[c];
     link[l][1] = lists.link_a[c];
     if (*uniform == -1) *uniform = l;
@@ -173,7 +175,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
                       const StepContext& step, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
   const int nv = topo.dof_count;
-  V<T> n[3] = {}, p[3] = {}, in[6] = {};  // depth, mu, restitution, previous impulse [3]
+  V<T> n[3] = {}, p[3] = {}, in[11] = {};  // depth, mu, restitution, previous impulse [3], softness [5]
   int link[kLanes<T>][2];
   int uniform;
   const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
@@ -198,9 +200,19 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     R.nonzero_end[r] = end;
   }
   batch_solve_many(topo, kin.H, end, R.z_row(first), 3, nv);
-  V<T> v_approach{};
-  for (int j = 0; j < nv; ++j) v_approach += R.J_row(first)[j] * R.qd_in[j];
-  R.target[first] = contact_normal_target(in[0], v_approach, in[2], step.rows, splat<V<T>>(static_cast<T>(step.dt)));
+  // the rows' velocities at the step's start; their targets and a soft contact's cfm
+  V<T> v[3] = {};
+  for (int e = 0; e < 3; ++e)
+    for (int j = 0; j < nv; ++j) v[e] += R.J_row(first + e)[j] * R.qd_in[j];
+  const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
+  const auto soft = in[6] >= 0;
+  R.target[first] = select<V<T>>(soft, soft_normal_target(in[0], v[0], in[8], in[9], in[10], dt),
+                                 contact_normal_target(in[0], v[0], in[2], step.rows, dt));
+  R.cfm[first] = select<V<T>>(soft, in[6], V<T>{});
+  for (int e = 1; e < 3; ++e) {
+    R.target[first + e] = select<V<T>>(soft, soft_friction_target(v[e], in[8], dt), V<T>{});
+    R.cfm[first + e] = select<V<T>>(soft, in[7], V<T>{});
+  }
   R.mu[first + 1] = in[1];
 }
 
@@ -216,6 +228,7 @@ void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
                           R.nonzero_end.data(),
                           R.z.data(),
                           R.target.data(),
+                          R.cfm.data(),
                           R.mu.data(),
                           R.bound.data(),
                           R.active.data(),

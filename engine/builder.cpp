@@ -321,6 +321,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   for (const auto& [a, b] : other.excluded_) excluded_.push_back({a + shape0, b + shape0});
   if (other.collision_filter_ == CollisionFilter::Mujoco) collision_filter_ = CollisionFilter::Mujoco;
   if (other.friction_rule_ == FrictionRule::Mujoco) friction_rule_ = FrictionRule::Mujoco;
+  if (other.impratio_ != 1) impratio_ = other.impratio_;
   for (KeyframeRecord key : other.keyframes_) {
     key.joint_begin += joint0;
     key.joint_end += joint0;
@@ -495,11 +496,13 @@ Model ModelBuilder::finalize() const {
   lay_out_keyframes(model);
   model.collision_filter = collision_filter_;
   model.friction_rule = friction_rule_;
+  model.impratio = impratio_;
   model.exclude_count = static_cast<int>(excluded_.size());
   model.exclude_shape.clear();
   for (const auto& [a, b] : excluded_) model.exclude_shape.insert(model.exclude_shape.end(), {a, b});
   lay_out_equalities(model);
   model.check_sizes();
+  set_body_invweight0(model);
   return model;
 }
 

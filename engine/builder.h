@@ -48,6 +48,14 @@ struct ShapeOptions {
   int collision_mask = -1;
   int priority = 0;  // FrictionRule::Mujoco: the shape of higher priority decides a contact's friction and condim
   int condim = 3;    // 1: frictionless contacts (MuJoCo's condim; 4 and 6 act as 3: no torsional or rolling rows)
+  // MuJoCo's contact softness (model.h, engine/parts/rows.h): solref (0, 0) is a rigid contact (the solver's
+  // erp and slop); (time constant > 0, damping ratio > 0) or (-stiffness < 0, -damping <= 0) a soft one
+  std::array<Scalar, 2> solref = {0, 0};
+  std::array<Scalar, 5> solimp = {0.9, 0.95, 0.001, 0.5, 2};  // dmin, dmax, width, midpoint, power
+  Scalar solmix = 1;
+  Scalar margin = 0;  // a soft contact is active from this distance, less gap
+  Scalar gap = 0;
+  std::string name;
 };
 
 // an actuator's parameters (add_actuator); the defaults make a motor of unit gear, unlimited
@@ -170,6 +178,8 @@ class ModelBuilder {
   void set_collision_filter(CollisionFilter filter) { collision_filter_ = filter; }
   // how contacts combine their shapes' friction (model.h); add_mjcf sets Mujoco
   void set_friction_rule(FrictionRule rule) { friction_rule_ = rule; }
+  // MuJoCo's impratio for soft contacts (model.impratio)
+  void set_impratio(Scalar impratio);
   FrictionRule friction_rule() const { return friction_rule_; }
   CollisionFilter collision_filter() const { return collision_filter_; }
   // shapes a and b never collide (MuJoCo's <exclude>, by shape)
@@ -302,6 +312,7 @@ class ModelBuilder {
   std::vector<std::pair<int, int>> excluded_;  // shape pairs
   CollisionFilter collision_filter_ = CollisionFilter::GroupAndMask;
   FrictionRule friction_rule_ = FrictionRule::GeometricMean;
+  Scalar impratio_ = 1;
   int articulation_count_ = 0;
 };
 

@@ -59,4 +59,21 @@ inline void check_actuator(const std::string& item, const ActuatorOptions& optio
   check_range(item, "force range", options.force_lower, options.force_upper);
 }
 
+// a shape's solref, solimp, solmix, margin and gap within MuJoCo's ranges (ShapeOptions)
+inline void check_softness(const std::string& item, const ShapeOptions& o) {
+  const Scalar t = o.solref[0], r = o.solref[1];
+  if (!((t == 0 && r == 0) || (t > 0 && r > 0 && std::isfinite(t) && std::isfinite(r)) ||
+        (t < 0 && r <= 0 && std::isfinite(t) && std::isfinite(r))))
+    fail(item, ": solref must be (time constant > 0, damping ratio > 0), (-stiffness < 0, -damping <= 0) or (0, 0) ",
+         "for a rigid contact, got (", t, ", ", r, ")");
+  const auto& i = o.solimp;
+  if (!(i[0] >= 0 && i[0] <= 1 && i[1] >= 0 && i[1] <= 1 && i[2] >= 0 && std::isfinite(i[2]) && i[3] >= 0 &&
+        i[3] <= 1 && i[4] >= 1 && std::isfinite(i[4])))
+    fail(item, ": solimp must be (dmin, dmax in [0, 1], width >= 0, midpoint in [0, 1], power >= 1), got (", i[0], ", ",
+         i[1], ", ", i[2], ", ", i[3], ", ", i[4], ")");
+  check_nonnegative(item, "solmix", o.solmix);
+  check_nonnegative(item, "margin", o.margin);
+  check_nonnegative(item, "gap", o.gap);
+}
+
 }  // namespace novaphy

@@ -1,5 +1,6 @@
 // The builder's shapes: primitives, planes and convex meshes (their hulls, kernels/hull.h), and their tables in
 // the Model.
+#include <cmath>
 #include <map>
 #include <memory>
 
@@ -9,8 +10,13 @@
 
 namespace novaphy {
 
+void ModelBuilder::set_impratio(Scalar impratio) {
+  if (!(impratio > 0 && std::isfinite(impratio))) fail("impratio must be finite and > 0, got ", impratio);
+  impratio_ = impratio;
+}
+
 int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh) {
-  const std::string item = label("shape", shape_count(), "") + " (" + shape_type_name(type) + ")";
+  const std::string item = label("shape", shape_count(), options.name) + " (" + shape_type_name(type) + ")";
   if (body < -1 || body >= body_count()) fail(item, ": body index ", body, " out of range [-1, ", body_count(), ")");
   if (type != ShapeType::Plane)
     for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
@@ -19,6 +25,7 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const S
     fail(item, ": condim must be 1, 3, 4 or 6, got ", options.condim);
   if (!(options.restitution >= 0 && options.restitution <= 1))
     fail(item, ": restitution must be in [0, 1], got ", options.restitution);
+  check_softness(item, options);
   ShapeRecord shape{type, body, scale, options, mesh};
   shape.options.xform = checked_transform(item, "xform", options.xform);
   shapes_.push_back(shape);
@@ -99,6 +106,12 @@ void ModelBuilder::lay_out_shapes(Model& model) const {
     model.shape_collision_mask[s] = shape.options.collision_mask;
     model.shape_priority[s] = shape.options.priority;
     model.shape_condim[s] = shape.options.condim;
+    std::copy(shape.options.solref.begin(), shape.options.solref.end(), &model.shape_solref[2 * s]);
+    std::copy(shape.options.solimp.begin(), shape.options.solimp.end(), &model.shape_solimp[5 * s]);
+    model.shape_solmix[s] = shape.options.solmix;
+    model.shape_margin[s] = shape.options.margin;
+    model.shape_gap[s] = shape.options.gap;
+    model.shape_name.push_back(shape.options.name);
   }
 }
 

@@ -30,6 +30,7 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     fail("margin must be finite and >= 0, got ", options.margin);
   if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
   if (options_.contact_capacity == 0) options_.contact_capacity = std::max(64, 8 * model.shape_count);
+  for (int s = 0; s < model.shape_count; ++s) options_.margin = std::max(options_.margin, model.shape_margin[s]);
   list_exclusions();
   link_bodies();
   sort_shapes();

@@ -60,7 +60,7 @@ struct Contacts : ModelCounts {
 
 struct CollisionOptions {
   int contact_capacity = 0;    // 0: 8 per shape, at least 64
-  Scalar margin = 0.01;        // contacts are made this far before touching
+  Scalar margin = 0.01;        // contacts are made this far before touching (at least every shape's shape_margin)
   bool self_collision = true;  // links of one articulation collide (never a parent with its child)
   int num_threads = 0;         // threads of collide's loops over shapes, worlds and planes; 0: OpenMP's default
 };

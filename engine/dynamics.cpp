@@ -210,6 +210,29 @@ MatX eval_mass_matrix(const Model& model, const State& state) {
   return H;
 }
 
+void set_body_invweight0(Model& model) {
+  // inputs: the model at joint_q0; outputs: body_invweight0 (0 for a static body)
+  model.body_invweight0.assign(2 * static_cast<size_t>(model.body_count), 0);
+  if (model.articulation_count == 0) return;
+  const State state = model.state();
+  ArticulationScratch s;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = kinematics(model, state, a, s);
+    mass_matrix_gemm(art, s);  // H, and each link's Jacobian [angular; linear] in its own frame
+    const Eigen::LLT<MatX> H(s.H);
+    if (H.info() != Eigen::Success) continue;
+    for (int i = 0; i < art.link_count(); ++i) {
+      const int b = art.joint_child[art.joint_begin + i];
+      const Eigen::Matrix<Scalar, 6, Eigen::Dynamic>& J = s.link_jacobian[i];
+      // the COM's velocity v + w x c = v - [c]x w
+      const Vec3 c = Eigen::Map<const Vec3>(&model.body_com[3 * b]);
+      const MatX Jc = J.bottomRows<3>() - skew(c) * J.topRows<3>();
+      model.body_invweight0[2 * b] = (Jc * H.solve(MatX(Jc.transpose()))).trace() / 3;
+      model.body_invweight0[2 * b + 1] = (J.topRows<3>() * H.solve(MatX(J.topRows<3>().transpose()))).trace() / 3;
+    }
+  }
+}
+
 Scalar eval_energy(const Model& model, const State& state) {
   const VecX qd = Eigen::Map<const VecX>(state.joint_qd.data(), model.joint_dof_count);
   Scalar e = 0.5 * qd.dot(eval_mass_matrix(model, state) * qd);

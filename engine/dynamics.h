@@ -19,6 +19,8 @@ void eval_fk(const Model& model, State& state);
 
 // dense joint_dof_count x joint_dof_count matrix, block diagonal over articulations
 MatX eval_mass_matrix(const Model& model, const State& state);
+// model.body_invweight0 (model.h), MuJoCo's, from joint_q0: the builder's last step
+void set_body_invweight0(Model& model);
 
 VecX eval_bias_forces(const Model& model, const State& state);
 

@@ -81,7 +81,7 @@ void IslandRows::finish_row(int r, Scalar cfm) {
     (*route_)[a]->solve_mass(a, z);
     for (int k = 0; k < row.dof_count[s]; ++k) W += J[k] * z[k];
   }
-  row.inv_mass = W + cfm > 1e-12 ? 1 / (W + cfm) : 0;
+  row.inv_mass = W + (cfm + row.cfm) > 1e-12 ? 1 / (W + (cfm + row.cfm)) : 0;
 }
 
 void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>& articulations) {
@@ -138,9 +138,21 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
     rows_[r1].normal = rn;
     rows_[r1].mu = contact_friction(model_, sa, sb);
-    const Scalar v_approach = row_velocity(rows_[rn], J_, step.in->joint_qd.data());
-    rows_[rn].target =
-        contact_normal_target(C.contact_depth[c], v_approach, contact_restitution(model_, sa, sb), step.rows, step.dt);
+    // the rows' velocities at the step's start; their targets and a soft contact's cfm
+    Scalar v[3];
+    for (int e = 0; e < 3; ++e) v[e] = row_velocity(rows_[rn + e], J_, step.in->joint_qd.data());
+    const Scalar depth = C.contact_depth[c];
+    const ContactSoftness soft = contact_softness(model_, sa, sb, depth, step.dt);
+    if (soft.soft) {
+      rows_[rn].target = soft_normal_target(depth, v[0], soft.damping, soft.spring, soft.active_margin, step.dt);
+      rows_[rn].cfm = soft.cfm_normal;
+      for (int e = 1; e < 3; ++e) {
+        rows_[rn + e].target = soft_friction_target(v[e], soft.damping, step.dt);
+        rows_[rn + e].cfm = soft.cfm_friction;
+      }
+    } else {
+      rows_[rn].target = contact_normal_target(depth, v[0], contact_restitution(model_, sa, sb), step.rows, step.dt);
+    }
     Scalar warm[3];
     const Scalar* previous = C.previous(c);
     contact_warm_start(previous ? previous : zero, d, step.rows, warm);

@@ -57,6 +57,7 @@ class MjcfImporter {
     for (int b = 1; b < m_->nbody; ++b) add_body(b);
     builder_.set_collision_filter(CollisionFilter::Mujoco);
     builder_.set_friction_rule(FrictionRule::Mujoco);
+    builder_.set_impratio(m_->opt.impratio);
     geom_shape_.assign(m_->ngeom, -1);
     for (int g = 0; g < m_->ngeom; ++g) add_geom(g);
     add_exclusions();
@@ -210,6 +211,12 @@ class MjcfImporter {
     options.collision_mask = m_->geom_conaffinity[g];
     options.priority = m_->geom_priority[g];
     options.condim = m_->geom_condim[g];
+    options.name = mj_name(m_, mjOBJ_GEOM, g);
+    std::copy_n(m_->geom_solref + mjNREF * g, 2, options.solref.begin());
+    std::copy_n(m_->geom_solimp + mjNIMP * g, 5, options.solimp.begin());
+    options.solmix = m_->geom_solmix[g];
+    options.margin = m_->geom_margin[g];
+    options.gap = m_->geom_gap[g];
     if (options.condim > 3 && (options.collision_group != 0 || options.collision_mask != 0))
       warn_motion("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "': condim " + std::to_string(options.condim) +
                   " (torsional and rolling friction) is modelled as condim 3");

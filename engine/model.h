@@ -46,6 +46,11 @@ const char* shape_type_name(ShapeType type);
 // x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]; one of type Weld keeps, as a connect,
 // equality_data[0..3) on [3..6) and body 2's orientation in body 1's frame at the quaternion equality_data[6..10)
 // ([x, y, z, w]; body 1 -1: the world)
+// A contact is soft, as MuJoCo's (engine/parts/rows.h), where its shapes' solref has a nonzero time constant:
+// shape_solref (time constant, damping ratio; or -stiffness, -damping), shape_solimp (dmin, dmax, width,
+// midpoint, power), shape_solmix (the weight of a shape's solref and solimp in a pair of equal priority),
+// shape_margin (a contact is active from this distance) and shape_gap (less this). body_invweight0 is
+// MuJoCo's: the mean of the diagonal of J M^-1 J^T at joint_q0 for the body's COM, translation then rotation.
 // A mesh m is a convex hull (kernels/hull.h): its vertices mesh_vertex[mesh_vertex_start[m] ..
 // mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the vertices' mean), its faces
 // [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
@@ -56,6 +61,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, body_com, body_count, 3)                       \
   X(Scalar, body_inertia, body_count, 9)                   \
   X(int, body_world, body_count, 1)                        \
+  X(Scalar, body_invweight0, body_count, 2)                \
   X(int, joint_type, joint_count, 1)                       \
   X(int, joint_parent, joint_count, 1)                     \
   X(int, joint_child, joint_count, 1)                      \
@@ -87,6 +93,11 @@ const char* shape_type_name(ShapeType type);
   X(int, shape_collision_mask, shape_count, 1)             \
   X(int, shape_priority, shape_count, 1)                   \
   X(int, shape_condim, shape_count, 1)                     \
+  X(Scalar, shape_solref, shape_count, 2)                  \
+  X(Scalar, shape_solimp, shape_count, 5)                  \
+  X(Scalar, shape_solmix, shape_count, 1)                  \
+  X(Scalar, shape_margin, shape_count, 1)                  \
+  X(Scalar, shape_gap, shape_count, 1)                     \
   X(int, shape_world, shape_count, 1)                      \
   X(int, shape_mesh, shape_count, 1)                       \
   X(int, mesh_vertex_start, mesh_count + 1, 1)             \
@@ -181,8 +192,10 @@ struct Model : ModelCounts {
   FrictionRule friction_rule = FrictionRule::GeometricMean;
   NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
 #undef NOVAPHY_DECLARE
+  Scalar impratio = 1;  // MuJoCo's ratio of a soft contact's normal to frictional regularisation
   std::vector<std::string> body_name;
   std::vector<std::string> joint_name;
+  std::vector<std::string> shape_name;
   std::vector<std::string> actuator_name;
   std::vector<std::string> tendon_name;
   std::vector<std::string> equality_name;

@@ -367,8 +367,9 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
-  step.lists = {data_.contact_start.data(),  data_.contact_list.data(), data_.contact_link_a.data(),
-                data_.contact_link_b.data(), data_.contact_mu.data(),   data_.contact_restitution.data()};
+  step.lists = {data_.contact_start.data(),   data_.contact_list.data(), data_.contact_link_a.data(),
+                data_.contact_link_b.data(),  data_.contact_mu.data(),   data_.contact_restitution.data(),
+                data_.contact_softness.data()};
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;
@@ -388,6 +389,8 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
     data_.contact_mu[c] = contact_friction(model_, sa, sb);
     data_.contact_restitution[c] = contact_restitution(model_, sa, sb);
+    contact_softness_row(contact_softness(model_, sa, sb, contacts.contact_depth[c], step.dt),
+                         &data_.contact_softness[5 * static_cast<size_t>(c)]);
   });
   group_by_key(
       n, articulations, [&](int c) { return data_.contact_owner[c]; }, data_.contact_start.data(),

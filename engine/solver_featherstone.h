@@ -71,6 +71,7 @@ struct SolverCounts {
   X(int, contact_link_b, n.contacts, "likewise for body b")                                                         \
   X(Scalar, contact_mu, n.contacts, "the contact's friction coefficient")                                           \
   X(Scalar, contact_restitution, n.contacts, "the contact's restitution")                                           \
+  X(Scalar, contact_softness, 5 * n.contacts, "a soft contact's cfm of its rows, B, K imp (pos - margin), margin")  \
   X(int, fill, n.articulations + 1, "scratch of the counting sorts")
 
 struct SolverData {

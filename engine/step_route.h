@@ -26,6 +26,9 @@ struct ContactLists {
   const int* link_b = nullptr;          // [contact] likewise for body b
   const Scalar* mu = nullptr;           // [contact] friction coefficient
   const Scalar* restitution = nullptr;  // [contact]
+  // [contact][5] a soft contact's (engine/parts/rows.h ContactSoftness): the normal row's cfm, the friction rows',
+  // B, K imp (pos - margin) and the active margin; all 0 with a cfm of -1 for a rigid contact
+  const Scalar* softness = nullptr;
 };
 
 struct StepContext {

@@ -38,7 +38,7 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
               const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd) {
   // unconstrained step of one row: the impulse that would bring J qd to its target
   auto step = [&](const PgsRow& row) {
-    return -(row_velocity(row, J, qd) - row.target + settings.cfm * row.lambda) * row.inv_mass;
+    return -(row_velocity(row, J, qd) - row.target + (settings.cfm + row.cfm) * row.lambda) * row.inv_mass;
   };
   // a row whose impulse moved by more than tolerance / (J M^-1 J^T) keeps the sweeps going (with
   // tolerance 0: moved at all; a sweep that moves none is a fixed point, which every further sweep

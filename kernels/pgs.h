@@ -19,7 +19,8 @@ struct PgsRow {
   int dof_begin[2] = {0, 0};  // first dof of each side in the global velocity vector
   int dof_count[2] = {0, 0};
   int pool[2] = {0, 0};  // offset of each side's J and M^-1 J^T in the pools
-  Scalar inv_mass = 0;   // 1 / (J M^-1 J^T + cfm)
+  Scalar cfm = 0;        // the row's own constraint force mixing, beyond the settings' (a soft contact's)
+  Scalar inv_mass = 0;   // 1 / (J M^-1 J^T + settings.cfm + cfm)
   Scalar target = 0;     // the velocity J qd the row drives towards
   Scalar lambda = 0;     // accumulated impulse
   int normal = -1;       // FrictionPair: the row holding the normal impulse

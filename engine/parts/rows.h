@@ -84,6 +84,105 @@ inline Scalar contact_restitution(const Model& model, int a, int b) {
   return std::max(model.shape_restitution[a], model.shape_restitution[b]);
 }
 
+// ---- soft contacts: MuJoCo's soft constraint (solref, solimp) over one step of the rows' sweeps. MuJoCo's rows
+// satisfy J a + R f = aref with aref = -B v - K imp (pos - margin); times dt, with the impulse p = f dt, the
+// step's J qd_out + R p = v + dt aref, v = J qd_in: a row of cfm R and target v + dt aref. A contact whose
+// deciding solref is (0, 0) is rigid (contact_normal_target)
+
+// a contact's softness from its shapes' solref, solimp, solmix, priority, margin and gap (combined as MuJoCo
+// combines geoms) at penetration `depth`: the normal row's cfm R (0 while the contact is inactive, farther
+// than margin - gap), the friction rows' (R / impratio), MuJoCo's B, and K imp (pos - margin)
+struct ContactSoftness {
+  bool soft = false;
+  Scalar cfm_normal = 0, cfm_friction = 0;
+  Scalar damping = 0;        // B
+  Scalar spring = 0;         // K imp (pos - margin), pos = -depth: the acceleration it pushes out at (< 0)
+  Scalar active_margin = 0;  // margin - gap: a contact nearer than this is active
+};
+
+// MuJoCo's impedance at a distance x past the active margin, from solimp (dmin, dmax, width, midpoint, power)
+inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
+  constexpr Scalar kMin = 1e-4, kMax = 0.9999;  // (MuJoCo's mjMINIMP, mjMAXIMP)
+  const Scalar dmin = std::clamp(solimp[0], kMin, kMax), dmax = std::clamp(solimp[1], kMin, kMax);
+  const Scalar width = solimp[2], mid = std::clamp(solimp[3], kMin, kMax), power = solimp[4];
+  if (dmin == dmax || width <= 1e-15) return 0.5 * (dmin + dmax);
+  const Scalar u = std::abs(x) / width;
+  if (u >= 1) return dmax;
+  const Scalar y = power == 1 ? u
+                   : u <= mid ? std::pow(u, power) / std::pow(mid, power - 1)
+                              : 1 - std::pow(1 - u, power) / std::pow(1 - mid, power - 1);
+  return dmin + y * (dmax - dmin);
+}
+
+inline ContactSoftness contact_softness(const Model& model, int a, int b, Scalar depth, Scalar dt) {
+  ContactSoftness s;
+  // the shape of higher priority decides, else a mix weighted by solmix
+  const int pa = model.shape_priority[a], pb = model.shape_priority[b];
+  const Scalar wa = model.shape_solmix[a], wb = model.shape_solmix[b];
+  const Scalar mix = pa != pb                   ? (pa > pb ? 1 : 0)
+                     : wa < 1e-15 && wb < 1e-15 ? 0.5
+                     : wa < 1e-15               ? 0
+                     : wb < 1e-15               ? 1
+                                                : wa / (wa + wb);
+  const Scalar* ra = &model.shape_solref[2 * a];
+  const Scalar* rb = &model.shape_solref[2 * b];
+  Scalar solref[2], solimp[5];
+  for (int k = 0; k < 2; ++k)
+    solref[k] = (ra[0] > 0 && rb[0] > 0) || pa != pb ? mix * ra[k] + (1 - mix) * rb[k] : std::min(ra[k], rb[k]);
+  for (int k = 0; k < 5; ++k)
+    solimp[k] = mix * model.shape_solimp[5 * a + k] + (1 - mix) * model.shape_solimp[5 * b + k];
+  if (solref[0] == 0 && solref[1] == 0) return s;
+  s.soft = true;
+  s.active_margin =
+      std::max(model.shape_margin[a], model.shape_margin[b]) - std::max(model.shape_gap[a], model.shape_gap[b]);
+  const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
+  if (x >= 0) return s;
+  const Scalar dmax = std::clamp(solimp[1], Scalar(1e-4), Scalar(0.9999));
+  Scalar K, B;
+  if (solref[0] > 0) {
+    const Scalar tc = std::max(solref[0], 2 * dt);  // (MuJoCo's refsafe)
+    K = 1 / std::max(Scalar(1e-15), dmax * dmax * tc * tc * solref[1] * solref[1]);
+    B = 2 / std::max(Scalar(1e-15), dmax * tc);
+  } else {
+    K = -solref[0] / std::max(Scalar(1e-15), dmax * dmax);
+    B = -solref[1] / std::max(Scalar(1e-15), dmax);
+  }
+  const Scalar imp = contact_impedance(solimp, x);
+  const auto body_weight = [&](int shape) {
+    const int body = model.shape_body[shape];
+    return body < 0 ? Scalar(0) : model.body_invweight0[2 * body];
+  };
+  s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (body_weight(a) + body_weight(b)));
+  s.cfm_friction = s.cfm_normal / model.impratio;
+  s.damping = B;
+  s.spring = K * imp * x;
+  return s;
+}
+
+// the five numbers of a contact's softness as the blocks read them (ContactLists::softness): the normal row's cfm
+// (-1: a rigid contact), the friction rows', B, K imp (pos - margin), the active margin
+inline void contact_softness_row(const ContactSoftness& s, Scalar* out) {
+  out[0] = s.soft ? s.cfm_normal : -1;
+  out[1] = s.cfm_friction;
+  out[2] = s.damping;
+  out[3] = s.spring;
+  out[4] = s.active_margin;
+}
+
+// the normal row's target: where active, v + dt aref; before, it may close the distance to the active margin
+template <typename V>
+inline V soft_normal_target(const V& depth, const V& v, const V& damping, const V& spring, const V& active_margin,
+                            const V& dt) {
+  const V reach = depth + active_margin;
+  return select<V>(reach > 0, v - dt * (damping * v + spring), reach / dt);
+}
+
+// a friction row's target: its sliding damped by B over the step (MuJoCo's aref = -B v for friction)
+template <typename V>
+inline V soft_friction_target(const V& v, const V& damping, const V& dt) {
+  return v - dt * damping * v;
+}
+
 // d [9] = the unit normal n [3], then the tangents t1 and t2
 inline void contact_frame(const Scalar* n, Scalar* d) {
   Vec3 t1, t2;

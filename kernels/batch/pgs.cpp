@@ -58,13 +58,15 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   auto z = [&](int r) { return rows.MinvJT + static_cast<size_t>(r) * n; };
   V<T>* lambda = rows.lambda;
   for (int r = 0; r < rows.count; ++r) {
-    const V<T> W = dot<T>(J(r), z(r), n) + cfm;
+    const V<T> W = dot<T>(J(r), z(r), n) + (cfm + rows.cfm[r]);
     rows.inv_mass[r] = (rows.active[r] != 0) & (W > T(1e-12)) ? 1 / W : V<T>{};
   }
   for (int r = 0; r < rows.count; ++r) apply<T>(z(r), lambda[r], rows.active[r], n, qd);
   // unconstrained step of one row: the impulse that would bring J qd to its target
   auto velocity = [&](int r) { return row_velocity<T>(J(r), qd, rows.nonzero_begin[r], rows.nonzero_end[r]); };
-  auto step = [&](int r) { return -(velocity(r) - rows.target[r] + cfm * lambda[r]) * rows.inv_mass[r]; };
+  auto step = [&](int r) {
+    return -(velocity(r) - rows.target[r] + (cfm + rows.cfm[r]) * lambda[r]) * rows.inv_mass[r];
+  };
   // a lane sweeps while some row's impulse in it moved by more than tolerance / (J M^-1 J^T) in the
   // sweep before (with tolerance 0: moved at all; a sweep that moves none is a fixed point, which
   // every further sweep would repeat bit for bit). A lane that stopped keeps its bits, as if alone in

@@ -22,10 +22,11 @@ struct BatchRows {
   const int* nonzero_end = nullptr;
   const Lanes<T>* MinvJT = nullptr;     // [row][dof]
   const Lanes<T>* target = nullptr;     // [row] the velocity J qd the row drives towards
+  const Lanes<T>* cfm = nullptr;        // [row] its own constraint force mixing, beyond the settings' cfm
   const Lanes<T>* mu = nullptr;         // [row] FrictionPair: friction coefficient
   const Lanes<T>* bound = nullptr;      // [row] Bounded: the largest |impulse|
   const IntLanes<T>* active = nullptr;  // [row] -1 in the lanes that have the row, 0 elsewhere
-  Lanes<T>* inv_mass = nullptr;         // [row] out: 1 / (J M^-1 J^T + cfm), 0 for a row of no mass
+  Lanes<T>* inv_mass = nullptr;         // [row] out: 1 / (J M^-1 J^T + settings' cfm + cfm), 0 for a row of no mass
   Lanes<T>* lambda = nullptr;           // [row] in: the warm start (not yet applied); out: the impulse
 };
 

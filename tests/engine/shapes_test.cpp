@@ -158,8 +158,10 @@ void expect_rests(const std::string& what, const Transform& pose, const std::fun
                   int least_contacts = 3, bool on_box = false) {
   using namespace solver_test;
   ModelBuilder builder;
+  ShapeOptions below;
+  below.xform.p = Vec3(0, -0.25, 0);
   if (on_box)
-    builder.add_shape_box(-1, Vec3(0.5, 0.25, 0.5), ShapeOptions{Transform{Vec3(0, -0.25, 0), Quat::Identity()}});
+    builder.add_shape_box(-1, Vec3(0.5, 0.25, 0.5), below);
   else
     builder.add_ground_plane();
   const int body = builder.add_body(RigidBody::from_box(1, Vec3::Constant(0.1)), pose);

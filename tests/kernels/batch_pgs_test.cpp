@@ -30,7 +30,7 @@ template <typename T>
 struct Problem {
   using V = Lanes<T>;
   static constexpr int W = kLanes<T>;
-  std::vector<V> J, z, target, mu, inv_mass, lambda, qd;
+  std::vector<V> J, z, target, cfm, mu, inv_mass, lambda, qd;  // cfm: a soft row's own, on every other row
   std::vector<IntLanes<T>> active;
   std::vector<int> nonzero_begin, nonzero_end;  // every row dense but the first, nonzero on dofs 2 .. 4
 
@@ -38,6 +38,7 @@ struct Problem {
       : J(kRows * kDofs),
         z(kRows * kDofs),
         target(kRows),
+        cfm(kRows),
         mu(kRows),
         inv_mass(kRows),
         lambda(kRows),
@@ -64,6 +65,7 @@ struct Problem {
           z[r * kDofs + k][l] = static_cast<T>(x[k]);
         }
         target[r][l] = on ? static_cast<T>(u(rng)) : 0;
+        cfm[r][l] = on && r % 2 == 1 ? static_cast<T>(0.2 * (1 + u(rng))) : 0;
         lambda[r][l] = on ? static_cast<T>(kKind[r] == RowKind::Unilateral ? 0.5 + 0.5 * u(rng) : 0.2 * u(rng)) : 0;
         mu[r][l] = on ? static_cast<T>(0.6 + 0.4 * u(rng)) : 0;
       }
@@ -81,6 +83,7 @@ struct Problem {
     b.nonzero_end = nonzero_end.data();
     b.MinvJT = z.data();
     b.target = target.data();
+    b.cfm = cfm.data();
     b.mu = mu.data();
     b.active = active.data();
     b.inv_mass = inv_mass.data();
@@ -128,7 +131,8 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
         zp.push_back(p.z[r * kDofs + k][l]);
         W += Jp.back() * zp.back();
       }
-      row.inv_mass = 1 / (W + settings.cfm);
+      row.cfm = p.cfm[r][l];
+      row.inv_mass = 1 / (W + (settings.cfm + row.cfm));
       row.target = p.target[r][l];
       row.lambda = lambda[r][l];
       row.mu = p.mu[r][l];
@@ -319,8 +323,8 @@ void expect_bounded_rows_match_the_scalar_solve() {
   const int normals[kBounded] = {-1, -1, -1};
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<V> J(kBounded * kDofs), z(kBounded * kDofs), target(kBounded), mu(kBounded), bound(kBounded),
-      inv_mass(kBounded), lambda(kBounded), qd(kDofs);
+  std::vector<V> J(kBounded * kDofs), z(kBounded * kDofs), target(kBounded), cfm(kBounded), mu(kBounded),
+      bound(kBounded), inv_mass(kBounded), lambda(kBounded), qd(kDofs);
   std::vector<IntLanes<T>> active(kBounded, ~IntLanes<T>{});
   std::vector<int> begin(kBounded, 0), end(kBounded, kDofs);
   std::vector<Eigen::LLT<Eigen::MatrixXd>> llt;
@@ -352,6 +356,7 @@ void expect_bounded_rows_match_the_scalar_solve() {
   rows.nonzero_end = end.data();
   rows.MinvJT = z.data();
   rows.target = target.data();
+  rows.cfm = cfm.data();
   rows.mu = mu.data();
   rows.bound = bound.data();
   rows.active = active.data();

@@ -1,0 +1,119 @@
+// MuJoCo's soft contacts (engine/parts/rows.h contact_softness): the weights they scale by, and where bodies
+// come to rest on them, against MuJoCo 2.2.2 on the same MJCF.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "engine/builder.h"
+#include "engine/mjcf_import.h"
+#include "engine/parts/rows.h"
+#include "solver_test_support.h"
+#include "test_support.h"
+#include "test_support_errors.h"
+
+namespace novaphy {
+namespace {
+
+using MjModelPtr = std::unique_ptr<mjModel, void (*)(mjModel*)>;
+using MjDataPtr = std::unique_ptr<mjData, void (*)(mjData*)>;
+
+// body_invweight0, worked out by NovaPhy from joint_q0 (CRBA and its Jacobians), is MuJoCo's own
+TEST(SoftContacts, BodyWeightsAreMujocos) {
+  for (const std::string& path : {std::string(NOVAPHY_SCENE_DIR "/quadruped.xml"),
+                                  std::string("/usr/share/mujoco/model/humanoid/humanoid.xml")}) {
+    ModelBuilder builder;
+    const MujocoImport import = import_mjcf(builder, path);
+    const Model model = builder.finalize();
+    const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
+    int compared = 0;
+    for (int b = 1; b < m->nbody; ++b) {
+      const int body = import.body_map[b];
+      if (body < 0) continue;
+      for (int k = 0; k < 2; ++k)
+        EXPECT_NEAR(model.body_invweight0[2 * body + k], m->body_invweight0[2 * b + k],
+                    1e-9 * m->body_invweight0[2 * b + k])
+            << path << " body " << b << (k == 0 ? " translation" : " rotation");
+      ++compared;
+    }
+    EXPECT_GT(compared, 4) << path;
+  }
+}
+
+// MuJoCo's impedance: dmin at the surface, dmax from `width` in, the midpoint and power shaping between
+TEST(SoftContacts, ImpedanceFollowsSolimp) {
+  const Scalar solimp[5] = {0.2, 0.9, 0.01, 0.4, 3};
+  EXPECT_NEAR(contact_impedance(solimp, 0), 0.2, 1e-15);
+  EXPECT_NEAR(contact_impedance(solimp, -0.02), 0.9, 1e-15);
+  const Scalar u = 0.3;  // below the midpoint: y = u^p / mid^(p-1)
+  EXPECT_NEAR(contact_impedance(solimp, -u * 0.01), 0.2 + 0.7 * std::pow(u, 3) / std::pow(0.4, 2), 1e-15);
+  const Scalar w = 0.7;  // above: y = 1 - (1-u)^p / (1-mid)^(p-1)
+  EXPECT_NEAR(contact_impedance(solimp, -w * 0.01), 0.2 + 0.7 * (1 - std::pow(0.3, 3) / std::pow(0.6, 2)), 1e-15);
+  const Scalar flat[5] = {0.95, 0.95, 0.001, 0.5, 2};
+  EXPECT_EQ(contact_impedance(flat, -0.0005), 0.95);
+}
+
+// bodies dropped on soft contacts come to rest as deep as in MuJoCo: MuJoCo's defaults on a box; a sphere
+// of Go1's feet's solimp (soft at the surface, hard 23 mm in), which sinks over a centimetre; a capsule of a
+// slower solref; a cylinder on a priority-deciding floor
+TEST(SoftContacts, BodiesRestAtMujocosDepth) {
+  const std::string path = test::write_temp_file("soft_rest.xml", R"(
+<mujoco>
+  <option timestep="0.002"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 0.1"/>
+    <body name="box" pos="0 0 0.12"><freejoint/><geom type="box" size="0.1 0.1 0.1" mass="2"/></body>
+    <body name="foot" pos="1 0 0.03"><freejoint/>
+      <geom type="sphere" size="0.023" mass="3" priority="1" solimp="0.015 1 0.023"/></body>
+    <body name="capsule" pos="2 0 0.06" euler="0 90 0"><freejoint/>
+      <geom type="capsule" size="0.05 0.2" mass="1" solref="0.05 0.5"/></body>
+    <body name="can" pos="3 0 0.12"><freejoint/><geom type="cylinder" size="0.1 0.1" mass="4" solmix="3"/></body>
+  </worldbody>
+</mujoco>)");
+  const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
+  const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
+  for (int k = 0; k < 1000; ++k) mj_step(m.get(), d.get());
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  solver_test::Scene scene(builder);
+  scene.run(2, 0.002);
+  for (const char* name : {"box", "foot", "capsule", "can"}) {
+    const int b = mj_name2id(m.get(), mjOBJ_BODY, name);
+    const Scalar mujoco = d->xpos[3 * b + 2], novaphy = scene.position(import.body_map[b]).z();
+    EXPECT_NEAR(novaphy, mujoco, 2e-4) << name;
+  }
+  // (the foot sinks more than a rigid contact's slop would allow)
+  const int foot = mj_name2id(m.get(), mjOBJ_BODY, "foot");
+  EXPECT_LT(scene.position(import.body_map[foot]).z(), 0.023 - 0.005);
+  std::filesystem::remove(path);
+}
+
+// solref and solimp outside MuJoCo's ranges are errors naming the geom
+TEST(SoftContacts, BadSolrefAndSolimpNameTheShape) {
+  ModelBuilder builder;
+  const int body = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  ShapeOptions options;
+  options.name = "foot";
+  options.solref = {0.02, -1};
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(body, 0.1, options),
+                       "shape 0 ('foot') (Sphere): solref must be (time constant > 0, damping ratio > 0), "
+                       "(-stiffness < 0, -damping <= 0) or (0, 0) for a rigid contact, got (0.02, -1)");
+  options.solref = {0.02, 1};
+  options.solimp = {0.5, 1.25, 0.001, 0.5, 2};
+  EXPECT_NOVAPHY_ERROR(
+      builder.add_shape_sphere(body, 0.1, options),
+      "shape 0 ('foot') (Sphere): solimp must be (dmin, dmax in [0, 1], width >= 0, midpoint in [0, 1], "
+      "power >= 1), got (0.5, 1.25, 0.001, 0.5, 2)");
+  options.solimp = {0.5, 0.75, 0.001, 0.5, 0.5};
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(body, 0.1, options), "power >= 1), got (0.5, 0.75, 0.001, 0.5, 0.5)");
+  options.solimp = {0.9, 0.95, 0.001, 0.5, 2};
+  options.margin = -0.01;
+  EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(body, 0.1, options),
+                       "shape 0 ('foot') (Sphere): margin must be finite and >= 0, got -0.01");
+  EXPECT_NOVAPHY_ERROR(builder.set_impratio(0), "impratio must be finite and > 0, got 0");
+}
+
+}  // namespace
+}  // namespace novaphy
