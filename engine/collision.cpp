@@ -404,6 +404,11 @@ ConvexShape CollisionPipeline::convex_shape(int s, const Transform& pose, HullVi
   return shape;
 }
 
+Scalar CollisionPipeline::pair_margin(int a, int b) const {
+  const bool soft = model_.shape_solref[2 * a] != 0 && model_.shape_solref[2 * b] != 0;
+  return soft ? std::max(model_.shape_margin[a], model_.shape_margin[b]) : options_.margin;
+}
+
 void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b,
                                      std::vector<Found>& out) const {
   const bool swap = model_.shape_type[a] > model_.shape_type[b];
@@ -412,7 +417,7 @@ void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, cons
   const Transform &Xa = swap ? pose_b : pose_a, &Xb = swap ? pose_a : pose_b;
   const Vec3 sa = Eigen::Map<const Vec3>(&model_.shape_scale[3 * a]);
   const Vec3 sb = Eigen::Map<const Vec3>(&model_.shape_scale[3 * b]);
-  const Scalar m = options_.margin;
+  const Scalar m = pair_margin(a, b);
   ContactPoint points[kMaxPairContacts];
   int count = 0;
   switch (ta) {

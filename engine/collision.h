@@ -59,8 +59,10 @@ struct Contacts : ModelCounts {
 };
 
 struct CollisionOptions {
-  int contact_capacity = 0;    // 0: 8 per shape, at least 64
-  Scalar margin = 0.01;        // contacts are made this far before touching (at least every shape's shape_margin)
+  int contact_capacity = 0;  // 0: 8 per shape, at least 64
+  // contacts are made this far before touching (pairs of soft shapes: within their shape_margin, MuJoCo's rule);
+  // the broad phase's bounds reach the larger of this and every shape_margin
+  Scalar margin = 0.01;
   bool self_collision = true;  // links of one articulation collide (never a parent with its child)
   int num_threads = 0;         // threads of collide's loops over shapes, worlds and planes; 0: OpenMP's default
 };
@@ -118,6 +120,9 @@ class CollisionPipeline {
   const HullView& hull_view(int s, HullView* view) const;
   // shape s at a pose as the convex narrow phase sees it (a Mesh's hull into *hull)
   ConvexShape convex_shape(int s, const Transform& pose, HullView* hull) const;
+  // how near shapes a and b are before they touch when their contacts are made: MuJoCo's rule (the larger
+  // shape_margin) where both are soft (a solref each), else options.margin
+  Scalar pair_margin(int a, int b) const;
   // shapes a < b at those poses
   void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it

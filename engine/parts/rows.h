@@ -108,9 +108,11 @@ inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
   if (dmin == dmax || width <= 1e-15) return 0.5 * (dmin + dmax);
   const Scalar u = std::abs(x) / width;
   if (u >= 1) return dmax;
+  // (power 2, MuJoCo's default, without std::pow: this runs per contact and step)
+  const auto raise = [power](Scalar x, Scalar p) { return power == 2 ? (p == 2 ? x * x : x) : std::pow(x, p); };
   const Scalar y = power == 1 ? u
-                   : u <= mid ? std::pow(u, power) / std::pow(mid, power - 1)
-                              : 1 - std::pow(1 - u, power) / std::pow(1 - mid, power - 1);
+                   : u <= mid ? raise(u, power) / raise(mid, power - 1)
+                              : 1 - raise(1 - u, power) / raise(1 - mid, power - 1);
   return dmin + y * (dmax - dmin);
 }
 
