@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -214,10 +215,8 @@ TEST(ShapesResting, ConvexMeshOnThePlaneAndOnABox) {
         [&](ModelBuilder& b, int body) { b.add_shape_mesh(body, b.add_mesh(points, "prism")); }, 4, on_box);
 }
 
-// a humanoid of mesh, cylinder, capsule and sphere parts falls and lies on the floor, no part of it more than
-// 1 cm below at rest, in both precisions
-TEST(ShapesResting, HumanoidOfMeshesCylindersAndCapsulesLiesOnTheFloor) {
-  const std::string path = test::write_temp_file("shape_humanoid.xml", R"(
+// a humanoid of mesh, cylinder, capsule and sphere parts, falling from 1.3 m tilted
+constexpr const char* kHumanoid = R"(
 <mujoco>
   <option timestep="0.002"/>
   <asset>
@@ -251,7 +250,12 @@ TEST(ShapesResting, HumanoidOfMeshesCylindersAndCapsulesLiesOnTheFloor) {
             <geom type="mesh" mesh="shoe"/></body></body></body>
     </body>
   </worldbody>
-</mujoco>)");
+</mujoco>)";
+
+// a humanoid of mesh, cylinder, capsule and sphere parts falls and lies on the floor, no part of it more than
+// 1 cm below at rest, in both precisions
+TEST(ShapesResting, HumanoidOfMeshesCylindersAndCapsulesLiesOnTheFloor) {
+  const std::string path = test::write_temp_file("shape_humanoid.xml", kHumanoid);
   for (const Precision precision : {Precision::Float64, Precision::Float32}) {
     ModelBuilder builder;
     const MujocoImport import = import_mjcf(builder, path);
@@ -275,6 +279,40 @@ TEST(ShapesResting, HumanoidOfMeshesCylindersAndCapsulesLiesOnTheFloor) {
     EXPECT_LT(scene.position(import.body_map[1]).z(), 0.4) << precision_name(precision);  // the torso: down
   }
   std::filesystem::remove(path);
+}
+
+// the humanoid of every new shape in 16 worlds of a batch, each its own fall: every world ends bit for bit as
+// it ends stepped alone, in both precisions
+TEST(ShapesBatched, EveryWorldEqualsItselfSteppedAlone) {
+  constexpr int kWorlds = 16, kSteps = 400;
+  const std::string path = test::write_temp_file("shape_humanoid.xml", kHumanoid);
+  ModelBuilder robot;
+  import_mjcf(robot, path);
+  std::filesystem::remove(path);
+  auto fall = [&](int worlds, int first, Precision precision) {
+    ModelBuilder builder;
+    builder.replicate(robot, worlds, Vec3::Zero());  // (worlds never collide: all at one place)
+    builder.set_precision(precision);
+    solver_test::Scene scene(builder);
+    const int nq = scene.model.joint_coord_count / worlds;
+    for (int w = 0; w < worlds; ++w) {  // (each world its own start: a shift and a tilt of the free joint)
+      scene.state.joint_q[w * nq + 1] += 0.05 * (first + w);
+      scene.state.joint_q[w * nq + 3] += 0.03 * ((first + w) % 5);
+    }
+    scene.run(kSteps * 0.002, 0.002);
+    return scene.state;
+  };
+  for (const Precision precision : {Precision::Float64, Precision::Float32}) {
+    const State batch = fall(kWorlds, 0, precision);
+    const int nq = batch.joint_coord_count / kWorlds, nv = batch.joint_dof_count / kWorlds;
+    for (int w = 0; w < kWorlds; ++w) {
+      const State alone = fall(1, w, precision);
+      ASSERT_EQ(std::memcmp(&batch.joint_q[w * nq], alone.joint_q.data(), nq * sizeof(Scalar)), 0)
+          << precision_name(precision) << " world " << w;
+      ASSERT_EQ(std::memcmp(&batch.joint_qd[w * nv], alone.joint_qd.data(), nv * sizeof(Scalar)), 0)
+          << precision_name(precision) << " world " << w;
+    }
+  }
 }
 
 // mesh links of one's own, dropped on the floor and on a box, and a hinged arm's mesh hand lowered onto a

@@ -42,6 +42,21 @@ TEST(SoftContacts, BodyWeightsAreMujocos) {
   }
 }
 
+// a free body's weights are 1/m and the mean of its inverse principal inertias; a body welded to the world has
+// none (an articulation of no dofs: a fuzzer's find)
+TEST(SoftContacts, FreeBodiesWeighTheirInverseInertiaWeldedOnesNothing) {
+  ModelBuilder builder;
+  const int free = builder.add_body(RigidBody::from_box(2, Vec3(0.1, 0.2, 0.3)));
+  const int welded = builder.add_body(RigidBody::from_sphere(1, 0.1));
+  builder.add_joint_fixed(-1, welded);
+  const Model model = builder.finalize();
+  const Mat3 I = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&model.body_inertia[9 * free]);
+  EXPECT_NEAR(model.body_invweight0[2 * free], 0.5, 1e-12);
+  EXPECT_NEAR(model.body_invweight0[2 * free + 1], I.inverse().trace() / 3, 1e-9);
+  EXPECT_EQ(model.body_invweight0[2 * welded], 0);
+  EXPECT_EQ(model.body_invweight0[2 * welded + 1], 0);
+}
+
 // MuJoCo's impedance: dmin at the surface, dmax from `width` in, the midpoint and power shaping between
 TEST(SoftContacts, ImpedanceFollowsSolimp) {
   const Scalar solimp[5] = {0.2, 0.9, 0.01, 0.4, 3};

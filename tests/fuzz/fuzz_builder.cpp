@@ -43,11 +43,25 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
       ShapeOptions options;
       options.xform = fuzz::transform(data);
       if (data.ConsumeBool()) options.mu = fuzz::number(data), options.restitution = fuzz::number(data);
+      if (data.ConsumeBool()) {  // MuJoCo's softness, in range or not
+        options.solref = {fuzz::number(data), fuzz::number(data)};
+        options.solimp = {fuzz::number(data), fuzz::number(data), fuzz::number(data), fuzz::number(data),
+                          fuzz::number(data)};
+        options.margin = fuzz::number(data);
+      }
       const int body = data.ConsumeIntegralInRange(-2, bodies);
       const Scalar size = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(0.01, 1) : fuzz::number(data);
-      switch (data.ConsumeIntegralInRange(0, 2)) {
+      switch (data.ConsumeIntegralInRange(0, 5)) {
         case 0: builder.add_shape_box(body, Vec3(size, size, fuzz::number(data)), options); break;
         case 1: builder.add_shape_sphere(body, size, options); break;
+        case 2: builder.add_shape_cylinder(body, size, fuzz::number(data), options); break;
+        case 3: builder.add_shape_ellipsoid(body, Vec3(size, fuzz::number(data), size), options); break;
+        case 4: {  // a mesh of a few points, flat, repeated or not finite at times
+          std::vector<Vec3> points(data.ConsumeIntegralInRange(0, 12));
+          for (Vec3& p : points) p = data.ConsumeBool() ? size * fuzz::vec3(data) : Vec3(size, 0, -size);
+          builder.add_shape_mesh(body, builder.add_mesh(points), options);
+          break;
+        }
         default: builder.add_shape_capsule(body, size, fuzz::number(data), options); break;
       }
       break;

@@ -33,10 +33,14 @@ std::string triple(FuzzedDataProvider& data) {
 
 std::string mjcf(FuzzedDataProvider& data) {
   std::ostringstream xml;
-  xml << "<mujoco><option gravity=\"" << triple(data) << "\"/><worldbody>";
+  xml << "<mujoco><option gravity=\"" << triple(data) << "\"/>";
+  // a mesh of a few points, flat, repeated or not finite at times
+  xml << "<asset><mesh name=\"m\" vertex=\"";
+  for (int k = 0, n = data.ConsumeIntegralInRange(1, 8); k < n; ++k) xml << triple(data) << " ";
+  xml << "\"/></asset><worldbody>";
   if (data.ConsumeBool()) xml << "<geom type=\"plane\" size=\"5 5 0.1\"/>";
   const char* joints[] = {"hinge", "slide", "ball", "free"};
-  const char* geoms[] = {"sphere", "capsule", "box", "plane", "cylinder", "ellipsoid"};
+  const char* geoms[] = {"sphere", "capsule", "box", "plane", "cylinder", "ellipsoid", "mesh"};
   std::function<void(int)> body = [&](int depth) {
     xml << "<body pos=\"" << triple(data) << "\"";
     if (data.ConsumeBool()) xml << " quat=\"" << text(fuzz::number(data)) << " " << triple(data) << "\"";
@@ -52,7 +56,9 @@ std::string mjcf(FuzzedDataProvider& data) {
       xml << "<inertial pos=\"" << triple(data) << "\" mass=\"" << text(fuzz::number(data)) << "\" diaginertia=\""
           << triple(data) << "\"/>";
     for (int k = 0, n = data.ConsumeIntegralInRange(0, 2); k < n; ++k)
-      xml << "<geom type=\"" << geoms[data.ConsumeIntegralInRange(0, 5)] << "\" size=\"" << triple(data) << "\"/>";
+      xml << "<geom type=\"" << geoms[data.ConsumeIntegralInRange(0, 6)] << "\" mesh=\"m\" size=\"" << triple(data)
+          << "\" solref=\"" << text(fuzz::number(data)) << " " << text(fuzz::number(data)) << "\" solimp=\""
+          << triple(data) << " 0.5 2\" margin=\"" << text(fuzz::number(data)) << "\"/>";
     if (depth < 4)
       for (int k = 0, n = data.ConsumeIntegralInRange(0, 2); k < n; ++k) body(depth + 1);
     xml << "</body>";
