@@ -219,7 +219,7 @@ void set_body_invweight0(Model& model) {
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     if (art.dof_count() == 0) continue;  // (welded to the world: weightless, as MuJoCo's static bodies)
-    mass_matrix_gemm(art, s);  // H, and each link's Jacobian [angular; linear] in its own frame
+    mass_matrix_gemm(art, s);            // H, and each link's Jacobian [angular; linear] in its own frame
     const Eigen::LLT<MatX> H(s.H);
     if (H.info() != Eigen::Success) continue;
     for (int i = 0; i < art.link_count(); ++i) {
