@@ -238,8 +238,16 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
   const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
   for (int l = 0; l < count; ++l) {
     const std::vector<int>& shapes = world_others_[first + l];
-    lane_boxes(l, scratch);
-    world_contacts(state, first + l, scratch, scratch.hits.data() + l * shapes.size());
+    const int n = static_cast<int>(shapes.size());
+    const std::uint64_t* hits = scratch.hits.data() + l * n;
+    // the boxes the lane's narrow phase reads: the shapes of its pairs and those reaching its planes (all of
+    // them where shapes of no world meet every shape)
+    std::uint64_t needed = shared_others_.empty() || n == 0 ? 0 : ~std::uint64_t{0} >> (64 - n);
+    for (int i = 0; i < n; ++i)
+      if (hits[i] != 0) needed |= hits[i] | std::uint64_t{1} << i;
+    for (int k = 0; k < planes; ++k) needed |= scratch.plane_hits[l * planes + k];
+    lane_boxes(l, needed, scratch);
+    world_contacts(state, first + l, scratch, hits);
     for (int k = 0; k < planes; ++k) {
       const int p = plane_of(first + l, code[k]);
       for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {

@@ -102,8 +102,8 @@ class CollisionPipeline {
   // the boxes of the worlds of group g into scratch.lanes (a world per lane), and the pairs whose boxes
   // overlap into scratch.hits ([lane][shape]: a bit for each shape after it)
   void group_boxes(const State& state, int g, Scratch& scratch) const;
-  // lane l's boxes from scratch.lanes into scratch.boxes
-  void lane_boxes(int l, Scratch& scratch) const;
+  // lane l's boxes of the shapes set in `needed` (a bit per shape) from scratch.lanes into scratch.boxes
+  void lane_boxes(int l, std::uint64_t needed, Scratch& scratch) const;
   // the planes of group g against its worlds' shapes, in lanes (scratch.lanes): for each of the group's
   // planes, in the order its worlds meet them (group_plane_), the shapes that may reach it, into
   // scratch.plane_hits ([lane][plane]: a bit for each shape)

@@ -235,10 +235,11 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
   }
 }
 
-void CollisionPipeline::lane_boxes(int l, Scratch& scratch) const {
+void CollisionPipeline::lane_boxes(int l, std::uint64_t needed, Scratch& scratch) const {
   const int n = static_cast<int>(scratch.lanes.size());
   if (static_cast<int>(scratch.boxes.size()) < n) scratch.boxes.resize(n);
-  for (int i = 0; i < n; ++i) {
+  for (std::uint64_t m = needed; m != 0; m &= m - 1) {
+    const int i = __builtin_ctzll(m);
     const ShapeLanes& X = scratch.lanes[i];
     Box& box = scratch.boxes[i];
     box.pose.p = Vec3(X.pose[0][l], X.pose[1][l], X.pose[2][l]);
