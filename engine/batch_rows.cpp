@@ -106,8 +106,9 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const S
 }
 
 // slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, depth,
-// mu, restitution, the previous impulse, its softness), its links (b, a) per lane; returns the lanes that have one, and
-// in `uniform` the lane whose links every other such lane shares (-2: none does)
+// mu, restitution, the previous impulse, its softness, its condim and torsional and rolling friction), its links (b, a)
+// per lane; returns the lanes that have one, and in `uniform` the lane whose links every other such lane shares (-2:
+// none does)
 template <typename T>
 IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* listed, const Lanes<T>* o,
                           const StepContext& step, RowWork<T>& R, V<T>* n, V<T>* p, V<T>* in, int (*link)[2],
@@ -131,6 +132,7 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     if (const Scalar* P = C.previous(c))
       for (int m = 0; m < 3; ++m) in[3 + m][l] = static_cast<T>(P[m]);
     for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(lists.softness[5 * static_cast<size_t>(c) + m]);
+    for (int m = 0; m < 3; ++m) in[11 + m][l] = static_cast<T>(lists.friction[3 * static_cast<size_t>(c) + m]);
     link[l][0] = lists.link_b[c];
     link[l][1] = lists.link_a[c];
     if (*uniform == -1) *uniform = l;
@@ -169,13 +171,15 @@ std::pair<int, int> contact_paths(const BatchTopology<T>& topo, const IntLanes<T
   return {begin, end};
 }
 
-// slot t's normal row and two friction rows
+// slot t's normal row and two friction rows; where the model has condim 4 or 6, a torsional row and two rolling
+// rows (in the lanes whose contact has them)
 template <typename T>
 void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, const BlockKinematics<T>& kin,
                       const StepContext& step, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
   const int nv = topo.dof_count;
-  V<T> n[3] = {}, p[3] = {}, in[11] = {};  // depth, mu, restitution, previous impulse [3], softness [5]
+  // depth, mu, restitution, previous impulse [3], softness [5], condim, torsional and rolling friction
+  V<T> n[3] = {}, p[3] = {}, in[14] = {};
   int link[kLanes<T>][2];
   int uniform;
   const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
@@ -199,7 +203,23 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     R.nonzero_begin[r] = begin;
     R.nonzero_end[r] = end;
   }
-  batch_solve_many(topo, kin.H, end, R.z_row(first), 3, nv);
+  const int dims = step.lists.dims;
+  for (int e = 3; e < dims; ++e) {
+    // J_k = coef_k axis . S_ang,k: the relative angular velocity about the normal (torsion) or a tangent (rolling)
+    const IntLanes<T> has = on & (in[11] >= T(e == 3 ? 4 : 6));
+    const int r = add_row(R, e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair, has, V<T>{}, V<T>{});
+    V<T>* J = R.J_row(r);
+    const V<T>* axis = d + 3 * (e == 3 ? 0 : e - 3);
+    for (int j = 0; j < nv; ++j) {
+      const V<T>* s = kin.S + 6 * j;
+      J[j] = has ? R.coef[j] * (axis[0] * s[0] + axis[1] * s[1] + axis[2] * s[2]) : V<T>{};
+    }
+    std::copy(J, J + nv, R.z_row(r));
+    R.normal[r] = first;
+    R.nonzero_begin[r] = begin;
+    R.nonzero_end[r] = end;
+  }
+  batch_solve_many(topo, kin.H, end, R.z_row(first), dims, nv);
   // the rows' velocities at the step's start; their targets and a soft contact's cfm
   V<T> v[3] = {};
   for (int e = 0; e < 3; ++e)
@@ -214,6 +234,14 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     R.cfm[first + e] = select<V<T>>(soft, in[7], V<T>{});
   }
   R.mu[first + 1] = in[1];
+  for (int e = 3; e < dims; ++e) {
+    const V<T> mu = in[e == 3 ? 12 : 13];
+    V<T> w{};
+    for (int j = 0; j < nv; ++j) w += R.J_row(first + e)[j] * R.qd_in[j];
+    R.target[first + e] = select<V<T>>(soft, soft_friction_target(w, in[8], dt), V<T>{});
+    R.cfm[first + e] = select<V<T>>(soft, soft_spin_cfm(in[7], in[1], mu), V<T>{});
+    R.mu[first + e] = mu;
+  }
 }
 
 // the sweeps over the block's rows
@@ -255,7 +283,7 @@ void keep_impulses(const BatchGroup<T>& G, int b, int slots, const IntLanes<T>& 
   }
   for (int t = 0; t < slots; ++t) {
     V<T> P[3];
-    contact_impulse_kept(&R.lambda[R.rows - 3 * (slots - t)], &R.frame[9 * t], P);
+    contact_impulse_kept(&R.lambda[R.rows - step.lists.dims * (slots - t)], &R.frame[9 * t], P);
     for (int l = 0; l < kLanes<T>; ++l) {
       const int c = R.contact[t * kLanes<T> + l];
       if (c < 0) continue;
@@ -300,7 +328,7 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
     gather_lanes<T>(qd_off, step.qd, nv, w.qd.data());
   }
   Clock::time_point mark = phases ? Clock::now() : Clock::time_point{};
-  R.resize(2 * nl + nf + 3 * slots, nv, slots);
+  R.resize(2 * nl + nf + step.lists.dims * slots, nv, slots);
   R.rows = 0;
   add_limit_rows(G, b, kin.H, step, w, mine, R);
   add_friction_rows(G, b, kin.H, step, mine, R);

@@ -47,7 +47,8 @@ struct ShapeOptions {
   int collision_group = 1;
   int collision_mask = -1;
   int priority = 0;  // FrictionRule::Mujoco: the shape of higher priority decides a contact's friction and condim
-  int condim = 3;    // 1: frictionless contacts (MuJoCo's condim; 4 and 6 act as 3: no torsional or rolling rows)
+  int condim = 3;    // MuJoCo's: 1 frictionless, 3 sliding friction, 4 and torsional, 6 and rolling
+  Scalar mu_torsion = 0.005, mu_rolling = 0.0001;  // (m) the torsional and rolling friction of condim 4 and 6
   // MuJoCo's contact softness (model.h, engine/parts/rows.h): solref (0, 0) is a rigid contact (the solver's
   // erp and slop); (time constant > 0, damping ratio > 0) or (-stiffness < 0, -damping <= 0) a soft one
   std::array<Scalar, 2> solref = {0, 0};

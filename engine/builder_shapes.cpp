@@ -21,6 +21,8 @@ int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const S
   if (type != ShapeType::Plane)
     for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
   check_nonnegative(item, "mu", options.mu);
+  check_nonnegative(item, "mu_torsion", options.mu_torsion);
+  check_nonnegative(item, "mu_rolling", options.mu_rolling);
   if (options.condim != 1 && options.condim != 3 && options.condim != 4 && options.condim != 6)
     fail(item, ": condim must be 1, 3, 4 or 6, got ", options.condim);
   if (!(options.restitution >= 0 && options.restitution <= 1))
@@ -101,6 +103,8 @@ void ModelBuilder::lay_out_shapes(Model& model) const {
     shape.options.xform.to_array(&model.shape_transform[7 * s]);
     Eigen::Map<Vec3>(&model.shape_scale[3 * s]) = shape.scale;
     model.shape_mu[s] = shape.options.mu;
+    model.shape_mu_torsion[s] = shape.options.mu_torsion;
+    model.shape_mu_rolling[s] = shape.options.mu_rolling;
     model.shape_restitution[s] = shape.options.restitution;
     model.shape_collision_group[s] = shape.options.collision_group;
     model.shape_collision_mask[s] = shape.options.collision_mask;

@@ -136,8 +136,9 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const int rn = add_row(ba, bb, &p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
     const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
     add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
+    const ContactFriction f = contact_friction_of(model_, sa, sb);
     rows_[r1].normal = rn;
-    rows_[r1].mu = contact_friction(model_, sa, sb);
+    rows_[r1].mu = f.mu;
     // the rows' velocities at the step's start; their targets and a soft contact's cfm
     Scalar v[3];
     for (int e = 0; e < 3; ++e) v[e] = row_velocity(rows_[rn + e], J_, step.in->joint_qd.data());
@@ -158,6 +159,19 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     contact_warm_start(previous ? previous : zero, d, step.rows, warm);
     for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
     contact_row_[c] = rn;
+    // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents (no warm start)
+    for (int e = 3; e < (f.condim == 6 ? 6 : f.condim == 4 ? 4 : 3); ++e) {
+      const Scalar* axis = d + 3 * (e == 3 ? 0 : e - 3);
+      const int r = add_row(ba, bb, nullptr, Vec3(axis[0], axis[1], axis[2]),
+                            e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair);
+      const Scalar mu = e == 3 ? f.torsion : f.rolling;
+      rows_[r].normal = rn;
+      rows_[r].mu = mu;
+      if (!soft.soft) continue;
+      rows_[r].target =
+          soft_friction_target(row_velocity(rows_[r], J_, step.in->joint_qd.data()), soft.damping, step.dt);
+      rows_[r].cfm = soft_spin_cfm(soft.cfm_friction, f.mu, mu);
+    }
   }
 }
 

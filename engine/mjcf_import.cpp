@@ -207,6 +207,8 @@ class MjcfImporter {
     ShapeOptions options;
     options.xform = G;
     options.mu = m_->geom_friction[3 * g];
+    options.mu_torsion = m_->geom_friction[3 * g + 1];
+    options.mu_rolling = m_->geom_friction[3 * g + 2];
     options.collision_group = m_->geom_contype[g];
     options.collision_mask = m_->geom_conaffinity[g];
     options.priority = m_->geom_priority[g];
@@ -217,9 +219,6 @@ class MjcfImporter {
     options.solmix = m_->geom_solmix[g];
     options.margin = m_->geom_margin[g];
     options.gap = m_->geom_gap[g];
-    if (options.condim > 3 && (options.collision_group != 0 || options.collision_mask != 0))
-      warn_motion("geom '" + mj_name(m_, mjOBJ_GEOM, g) + "': condim " + std::to_string(options.condim) +
-                  " (torsional and rolling friction) is modelled as condim 3");
     ShapeOptions along_z = options;  // capsules and plane normals: MuJoCo's Z onto NovaPhy's Y
     along_z.xform = G * y_to_z();
     switch (m_->geom_type[g]) {

@@ -26,7 +26,8 @@ const char* precision_name(Precision precision);
 // (group_b & mask_a) != 0. Either way a shape that can collide with no shape is visual only
 enum class CollisionFilter : int { GroupAndMask = 0, Mujoco = 1 };
 
-// a contact's friction coefficient from its shapes': GeometricMean (the builder's default) sqrt(mu_a mu_b);
+// a contact's friction coefficients (sliding shape_mu; with condim 4 torsional shape_mu_torsion, with 6 also
+// rolling shape_mu_rolling, both lengths) from its shapes': GeometricMean (the builder's default) sqrt(mu_a mu_b);
 // Mujoco (a model that imported MJCF), MuJoCo's rule: the shape of higher shape_priority decides, else the
 // larger mu; a contact whose condim (the deciding shape's, else the larger) is 1 is frictionless
 enum class FrictionRule : int { GeometricMean = 0, Mujoco = 1 };
@@ -88,6 +89,8 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, shape_transform, shape_count, 7)               \
   X(Scalar, shape_scale, shape_count, 3)                   \
   X(Scalar, shape_mu, shape_count, 1)                      \
+  X(Scalar, shape_mu_torsion, shape_count, 1)              \
+  X(Scalar, shape_mu_rolling, shape_count, 1)              \
   X(Scalar, shape_restitution, shape_count, 1)             \
   X(int, shape_collision_group, shape_count, 1)            \
   X(int, shape_collision_mask, shape_count, 1)             \

@@ -109,6 +109,8 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     std::fill_n(index_.dof_articulation.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
   }
   group_actuators();
+  for (int s = 0; s < model.shape_count; ++s)
+    contact_dims_ = std::max(contact_dims_, model.shape_condim[s] == 6 ? 6 : model.shape_condim[s] == 4 ? 4 : 3);
 
   // limits kept per limited joint, by articulation: the blocks lay out their articulations' cells, the
   // others follow
@@ -367,9 +369,9 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
-  step.lists = {data_.contact_start.data(),   data_.contact_list.data(), data_.contact_link_a.data(),
-                data_.contact_link_b.data(),  data_.contact_mu.data(),   data_.contact_restitution.data(),
-                data_.contact_softness.data()};
+  step.lists = {data_.contact_start.data(),    data_.contact_list.data(),     data_.contact_link_a.data(),
+                data_.contact_link_b.data(),   data_.contact_mu.data(),       data_.contact_restitution.data(),
+                data_.contact_softness.data(), data_.contact_friction.data(), contact_dims_};
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;
@@ -387,7 +389,10 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     data_.contact_link_a[c] = a >= 0 ? index_.body_link[ba] : -1;
     data_.contact_link_b[c] = b >= 0 ? index_.body_link[bb] : -1;
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
-    data_.contact_mu[c] = contact_friction(model_, sa, sb);
+    const ContactFriction f = contact_friction_of(model_, sa, sb);
+    data_.contact_mu[c] = f.mu;
+    Scalar* friction = &data_.contact_friction[3 * static_cast<size_t>(c)];
+    friction[0] = f.condim, friction[1] = f.torsion, friction[2] = f.rolling;
     data_.contact_restitution[c] = contact_restitution(model_, sa, sb);
     contact_softness_row(contact_softness(model_, sa, sb, contacts.contact_depth[c], step.dt),
                          &data_.contact_softness[5 * static_cast<size_t>(c)]);

@@ -71,6 +71,7 @@ struct SolverCounts {
   X(int, contact_link_b, n.contacts, "likewise for body b")                                                         \
   X(Scalar, contact_mu, n.contacts, "the contact's friction coefficient")                                           \
   X(Scalar, contact_restitution, n.contacts, "the contact's restitution")                                           \
+  X(Scalar, contact_friction, 3 * n.contacts, "a contact's condim, torsional and rolling friction coefficients")    \
   X(Scalar, contact_softness, 5 * n.contacts, "a soft contact's cfm of its rows, B, K imp (pos - margin), margin")  \
   X(int, fill, n.articulations + 1, "scratch of the counting sorts")
 
@@ -163,6 +164,7 @@ class SolverFeatherstone {
   std::vector<int> dense_rows_;
   std::vector<int> island_articulations_, island_contacts_;  // this step's
   int listed_ = 0;                                           // the contacts the last step listed
+  int contact_dims_ = 3;  // the rows of a contact of the most, by the shapes' condim (ContactLists::dims)
   SolverCounts counts_;
   SolverData data_;
   std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays

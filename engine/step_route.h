@@ -29,6 +29,9 @@ struct ContactLists {
   // [contact][5] a soft contact's (engine/parts/rows.h ContactSoftness): the normal row's cfm, the friction rows',
   // B, K imp (pos - margin) and the active margin; all 0 with a cfm of -1 for a rigid contact
   const Scalar* softness = nullptr;
+  // [contact][3]: its condim (as a number), torsional and rolling friction coefficients
+  const Scalar* friction = nullptr;
+  int dims = 3;  // the rows of a contact of the most: 3, 4 (torsional) or 6 (and rolling), by the shapes' condim
 };
 
 struct StepContext {

@@ -54,8 +54,9 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
       // a row touching a diverged articulation yields no impulse, so NaN does not spread through contacts
       if (row.kind != RowKind::FrictionPair) {
         const Scalar unclamped = row.lambda + step(row);
-        const Scalar lambda = row.kind == RowKind::Unilateral ? std::max<Scalar>(0, unclamped)
-                                                              : std::clamp(unclamped, -row.bound, row.bound);
+        const Scalar bound = row.kind == RowKind::FrictionOne ? row.mu * rows[row.normal].lambda : row.bound;
+        const Scalar lambda =
+            row.kind == RowKind::Unilateral ? std::max<Scalar>(0, unclamped) : std::clamp(unclamped, -bound, bound);
         if (!std::isfinite(lambda) || lambda == row.lambda) continue;
         apply_impulse(row, MinvJT, lambda - row.lambda, qd);
         moving |= moved(row, lambda - row.lambda);

@@ -10,8 +10,9 @@
 namespace novaphy {
 
 // Unilateral: impulse >= 0 (a contact's normal, a limit); FrictionPair: two tangent rows bounded together by
-// mu times their normal row's impulse; Bounded: |impulse| <= bound (a joint's dry friction)
-enum class RowKind : int { Unilateral = 0, FrictionPair = 1, Bounded = 2 };
+// mu times their normal row's impulse (sliding, or rolling about the tangents); Bounded: |impulse| <= bound (a
+// joint's dry friction); FrictionOne: |impulse| <= mu times its normal row's impulse (torsional friction)
+enum class RowKind : int { Unilateral = 0, FrictionPair = 1, Bounded = 2, FrictionOne = 3 };
 
 struct PgsRow {
   RowKind kind = RowKind::Unilateral;  // a FrictionPair row is followed by its second tangent row
@@ -23,8 +24,8 @@ struct PgsRow {
   Scalar inv_mass = 0;   // 1 / (J M^-1 J^T + settings.cfm + cfm)
   Scalar target = 0;     // the velocity J qd the row drives towards
   Scalar lambda = 0;     // accumulated impulse
-  int normal = -1;       // FrictionPair: the row holding the normal impulse
-  Scalar mu = 0;         // FrictionPair: friction coefficient
+  int normal = -1;       // FrictionPair, FrictionOne: the row holding the normal impulse
+  Scalar mu = 0;         // FrictionPair, FrictionOne: friction coefficient
   Scalar bound = 0;      // Bounded: the largest |impulse|
 };
 

@@ -68,18 +68,38 @@ inline V friction_loss_bound(const V& frictionloss, const V& dt) {
   return frictionloss * dt;
 }
 
-// ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame
+// ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame; with condim
+// 4 a torsional row (the relative angular velocity about the normal, |impulse| <= mu_torsion normal impulse),
+// with 6 also two rolling rows (about the tangents, bounded together by mu_rolling normal impulse)
 
-// friction and restitution of a contact between shapes a and b (friction by the model's FrictionRule)
-inline Scalar contact_friction(const Model& model, int a, int b) {
-  if (model.friction_rule == FrictionRule::GeometricMean) return std::sqrt(model.shape_mu[a] * model.shape_mu[b]);
+// a contact's friction: its condim and coefficients (sliding, torsional, rolling), by the model's FrictionRule:
+// GeometricMean the means of the shapes' and the larger condim; Mujoco the shape of higher priority decides,
+// else the larger of each (condim 1: none)
+struct ContactFriction {
+  int condim = 3;
+  Scalar mu = 0, torsion = 0, rolling = 0;
+};
+inline ContactFriction contact_friction_of(const Model& model, int a, int b) {
+  ContactFriction f;
+  f.condim = std::max(model.shape_condim[a], model.shape_condim[b]);
+  if (model.friction_rule == FrictionRule::GeometricMean) {
+    f.mu = std::sqrt(model.shape_mu[a] * model.shape_mu[b]);
+    f.torsion = std::sqrt(model.shape_mu_torsion[a] * model.shape_mu_torsion[b]);
+    f.rolling = std::sqrt(model.shape_mu_rolling[a] * model.shape_mu_rolling[b]);
+    return f;
+  }
   const int pa = model.shape_priority[a], pb = model.shape_priority[b];
   const int decides = pa > pb ? a : pb > pa ? b : -1;
-  const int condim =
-      decides >= 0 ? model.shape_condim[decides] : std::max(model.shape_condim[a], model.shape_condim[b]);
-  if (condim == 1) return 0;
-  return decides >= 0 ? model.shape_mu[decides] : std::max(model.shape_mu[a], model.shape_mu[b]);
+  auto pick = [&](const std::vector<Scalar>& x) { return decides >= 0 ? x[decides] : std::max(x[a], x[b]); };
+  if (decides >= 0) f.condim = model.shape_condim[decides];
+  if (f.condim == 1) return f;
+  f.mu = pick(model.shape_mu);
+  f.torsion = pick(model.shape_mu_torsion);
+  f.rolling = pick(model.shape_mu_rolling);
+  return f;
 }
+// the sliding friction coefficient alone
+inline Scalar contact_friction(const Model& model, int a, int b) { return contact_friction_of(model, a, b).mu; }
 inline Scalar contact_restitution(const Model& model, int a, int b) {
   return std::max(model.shape_restitution[a], model.shape_restitution[b]);
 }
@@ -177,6 +197,13 @@ inline V soft_normal_target(const V& depth, const V& v, const V& damping, const 
                             const V& dt) {
   const V reach = depth + active_margin;
   return select<V>(reach > 0, v - dt * (damping * v + spring), reach / dt);
+}
+
+// a torsional or rolling row's cfm (MuJoCo's elliptic cone): the sliding rows' R_1 times mu_1^2 / mu^2 (0 where
+// its mu is 0: the row holds nothing)
+template <typename V>
+inline V soft_spin_cfm(const V& cfm_sliding, const V& mu_sliding, const V& mu) {
+  return select<V>(mu > 0, cfm_sliding * (mu_sliding * mu_sliding) / select<V>(mu > 0, mu * mu, V{} + 1), V{});
 }
 
 // a friction row's target: its sliding damped by B over the step (MuJoCo's aref = -B v for friction)

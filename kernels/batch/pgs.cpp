@@ -86,7 +86,7 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
         if (rows.kind[r] == RowKind::Unilateral) {
           next = sum > 0 ? sum : V<T>{};
         } else {
-          const V<T> b = rows.bound[r];
+          const V<T> b = rows.kind[r] == RowKind::FrictionOne ? rows.mu[r] * lambda[rows.normal[r]] : rows.bound[r];
           next = sum < -b ? -b : (sum > b ? b : sum);
         }
         const M<T> on = live & rows.active[r] & finite<T>(next) & (next != lambda[r]);

@@ -105,6 +105,49 @@ TEST(SoftContacts, BodiesRestAtMujocosDepth) {
   std::filesystem::remove(path);
 }
 
+// torsional (condim 4) and rolling (condim 6) friction as MuJoCo's: a ball spinning on the spot slows as in
+// MuJoCo; a ball rolling with condim 6 slows as in MuJoCo, one of condim 3 rolls on (both on elliptic cones)
+TEST(SoftContacts, TorsionalAndRollingFrictionSlowAsInMujoco) {
+  const std::string path = test::write_temp_file("spin_roll.xml", R"(
+<mujoco>
+  <option timestep="0.002" cone="elliptic"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="10 10 0.1"/>
+    <body name="spin" pos="0 0 0.1"><freejoint/>
+      <geom type="sphere" size="0.1" mass="1" condim="4" friction="1 0.005 0.0001"/></body>
+    <body name="roll6" pos="0 1 0.1"><freejoint/>
+      <geom type="sphere" size="0.1" mass="1" condim="6" friction="1 0.005 0.002"/></body>
+    <body name="roll3" pos="0 2 0.1"><freejoint/>
+      <geom type="sphere" size="0.1" mass="1" condim="3" friction="1 0.005 0.002"/></body>
+  </worldbody>
+  <keyframe><key name="go" qpos="0 0 0.1 1 0 0 0  0 1 0.1 1 0 0 0  0 2 0.1 1 0 0 0"
+                 qvel="0 0 0 0 0 10  1 0 0 0 10 0  1 0 0 0 10 0"/></keyframe>
+</mujoco>)");
+  const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
+  const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
+  mj_resetDataKeyframe(m.get(), d.get(), 0);
+  for (int k = 0; k < 250; ++k) mj_step(m.get(), d.get());
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  solver_test::Scene scene(builder);
+  scene.state = scene.model.state("go");
+  scene.run(0.5, 0.002);
+  // the spin about Z (NovaPhy's free joint: [w_world; v]; MuJoCo's qvel: [v; w_body], the body turned about Z)
+  const Scalar spin_mujoco = d->qvel[5], spin = scene.state.joint_qd[2];
+  EXPECT_LT(spin_mujoco, 8);  // (it slowed: from 10 rad/s)
+  EXPECT_NEAR(spin, spin_mujoco, 0.05 * (10 - spin_mujoco)) << "spin";
+  // how far each ball rolled along X
+  for (const char* name : {"roll6", "roll3"}) {
+    const int b = mj_name2id(m.get(), mjOBJ_BODY, name);
+    const Scalar mujoco = d->xpos[3 * b], novaphy = scene.position(import.body_map[b]).x();
+    EXPECT_NEAR(novaphy, mujoco, 0.005) << name;
+  }
+  const Scalar rolled6 = scene.position(import.body_map[mj_name2id(m.get(), mjOBJ_BODY, "roll6")]).x();
+  const Scalar rolled3 = scene.position(import.body_map[mj_name2id(m.get(), mjOBJ_BODY, "roll3")]).x();
+  EXPECT_LT(rolled6, rolled3 - 0.01);  // rolling friction held it back
+  std::filesystem::remove(path);
+}
+
 // solref and solimp outside MuJoCo's ranges are errors naming the geom
 TEST(SoftContacts, BadSolrefAndSolimpNameTheShape) {
   ModelBuilder builder;
