@@ -176,6 +176,24 @@ int segment_manifold(const Feature& fa, const Feature& fb, const Vec3& n, Scalar
   return found;
 }
 
+// the outward unit normal of a smooth shape (sphere, capsule, ellipsoid) at its surface point nearest p, or zero
+// for a shape with corners or flat faces
+Vec3 smooth_normal(const ConvexShape& s, const Vec3& p) {
+  const Vec3 x = s.pose.q.conjugate() * (p - s.pose.p);
+  Vec3 n = Vec3::Zero();
+  switch (s.kind) {
+    case ConvexKind::Sphere: n = x; break;
+    case ConvexKind::Capsule: n = x - Vec3(0, std::clamp(x.y(), -s.size.y(), s.size.y()), 0); break;
+    case ConvexKind::Ellipsoid: {  // the gradient at x scaled onto the surface
+      const Vec3 on = x / x.cwiseQuotient(s.size).norm();
+      n = on.cwiseQuotient(s.size.cwiseProduct(s.size));
+      break;
+    }
+    default: return n;
+  }
+  return n.squaredNorm() > 0 ? Vec3(s.pose.q * n.normalized()) : Vec3::Zero();
+}
+
 // libccd's view of a shape: grown by half the margin
 struct CcdShape {
   const ConvexShape* shape;
@@ -260,6 +278,10 @@ int collide_convex(const ConvexShape& a, const ConvexShape& b, Scalar margin, Co
   else if (fa.count == 2 && fb.count == 2)
     count = segment_manifold(fa, fb, n, margin, out);
   if (count > 0) return count;
+  // a single point: MPR's normal, or where a shape is smooth its surface's there (both: their mean)
+  const Vec3 at(pos.v[0], pos.v[1], pos.v[2]);
+  const Vec3 surface = smooth_normal(a, at) - smooth_normal(b, at);
+  if (surface.squaredNorm() > 0 && surface.dot(n) > 0) n = surface.normalized();
   out->normal = n;
   out->depth = grown_depth - margin;
   out->point = Vec3(pos.v[0], pos.v[1], pos.v[2]);
