@@ -369,9 +369,17 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
-  step.lists = {data_.contact_start.data(),    data_.contact_list.data(),     data_.contact_link_a.data(),
-                data_.contact_link_b.data(),   data_.contact_mu.data(),       data_.contact_restitution.data(),
-                data_.contact_softness.data(), data_.contact_friction.data(), contact_dims_};
+  step.lists = {data_.contact_start.data(),
+                data_.contact_list.data(),
+                data_.contact_link_a.data(),
+                data_.contact_link_b.data(),
+                data_.contact_mu.data(),
+                data_.contact_restitution.data(),
+                data_.contact_softness.data(),
+                data_.contact_friction.data(),
+                std::min(contact_dims_, settings.max_condim >= 6   ? 6
+                                        : settings.max_condim >= 4 ? 4
+                                                                   : 3)};
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;

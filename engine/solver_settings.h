@@ -32,6 +32,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(Scalar, angular_damping, 0.05, 0, kUnbounded, "1/s",                                                              \
     "Rotational dof velocities are scaled by (1 - angular_damping dt) each step.")                                    \
   X(int, update_mass_matrix_interval, 1, 1, kIntUnbounded, "", "Recompute and refactor H every N steps.")             \
+  X(int, max_condim, 6, 3, 6, "",                                                                                     \
+    "The most friction a contact gets of its shapes' condim: 6 MuJoCo's all (torsional and rolling rows for condim "  \
+    "4 and 6), 4 no rolling rows, 3 neither; fewer rows, a faster step (docs/step.md, Condim).")                      \
   X(Scalar, friction_smoothing, 1.0, 0, 1, "",                                                                        \
     "0: box friction per tangent (the direction snaps to the tangent axes); 1: circular cone (friction opposes the "  \
     "slip smoothly); between: a blend.")                                                                              \
