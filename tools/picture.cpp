@@ -91,6 +91,34 @@ Scalar hit_side(const Vec3& o, const Vec3& d, Scalar r, Scalar h, Vec3& n) {
   return side;
 }
 
+// the ray's entry into the ellipsoid of semi-axes r (a unit sphere in coordinates scaled by them), its normal into n
+Scalar hit_ellipsoid(const Vec3& o, const Vec3& d, const Vec3& r, Vec3& n) {
+  const Vec3 os = o.cwiseQuotient(r), ds = d.cwiseQuotient(r);
+  const Scalar a = ds.squaredNorm(), b = os.dot(ds), disc = b * b - a * (os.squaredNorm() - 1);
+  if (disc < 0) return kMiss;
+  const Scalar enter = (-b - std::sqrt(disc)) / a;
+  if (enter <= kEpsilon) return kMiss;
+  n = (o + enter * d).cwiseQuotient(r.cwiseProduct(r)).normalized();
+  return enter;
+}
+
+// the ray's entry into a hull's half-spaces (planes [face][4]): the last face plane entered before the first left
+Scalar hit_hull(const Vec3& o, const Vec3& d, const std::vector<Scalar>& planes, Vec3& n) {
+  Scalar enter = -kMiss, leave = kMiss;
+  for (size_t f = 0; f < planes.size(); f += 4) {
+    const Vec3 face(planes[f], planes[f + 1], planes[f + 2]);
+    const Scalar towards = face.dot(d), gap = planes[f + 3] - face.dot(o);
+    if (std::abs(towards) < kEpsilon) {
+      if (gap < 0) return kMiss;
+    } else if (towards < 0 && gap / towards > enter) {
+      enter = gap / towards, n = face;
+    } else if (towards > 0) {
+      leave = std::min(leave, gap / towards);
+    }
+  }
+  return enter <= leave && enter > kEpsilon ? enter : kMiss;
+}
+
 // the ray's entry into solid s: its distance and the outward normal there (world frame)
 Scalar hit(const Solid& s, const Vec3& o_world, const Vec3& d_world, Vec3& normal) {
   const Quat to_local = s.pose.q.conjugate();
@@ -137,30 +165,8 @@ Scalar hit(const Solid& s, const Vec3& o_world, const Vec3& d_world, Vec3& norma
       }
       break;
     }
-    case ShapeType::Ellipsoid: {  // a unit sphere in coordinates scaled by the semi-axes
-      const Vec3 os = o.cwiseQuotient(s.scale), ds = d.cwiseQuotient(s.scale);
-      const Scalar a = ds.squaredNorm(), b = os.dot(ds), disc = b * b - a * (os.squaredNorm() - 1);
-      if (disc < 0) break;
-      const Scalar enter = (-b - std::sqrt(disc)) / a;
-      if (enter > kEpsilon) t = enter, n = (o + t * d).cwiseQuotient(s.scale.cwiseProduct(s.scale)).normalized();
-      break;
-    }
-    case ShapeType::Mesh: {  // the hull's half-spaces: the last face plane entered before the first left
-      Scalar enter = -kMiss, leave = kMiss;
-      for (size_t f = 0; f < s.planes.size(); f += 4) {
-        const Vec3 face(s.planes[f], s.planes[f + 1], s.planes[f + 2]);
-        const Scalar towards = face.dot(d), gap = s.planes[f + 3] - face.dot(o);
-        if (std::abs(towards) < kEpsilon) {
-          if (gap < 0) return kMiss;
-        } else if (towards < 0 && gap / towards > enter) {
-          enter = gap / towards, n = face;
-        } else if (towards > 0) {
-          leave = std::min(leave, gap / towards);
-        }
-      }
-      if (enter <= leave && enter > kEpsilon) t = enter;
-      break;
-    }
+    case ShapeType::Ellipsoid: t = hit_ellipsoid(o, d, s.scale, n); break;
+    case ShapeType::Mesh: t = hit_hull(o, d, s.planes, n); break;
     case ShapeType::Capsule: {
       // the side: the cylinder about local Y within the half height; then the two end spheres
       const Scalar r = s.scale.x(), h = s.scale.y();
