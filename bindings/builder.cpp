@@ -64,16 +64,31 @@ void def_joint(Class& c, const char* method, JointType type, const char* doc) {
         py::arg("target_ke") = py::none(), py::arg("target_kd") = py::none(), py::arg("name") = "", doc);
 }
 
-ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar restitution, int group, int mask,
-                           int priority, int condim) {
+// a shape's keyword arguments (SHAPE_KWARGS) as the lambdas take them and pass them on
+#define SHAPE_PARAMS                                                                                                  \
+  Scalar mu, Scalar restitution, int group, int mask, int priority, int condim, Scalar mu_torsion, Scalar mu_rolling, \
+      const std::array<Scalar, 2>&solref, const std::array<Scalar, 5>&solimp, Scalar solmix, Scalar margin,           \
+      Scalar gap, const std::string &name
+#define SHAPE_VALUES \
+  mu, restitution, group, mask, priority, condim, mu_torsion, mu_rolling, solref, solimp, solmix, margin, gap, name
+
+ShapeOptions shape_options(std::optional<Transform> xform, SHAPE_PARAMS) {
   ShapeOptions options;
-  options.priority = priority;
-  options.condim = condim;
   options.xform = xform.value_or(Transform::identity());
   options.mu = mu;
   options.restitution = restitution;
   options.collision_group = group;
   options.collision_mask = mask;
+  options.priority = priority;
+  options.condim = condim;
+  options.mu_torsion = mu_torsion;
+  options.mu_rolling = mu_rolling;
+  options.solref = solref;
+  options.solimp = solimp;
+  options.solmix = solmix;
+  options.margin = margin;
+  options.gap = gap;
+  options.name = name;
   return options;
 }
 
@@ -81,7 +96,10 @@ ShapeOptions shape_options(std::optional<Transform> xform, Scalar mu, Scalar res
 #define XFORM_KWARG py::kw_only(), py::arg("xform") = py::none()
 #define SHAPE_KWARGS                                                                                                 \
   py::arg("mu") = 0.5, py::arg("restitution") = 0.0, py::arg("collision_group") = 1, py::arg("collision_mask") = -1, \
-  py::arg("priority") = 0, py::arg("condim") = 3
+  py::arg("priority") = 0, py::arg("condim") = 3, py::arg("mu_torsion") = 0.005, py::arg("mu_rolling") = 0.0001,     \
+  py::arg("solref") = std::array<Scalar, 2>{0, 0},                                                                   \
+  py::arg("solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2}, py::arg("solmix") = 1.0,                      \
+  py::arg("margin") = 0.0, py::arg("gap") = 0.0, py::arg("name") = ""
 
 // runs an importer and passes each of its warnings to Python's warnings module
 template <std::vector<std::string> (ModelBuilder::*importer)(const std::string&, const ImportOptions&)>
@@ -242,61 +260,49 @@ void bind_builder(py::module_& m) {
            py::arg("spacing") = Vec3::Zero(), "world_count copies of other, copy i shifted by i * spacing.")
       .def(
           "add_ground_plane",
-          [](ModelBuilder& self, Scalar y, Scalar mu, Scalar restitution, int group, int mask, int priority,
-             int condim) {
-            return self.add_ground_plane(y,
-                                         shape_options(std::nullopt, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, Scalar y, SHAPE_PARAMS) {
+            return self.add_ground_plane(y, shape_options(std::nullopt, SHAPE_VALUES));
           },
           py::arg("y") = 0.0, py::kw_only(), SHAPE_KWARGS, "Static plane y = const with normal +Y.")
       .def(
           "add_plane",
-          [](ModelBuilder& self, const Vec3& normal, Scalar offset, Scalar mu, Scalar restitution, int group, int mask,
-             int priority, int condim) {
-            return self.add_plane(normal, offset,
-                                  shape_options(std::nullopt, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, const Vec3& normal, Scalar offset, SHAPE_PARAMS) {
+            return self.add_plane(normal, offset, shape_options(std::nullopt, SHAPE_VALUES));
           },
           py::arg("normal"), py::arg("offset") = 0.0, py::kw_only(), SHAPE_KWARGS,
           "Static plane {x : normal . x = offset}.")
       .def(
           "add_shape_box",
-          [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution, int group, int mask, int priority, int condim) {
-            return self.add_shape_box(body, half_extents,
-                                      shape_options(xform, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, int body, const Vec3& half_extents, std::optional<Transform> xform, SHAPE_PARAMS) {
+            return self.add_shape_box(body, half_extents, shape_options(xform, SHAPE_VALUES));
           },
           py::arg("body"), py::arg("half_extents"), XFORM_KWARG, SHAPE_KWARGS)
       .def(
           "add_shape_sphere",
-          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, Scalar mu, Scalar restitution,
-             int group, int mask, int priority, int condim) {
-            return self.add_shape_sphere(body, radius,
-                                         shape_options(xform, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, int body, Scalar radius, std::optional<Transform> xform, SHAPE_PARAMS) {
+            return self.add_shape_sphere(body, radius, shape_options(xform, SHAPE_VALUES));
           },
           py::arg("body"), py::arg("radius"), XFORM_KWARG, SHAPE_KWARGS)
       .def(
           "add_shape_capsule",
-          [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution, int group, int mask, int priority, int condim) {
-            return self.add_shape_capsule(body, radius, half_height,
-                                          shape_options(xform, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform,
+             SHAPE_PARAMS) {
+            return self.add_shape_capsule(body, radius, half_height, shape_options(xform, SHAPE_VALUES));
           },
           py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
           "Capsule along the shape frame's local Y axis.")
       .def(
           "add_shape_cylinder",
-          [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution, int group, int mask, int priority, int condim) {
-            return self.add_shape_cylinder(body, radius, half_height,
-                                           shape_options(xform, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, int body, Scalar radius, Scalar half_height, std::optional<Transform> xform,
+             SHAPE_PARAMS) {
+            return self.add_shape_cylinder(body, radius, half_height, shape_options(xform, SHAPE_VALUES));
           },
           py::arg("body"), py::arg("radius"), py::arg("half_height"), XFORM_KWARG, SHAPE_KWARGS,
           "Cylinder along the shape frame's local Y axis.")
       .def(
           "add_shape_ellipsoid",
-          [](ModelBuilder& self, int body, const Vec3& radii, std::optional<Transform> xform, Scalar mu,
-             Scalar restitution, int group, int mask, int priority, int condim) {
-            return self.add_shape_ellipsoid(body, radii,
-                                            shape_options(xform, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, int body, const Vec3& radii, std::optional<Transform> xform, SHAPE_PARAMS) {
+            return self.add_shape_ellipsoid(body, radii, shape_options(xform, SHAPE_VALUES));
           },
           py::arg("body"), py::arg("radii"), XFORM_KWARG, SHAPE_KWARGS,
           "Ellipsoid of semi-axes radii along the shape frame's X, Y and Z.")
@@ -312,10 +318,8 @@ void bind_builder(py::module_& m) {
           "A mesh from its vertices (n x 3) for add_shape_mesh; it collides as their convex hull.")
       .def(
           "add_shape_mesh",
-          [](ModelBuilder& self, int body, int mesh, std::optional<Transform> xform, Scalar mu, Scalar restitution,
-             int group, int mask, int priority, int condim) {
-            return self.add_shape_mesh(body, mesh,
-                                       shape_options(xform, mu, restitution, group, mask, priority, condim));
+          [](ModelBuilder& self, int body, int mesh, std::optional<Transform> xform, SHAPE_PARAMS) {
+            return self.add_shape_mesh(body, mesh, shape_options(xform, SHAPE_VALUES));
           },
           py::arg("body"), py::arg("mesh"), XFORM_KWARG, SHAPE_KWARGS,
           "A shape of mesh `mesh` (add_mesh), colliding as its convex hull.")

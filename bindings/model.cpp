@@ -186,6 +186,7 @@ void bind_model(py::module_& m) {
   model.def_property_readonly("gravity", [](const Model& self) { return self.gravity; })
       .def_readonly("precision", &Model::precision, "Precision of the solver's batched kernels for this model.")
       .def_readonly("body_name", &Model::body_name)
+      .def_readonly("shape_name", &Model::shape_name)
       .def_readonly("joint_name", &Model::joint_name)
       .def_readonly("actuator_name", &Model::actuator_name)
       .def_readonly("tendon_name", &Model::tendon_name)

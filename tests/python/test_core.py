@@ -193,3 +193,37 @@ def test_imported_quadruped_falls_freely_at_rest(scene):
     # every link falls together: the free joint accelerates at g, the hinges stay put
     np.testing.assert_allclose(qdd[:6], [0, 0, 0, 0, 0, -9.81], atol=1e-12)
     np.testing.assert_allclose(qdd[6:], 0, atol=1e-12)
+
+
+def test_new_shapes_and_soft_contacts_from_python():
+    # a cylinder, an ellipsoid and a mesh hull resting on the ground; the mesh's contacts soft (both shapes carry a
+    # solref: a pair of equal priority with one rigid shape is rigid), a solimp soft at the surface sinking it
+    b = novaphy.ModelBuilder()
+    b.add_ground_plane(solref=(0.02, 1.0), solimp=(0.5, 0.95, 0.01, 0.5, 2))
+    can = b.add_body(novaphy.RigidBody.from_box(1.0, [0.1, 0.05, 0.1]), xform=novaphy.Transform([0, 0.05, 0]))
+    b.add_shape_cylinder(can, 0.1, 0.05)
+    egg = b.add_body(novaphy.RigidBody.from_sphere(1.0, 0.08), xform=novaphy.Transform([1, 0.08, 0]))
+    b.add_shape_ellipsoid(egg, [0.15, 0.08, 0.12])
+    cube = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)])
+    brick = b.add_body(novaphy.RigidBody.from_box(1.0, [0.1, 0.1, 0.1]), xform=novaphy.Transform([2, 0.1, 0]))
+    soft = {"solref": (0.02, 1.0), "solimp": (0.5, 0.95, 0.01, 0.5, 2)}
+    b.add_shape_mesh(brick, b.add_mesh(cube, name="cube"), name="brick", **soft)
+    m = b.finalize()
+    kinds = [novaphy.ShapeType.Cylinder, novaphy.ShapeType.Ellipsoid, novaphy.ShapeType.Mesh]
+    assert [novaphy.ShapeType(t) for t in m.shape_type[1:]] == kinds
+    assert m.mesh_vertex.shape == (8, 3) and m.mesh_face_plane.shape == (6, 4)
+    assert m.shape_solref[3][0] == 0.02 and m.shape_name[3] == "brick"
+    state, control = m.state(), m.control()
+    pipeline = novaphy.CollisionPipeline(m)
+    contacts = pipeline.contacts()
+    solver = novaphy.solvers.SolverFeatherstone(m)
+    for _ in range(240):
+        pipeline.collide(state, contacts)
+        solver.step(state, state, control, contacts, 1.0 / 120)
+    heights = state.body_q[:, 1]
+    assert abs(heights[0] - 0.05) < 1e-3 and abs(heights[1] - 0.08) < 1e-3
+    assert 0.09 < heights[2] < 0.1 - solver.settings.linear_slop  # soft: deeper than a rigid contact's slop
+    with pytest.raises(ValueError, match="mesh 1 \\('flat'\\): the points span no volume"):
+        b.add_mesh(cube * [1, 0, 1], name="flat")
+    with pytest.raises(ValueError, match="solimp must be"):
+        b.add_shape_sphere(can, 0.1, solimp=(0.9, 1.5, 0.001, 0.5, 2))
