@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 
 namespace novaphy {
 
@@ -63,8 +64,11 @@ Feature feature(const ConvexShape& s, const Vec3& d) {
             Eigen::Map<const Vec3>(h.face_plane + 4 * best).dot(dl))
           best = g;
       if (Eigen::Map<const Vec3>(h.face_plane + 4 * best).dot(dl) <= kFaceCos) break;
-      const int begin = h.corner_start[best], end = std::min(h.corner_start[best + 1], begin + 16);
-      for (int c = begin; c < end; ++c) f.p[f.count++] = Eigen::Map<const Vec3>(h.vertex + 3 * h.corner[c]);
+      // (a face of more than 16 corners by every k-th of them, still counterclockwise and spread all round)
+      const int begin = h.corner_start[best], corners = h.corner_start[best + 1] - begin;
+      const int stride = (corners + 15) / 16;
+      for (int c = 0; c < corners; c += stride)
+        f.p[f.count++] = Eigen::Map<const Vec3>(h.vertex + 3 * h.corner[begin + c]);
       f.normal = Eigen::Map<const Vec3>(h.face_plane + 4 * best);
       f.id = best;
       break;
@@ -103,10 +107,12 @@ struct Clipped {
   Vec3 p;
   int id;
 };
+// a convex polygon of 16 corners clipped by one of 16 sides gains at most one corner a side
+using ClippedPolygon = std::array<Clipped, 32>;
 
 // the incident feature (a segment or polygon) clipped to the prism over the reference polygon
-int clip_to_face(const Feature& ref, const Feature& inc, std::array<Clipped, 40>& poly) {
-  std::array<Clipped, 40> next;
+int clip_to_face(const Feature& ref, const Feature& inc, ClippedPolygon& poly) {
+  ClippedPolygon next;
   int count = inc.count;
   for (int c = 0; c < count; ++c) poly[c] = {inc.p[c], c};
   for (int e = 0; e < ref.count && count > 0; ++e) {
@@ -118,14 +124,14 @@ int clip_to_face(const Feature& ref, const Feature& inc, std::array<Clipped, 40>
     for (int c = 0; c < count; ++c) {
       const Clipped& p = poly[c];
       const Scalar dp = out.dot(p.p - v);
-      if (dp <= 0) next[kept++] = p;
+      if (dp <= 0 && kept < static_cast<int>(next.size())) next[kept++] = p;
       if (c >= edges) continue;
       const Clipped& q = poly[(c + 1) % count];
       const Scalar dq = out.dot(q.p - v);
-      if ((dp < 0) != (dq < 0) && dp != dq && kept < 39)
+      if ((dp < 0) != (dq < 0) && dp != dq && kept < static_cast<int>(next.size()))
         next[kept++] = {p.p + (dp / (dp - dq)) * (q.p - p.p), 16 + ((e * 5 + p.id) & 15)};
     }
-    count = std::min(kept, 16);
+    count = kept;
     std::copy(next.begin(), next.begin() + count, poly.begin());
   }
   return count;
@@ -134,9 +140,9 @@ int clip_to_face(const Feature& ref, const Feature& inc, std::array<Clipped, 40>
 // the manifold of a face against a face, segment or another face: incident points clipped to the reference
 // face and kept within the margin; normal from a to b
 int face_manifold(const Feature& ref, const Feature& inc, bool ref_is_a, Scalar margin, ContactPoint* out) {
-  std::array<Clipped, 40> poly;
+  ClippedPolygon poly;
   const int count = clip_to_face(ref, inc, poly);
-  std::array<ContactPoint, 16> points;
+  std::array<ContactPoint, std::tuple_size_v<ClippedPolygon>> points;
   int found = 0;
   for (int c = 0; c < count; ++c) {
     const Scalar depth = -ref.normal.dot(poly[c].p - ref.p[0]);

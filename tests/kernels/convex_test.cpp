@@ -187,6 +187,35 @@ TEST(CollideConvex, StackedPairsOverlapByTheirClosedForm) {
     }
 }
 
+// a hull whose face has more corners than a feature holds (a 40-gon prism) lying on a box: its contacts spread
+// round the whole face, their middle at the face's centre
+TEST(CollideConvex, AManyCorneredFaceRestsOnAllOfIt) {
+  std::vector<Vec3> prism;
+  for (int k = 0; k < 40; ++k)
+    for (const Scalar y : {-0.05, 0.05})
+      prism.push_back(Vec3(0.1 * std::cos(k * M_PI / 20), y, 0.1 * std::sin(k * M_PI / 20)));
+  ConvexHull hull;
+  ASSERT_EQ(convex_hull(prism, &hull), "");
+  std::vector<Scalar> planes;
+  for (int f = 0; f < hull.face_count(); ++f)
+    planes.insert(planes.end(),
+                  {hull.face_normal[f].x(), hull.face_normal[f].y(), hull.face_normal[f].z(), hull.face_offset[f]});
+  const HullView view{hull.vertex[0].data(), static_cast<int>(hull.vertex.size()),
+                      planes.data(),         hull.corner_start.data(),
+                      hull.corner.data(),    hull.face_count()};
+  const ConvexShape floor{ConvexKind::Box, Transform{Vec3(0, -0.5, 0), Quat::Identity()}, Vec3(1, 0.5, 1), nullptr};
+  const ConvexShape disk{ConvexKind::Hull, Transform{Vec3(0.2, 0.049, -0.1), Quat::Identity()}, Vec3::Zero(), &view};
+  ContactPoint out[4];
+  ASSERT_EQ(collide_convex(floor, disk, 0, out), 4);
+  Vec3 middle = Vec3::Zero();
+  for (const ContactPoint& c : out) {
+    EXPECT_NEAR(c.depth, 0.001, 1e-9);
+    EXPECT_NEAR((c.point - Vec3(0.2, 0, -0.1)).norm(), 0.1, 1e-3);  // on the rim
+    middle += c.point / 4;
+  }
+  EXPECT_LT((middle - Vec3(0.2, 0, -0.1)).norm(), 0.03);
+}
+
 // a sphere beside a cylinder's side, and against its cap: the closed forms
 TEST(CollideConvex, SphereOnCylinderSideAndCap) {
   const ConvexShape cylinder{ConvexKind::Cylinder, Transform{}, Vec3(0.1, 0.2, 0), nullptr};
