@@ -264,14 +264,16 @@ void ModelBuilder::lay_out_keyframes(Model& model) const {
   model.keyframe_q.resize(model.keyframe_count * nq);
   model.keyframe_qd.assign(model.keyframe_count * nv, 0);
   model.keyframe_ctrl.assign(model.keyframe_count * nu, 0);
-  for (int k = 0; k < model.keyframe_count; ++k) std::copy_n(model.joint_q0.begin(), nq, &model.keyframe_q[k * nq]);
+  // (through data(): a model of no actuators has an empty keyframe_ctrl, which [] may not index)
+  for (int k = 0; k < model.keyframe_count; ++k)
+    std::copy_n(model.joint_q0.begin(), nq, model.keyframe_q.data() + k * nq);
   for (const KeyframeRecord& key : keyframes_) {
     const size_t k =
         std::find(model.keyframe_name.begin(), model.keyframe_name.end(), key.name) - model.keyframe_name.begin();
     const int q0 = model.joint_q_start[key.joint_begin], qd0 = model.joint_qd_start[key.joint_begin];
-    std::copy(key.q.begin(), key.q.end(), &model.keyframe_q[k * nq + q0]);
-    std::copy(key.qd.begin(), key.qd.end(), &model.keyframe_qd[k * nv + qd0]);
-    std::copy(key.ctrl.begin(), key.ctrl.end(), &model.keyframe_ctrl[k * nu + key.actuator_begin]);
+    std::copy(key.q.begin(), key.q.end(), model.keyframe_q.data() + k * nq + q0);
+    std::copy(key.qd.begin(), key.qd.end(), model.keyframe_qd.data() + k * nv + qd0);
+    std::copy(key.ctrl.begin(), key.ctrl.end(), model.keyframe_ctrl.data() + k * nu + key.actuator_begin);
   }
 }
 
