@@ -191,28 +191,22 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
   for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);
-  const int first = R.rows;
-  for (int e = 0; e < 3; ++e) {
-    const int r = add_row(R, e == 0 ? RowKind::Unilateral : RowKind::FrictionPair, on, V<T>{}, warm[e]);
+  const int first = R.rows, dims = step.lists.dims;
+  for (int e = 0; e < dims; ++e) {
+    // the normal and sliding rows in every lane of `on`; the torsional and rolling ones where its condim has them
+    const IntLanes<T> has = e < 3 ? on : on & (in[11] >= T(e == 3 ? 4 : 6));
+    const RowKind kind = e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
+    const int r = add_row(R, kind, has, V<T>{}, e < 3 ? warm[e] : V<T>{});
     V<T>* J = R.J_row(r);
-    // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
-    const V<T>* de = d + 3 * e;
-    for (int j = 0; j < nv; ++j) J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
-    std::copy(J, J + nv, R.z_row(r));
-    R.normal[r] = first;
-    R.nonzero_begin[r] = begin;
-    R.nonzero_end[r] = end;
-  }
-  const int dims = step.lists.dims;
-  for (int e = 3; e < dims; ++e) {
-    // J_k = coef_k axis . S_ang,k: the relative angular velocity about the normal (torsion) or a tangent (rolling)
-    const IntLanes<T> has = on & (in[11] >= T(e == 3 ? 4 : 6));
-    const int r = add_row(R, e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair, has, V<T>{}, V<T>{});
-    V<T>* J = R.J_row(r);
-    const V<T>* axis = d + 3 * (e == 3 ? 0 : e - 3);
-    for (int j = 0; j < nv; ++j) {
-      const V<T>* s = kin.S + 6 * j;
-      J[j] = has ? R.coef[j] * (axis[0] * s[0] + axis[1] * s[1] + axis[2] * s[2]) : V<T>{};
+    if (e < 3) {  // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
+      const V<T>* de = d + 3 * e;
+      for (int j = 0; j < nv; ++j) J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
+    } else {  // J_k = coef_k axis . S_ang,k: the relative angular velocity about the normal or a tangent
+      const V<T>* axis = d + 3 * (e == 3 ? 0 : e - 3);
+      for (int j = 0; j < nv; ++j) {
+        const V<T>* s = kin.S + 6 * j;
+        J[j] = has ? R.coef[j] * (axis[0] * s[0] + axis[1] * s[1] + axis[2] * s[2]) : V<T>{};
+      }
     }
     std::copy(J, J + nv, R.z_row(r));
     R.normal[r] = first;
@@ -221,25 +215,18 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   }
   batch_solve_many(topo, kin.H, end, R.z_row(first), dims, nv);
   // the rows' velocities at the step's start; their targets and a soft contact's cfm
-  V<T> v[3] = {};
-  for (int e = 0; e < 3; ++e)
+  V<T> v[6] = {};
+  for (int e = 0; e < dims; ++e)
     for (int j = 0; j < nv; ++j) v[e] += R.J_row(first + e)[j] * R.qd_in[j];
   const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
   const auto soft = in[6] >= 0;
   R.target[first] = select<V<T>>(soft, soft_normal_target(in[0], v[0], in[8], in[9], in[10], dt),
                                  contact_normal_target(in[0], v[0], in[2], step.rows, dt));
   R.cfm[first] = select<V<T>>(soft, in[6], V<T>{});
-  for (int e = 1; e < 3; ++e) {
+  for (int e = 1; e < dims; ++e) {
+    const V<T> mu = in[e < 3 ? 1 : e == 3 ? 12 : 13];
     R.target[first + e] = select<V<T>>(soft, soft_friction_target(v[e], in[8], dt), V<T>{});
-    R.cfm[first + e] = select<V<T>>(soft, in[7], V<T>{});
-  }
-  R.mu[first + 1] = in[1];
-  for (int e = 3; e < dims; ++e) {
-    const V<T> mu = in[e == 3 ? 12 : 13];
-    V<T> w{};
-    for (int j = 0; j < nv; ++j) w += R.J_row(first + e)[j] * R.qd_in[j];
-    R.target[first + e] = select<V<T>>(soft, soft_friction_target(w, in[8], dt), V<T>{});
-    R.cfm[first + e] = select<V<T>>(soft, soft_spin_cfm(in[7], in[1], mu), V<T>{});
+    R.cfm[first + e] = select<V<T>>(soft, e < 3 ? in[7] : soft_spin_cfm(in[7], in[1], mu), V<T>{});
     R.mu[first + e] = mu;
   }
 }

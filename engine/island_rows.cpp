@@ -160,7 +160,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
     contact_row_[c] = rn;
     // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents (no warm start)
-    const int dims = std::min(step.lists.dims, f.condim == 6 ? 6 : f.condim == 4 ? 4 : 3);
+    const int dims = std::min(step.lists.dims, contact_row_count(f.condim));
     for (int e = 3; e < dims; ++e) {
       const Scalar* axis = d + 3 * (e == 3 ? 0 : e - 3);
       const int r = add_row(ba, bb, nullptr, Vec3(axis[0], axis[1], axis[2]),

@@ -110,7 +110,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   }
   group_actuators();
   for (int s = 0; s < model.shape_count; ++s)
-    contact_dims_ = std::max(contact_dims_, model.shape_condim[s] == 6 ? 6 : model.shape_condim[s] == 4 ? 4 : 3);
+    contact_dims_ = std::max(contact_dims_, contact_row_count(model.shape_condim[s]));
 
   // limits kept per limited joint, by articulation: the blocks lay out their articulations' cells, the
   // others follow
@@ -377,9 +377,7 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
                 data_.contact_restitution.data(),
                 data_.contact_softness.data(),
                 data_.contact_friction.data(),
-                std::min(contact_dims_, settings.max_condim >= 6   ? 6
-                                        : settings.max_condim >= 4 ? 4
-                                                                   : 3)};
+                std::min(contact_dims_, contact_row_count(settings.max_condim))};
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;

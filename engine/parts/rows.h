@@ -98,6 +98,10 @@ inline ContactFriction contact_friction_of(const Model& model, int a, int b) {
   f.rolling = pick(model.shape_mu_rolling);
   return f;
 }
+// the rows of a contact of that condim, or of at most that many friction dimensions: 3 (a normal row and two
+// sliding rows; condim 1 has them with no friction), 4 (and a torsional row) or 6 (and two rolling rows)
+inline int contact_row_count(int condim) { return condim >= 6 ? 6 : condim >= 4 ? 4 : 3; }
+
 // the sliding friction coefficient alone
 inline Scalar contact_friction(const Model& model, int a, int b) { return contact_friction_of(model, a, b).mu; }
 inline Scalar contact_restitution(const Model& model, int a, int b) {
