@@ -160,4 +160,24 @@ std::string write_temp_file(const std::string& name, const std::string& text) {
   return path.string();
 }
 
+HullArrays::HullArrays(const std::vector<Vec3>& points) {
+  const std::string why = convex_hull(points, &hull);
+  if (!why.empty()) throw std::invalid_argument("HullArrays: " + why);
+  for (int f = 0; f < hull.face_count(); ++f)
+    planes.insert(planes.end(),
+                  {hull.face_normal[f].x(), hull.face_normal[f].y(), hull.face_normal[f].z(), hull.face_offset[f]});
+  // (Vec3 is packed: three numbers a vertex)
+  view = {hull.vertex[0].data(), static_cast<int>(hull.vertex.size()),
+          planes.data(),         hull.corner_start.data(),
+          hull.corner.data(),    hull.face_count()};
+}
+
+std::vector<Vec3> prism_points(int n, Scalar r, Scalar h) {
+  std::vector<Vec3> points;
+  for (int k = 0; k < n; ++k)
+    for (const Scalar y : {-h, h})
+      points.push_back(Vec3(r * std::cos(2 * M_PI * k / n), y, r * std::sin(2 * M_PI * k / n)));
+  return points;
+}
+
 }  // namespace novaphy::test

@@ -49,27 +49,18 @@ const std::map<std::string, Kind>& kinds() {
 
 // a geom of that kind at the pose X as NovaPhy's convex narrow phase sees it
 ConvexShape convex(const std::string& kind, const Transform& X) {
-  static ConvexHull gem;
-  static std::vector<Scalar> planes;
-  static HullView view;
-  if (gem.vertex.empty()) {
+  static const test::HullArrays gem([] {
     std::vector<Vec3> points;
     std::istringstream in(kGem);
     for (Vec3 p; in >> p.x() >> p.y() >> p.z();) points.push_back(p);
-    convex_hull(points, &gem);
-    for (int f = 0; f < gem.face_count(); ++f)
-      planes.insert(planes.end(),
-                    {gem.face_normal[f].x(), gem.face_normal[f].y(), gem.face_normal[f].z(), gem.face_offset[f]});
-    view = {gem.vertex[0].data(), static_cast<int>(gem.vertex.size()),
-            planes.data(),        gem.corner_start.data(),
-            gem.corner.data(),    gem.face_count()};  // (Vec3 is packed: three numbers a vertex)
-  }
+    return points;
+  }());
   const Kind& k = kinds().at(kind);
   // capsules and cylinders run along MJCF's Z and NovaPhy's Y
   const Quat along = k.kind == ConvexKind::Capsule || k.kind == ConvexKind::Cylinder
                          ? Quat(Eigen::AngleAxis<Scalar>(M_PI / 2, Vec3::UnitX()))
                          : Quat::Identity();
-  return {k.kind, Transform{X.p, X.q * along}, k.size, &view};
+  return {k.kind, Transform{X.p, X.q * along}, k.size, &gem.view};
 }
 
 // how far from a (at the origin, orientation qa) along u b (orientation qb) first touches a: bisection on
@@ -205,10 +196,7 @@ TEST(ShapesResting, EllipsoidOnItsShortestAxis) {
 
 TEST(ShapesResting, ConvexMeshOnThePlaneAndOnABox) {
   // an octagonal prism's vertices, and points inside it (not on the hull)
-  std::vector<Vec3> points;
-  for (int k = 0; k < 8; ++k)
-    for (const Scalar y : {-0.05, 0.05})
-      points.push_back(Vec3(0.12 * std::cos(k * M_PI / 4), y, 0.12 * std::sin(k * M_PI / 4)));
+  std::vector<Vec3> points = test::prism_points(8, 0.12, 0.05);
   points.push_back(Vec3(0.01, 0.02, -0.03));
   for (const bool on_box : {false, true})
     expect_rests(

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kernels/hull.h"
+#include "test_support.h"
 
 namespace novaphy {
 namespace {
@@ -64,29 +65,18 @@ TEST(CollidePlaneEllipsoid, DeepestPointAsTheClosedForm) {
   }
 }
 
-// a unit-cube hull's arrays, for the narrow phase
-struct CubeHull {
-  ConvexHull hull;
-  std::vector<Scalar> planes;
-  HullView view;
-  explicit CubeHull(const Vec3& half) {
-    std::vector<Vec3> corners;
-    for (int v = 0; v < 8; ++v)
-      corners.push_back(half.cwiseProduct(Vec3(v & 1 ? 1 : -1, v & 2 ? 1 : -1, v & 4 ? 1 : -1)));
-    corners.push_back(Vec3::Zero());  // (inside: not a vertex of the hull)
-    EXPECT_EQ(convex_hull(corners, &hull), "");
-    for (int f = 0; f < hull.face_count(); ++f)
-      planes.insert(planes.end(),
-                    {hull.face_normal[f].x(), hull.face_normal[f].y(), hull.face_normal[f].z(), hull.face_offset[f]});
-    view = {hull.vertex[0].data(), static_cast<int>(hull.vertex.size()),
-            planes.data(),         hull.corner_start.data(),
-            hull.corner.data(),    hull.face_count()};
-  }
-};
+// a box's corners, and a point inside it (not a vertex of its hull)
+std::vector<Vec3> box_points(const Vec3& half) {
+  std::vector<Vec3> corners;
+  for (int v = 0; v < 8; ++v)
+    corners.push_back(half.cwiseProduct(Vec3(v & 1 ? 1 : -1, v & 2 ? 1 : -1, v & 4 ? 1 : -1)));
+  corners.push_back(Vec3::Zero());  // (inside: not a vertex of the hull)
+  return corners;
+}
 
 TEST(ConvexHull, BoxCornersGiveSixSquareFacesCounterclockwise) {
   const Vec3 half(0.3, 0.2, 0.1);
-  CubeHull cube(half);
+  const test::HullArrays cube(box_points(half));
   EXPECT_EQ(cube.hull.vertex.size(), 8u);
   ASSERT_EQ(cube.hull.face_count(), 6);
   for (int f = 0; f < 6; ++f) {
@@ -114,7 +104,7 @@ TEST(ConvexHull, DegenerateInputSaysWhy) {
 // a box's hull collides as the box: on the plane as collide_plane_box, against a box as collide_box_box
 TEST(CollideConvex, BoxHullCollidesAsTheBox) {
   const Vec3 half(0.3, 0.2, 0.1);
-  CubeHull cube(half);
+  const test::HullArrays cube(box_points(half));
   const Transform pose{Vec3(0.1, 0.19, -0.2), Quat(Eigen::AngleAxis<Scalar>(0.02, Vec3(1, 0, 1).normalized()))};
   ContactPoint hull_points[kMaxPairContacts], box_points[kMaxPairContacts];
   const int n = collide_plane_hull(Transform{}, pose, cube.view, 0.01, hull_points);
@@ -145,19 +135,8 @@ TEST(CollideConvex, BoxHullCollidesAsTheBox) {
 // along +Y at every point the pair reports (within MPR's tolerance: 1e-6 m, the normal 0.3 degrees; the mesh: an
 // octagonal prism's hull, flat on top and bottom)
 TEST(CollideConvex, StackedPairsOverlapByTheirClosedForm) {
-  std::vector<Vec3> prism;
-  for (int k = 0; k < 8; ++k)
-    for (const Scalar y : {-0.05, 0.05})
-      prism.push_back(Vec3(0.1 * std::cos(k * M_PI / 4), y, 0.1 * std::sin(k * M_PI / 4)));
-  ConvexHull hull;
-  ASSERT_EQ(convex_hull(prism, &hull), "");
-  std::vector<Scalar> planes;
-  for (int f = 0; f < hull.face_count(); ++f)
-    planes.insert(planes.end(),
-                  {hull.face_normal[f].x(), hull.face_normal[f].y(), hull.face_normal[f].z(), hull.face_offset[f]});
-  const HullView view{hull.vertex[0].data(), static_cast<int>(hull.vertex.size()),
-                      planes.data(),         hull.corner_start.data(),
-                      hull.corner.data(),    hull.face_count()};
+  const test::HullArrays prism(test::prism_points(8, 0.1, 0.05));
+  const HullView& view = prism.view;
   struct Kind {
     const char* name;
     ConvexKind kind;
@@ -190,21 +169,10 @@ TEST(CollideConvex, StackedPairsOverlapByTheirClosedForm) {
 // a hull whose face has more corners than a feature holds (a 40-gon prism) lying on a box: its contacts spread
 // round the whole face, their middle at the face's centre
 TEST(CollideConvex, AManyCorneredFaceRestsOnAllOfIt) {
-  std::vector<Vec3> prism;
-  for (int k = 0; k < 40; ++k)
-    for (const Scalar y : {-0.05, 0.05})
-      prism.push_back(Vec3(0.1 * std::cos(k * M_PI / 20), y, 0.1 * std::sin(k * M_PI / 20)));
-  ConvexHull hull;
-  ASSERT_EQ(convex_hull(prism, &hull), "");
-  std::vector<Scalar> planes;
-  for (int f = 0; f < hull.face_count(); ++f)
-    planes.insert(planes.end(),
-                  {hull.face_normal[f].x(), hull.face_normal[f].y(), hull.face_normal[f].z(), hull.face_offset[f]});
-  const HullView view{hull.vertex[0].data(), static_cast<int>(hull.vertex.size()),
-                      planes.data(),         hull.corner_start.data(),
-                      hull.corner.data(),    hull.face_count()};
+  const test::HullArrays prism(test::prism_points(40, 0.1, 0.05));
   const ConvexShape floor{ConvexKind::Box, Transform{Vec3(0, -0.5, 0), Quat::Identity()}, Vec3(1, 0.5, 1), nullptr};
-  const ConvexShape disk{ConvexKind::Hull, Transform{Vec3(0.2, 0.049, -0.1), Quat::Identity()}, Vec3::Zero(), &view};
+  const ConvexShape disk{ConvexKind::Hull, Transform{Vec3(0.2, 0.049, -0.1), Quat::Identity()}, Vec3::Zero(),
+                         &prism.view};
   ContactPoint out[4];
   ASSERT_EQ(collide_convex(floor, disk, 0, out), 4);
   Vec3 middle = Vec3::Zero();
