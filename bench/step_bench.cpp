@@ -67,6 +67,7 @@ SolverFeatherstoneSettings solver_settings(const SceneSpec& spec, int threads) {
   SolverFeatherstoneSettings settings;
   settings.num_threads = threads;
   settings.pgs_tolerance = spec.pgs_tolerance;
+  settings.count_serial_time = true;
   return settings;
 }
 
@@ -81,6 +82,7 @@ struct NovaPhyWorlds {
         state(model.state()),
         control(model.control()) {
     for (int k = 0; k < kSettleSteps; ++k) step();
+    solver.reset_serial_seconds();
   }
   void step() {
     if (floor) pipeline.collide(state, contacts);
@@ -133,6 +135,7 @@ void BM_NovaPhyStep(benchmark::State& bm) {
   for (auto _ : bm) nova.step();
   label(bm, worlds);
   if (spec.floor) bm.counters["base_height"] = nova.base_height();
+  bm.counters["serial_share"] = nova.solver.serial_seconds().share();
   // memory per world: what the solver holds, the State's arrays, and H with its factor (two packed
   // triangles in the model's precision): the least a world can be stepped in
   const Model& model = nova.model;
@@ -204,6 +207,21 @@ bool on_cpu(int cpu, F&& f) {
   return true;
 }
 
+double median(std::vector<double> x) {
+  std::sort(x.begin(), x.end());
+  const size_t n = x.size();
+  return n % 2 ? x[n / 2] : (x[n / 2 - 1] + x[n / 2]) / 2;
+}
+
+// the wall time of `steps` calls of run(), after as many not timed
+template <typename F>
+double seconds(F&& run, int steps) {
+  for (int k = 0; k < steps; ++k) run();
+  const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  for (int k = 0; k < steps; ++k) run();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 // The targets' figures side by side: at 4096 worlds, each iteration (a round) times runs of steps in
 // turn, their order rotating from round to round: NovaPhy on all threads, NovaPhy on one thread pinned to
 // each core in turn, MuJoCo on all, MuJoCo on one pinned to each core (NovaPhy's runs on two copies of the
@@ -232,12 +250,6 @@ void BM_PairedStep(benchmark::State& bm) {
   const Precision precision = bm.range(1) == 1 ? Precision::Float32 : Precision::Float64;
   NovaPhyWorlds nova_all(spec, kWorlds, all, precision), nova_one(spec, kWorlds, 1, precision);
   MujocoWorlds mujoco(kScenes[kMujocoScene[bm.range(0)]], kWorlds);
-  auto seconds = [](auto&& run, int steps) {
-    for (int k = 0; k < steps; ++k) run();
-    const Clock::time_point start = Clock::now();
-    for (int k = 0; k < steps; ++k) run();
-    return std::chrono::duration<double>(Clock::now() - start).count();
-  };
   auto both_novaphy = [&] {  // (the two copies stay at the same step)
     nova_all.step();
     nova_one.step();
@@ -283,11 +295,6 @@ void BM_PairedStep(benchmark::State& bm) {
   // the share of the cores' time the machine's host gave to others while the rounds ran
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
   bm.counters["steal"] = (steal_seconds() - steal_before) / (wall * all);
-  auto median = [](std::vector<double> x) {
-    std::sort(x.begin(), x.end());
-    const size_t n = x.size();
-    return n % 2 ? x[n / 2] : (x[n / 2 - 1] + x[n / 2]) / 2;
-  };
   bm.counters["scene"] = static_cast<double>(bm.range(0));
   bm.counters["precision"] = static_cast<double>(bm.range(1));
   bm.counters["worlds"] = kWorlds;
@@ -306,6 +313,72 @@ void BM_PairedStep(benchmark::State& bm) {
   }
   bm.counters["novaphy_steps"] = k_nova;
   bm.counters["mujoco_steps"] = k_mujoco;
+}
+
+// The thread sweep: at `worlds` worlds, each engine on 1, 2, 4, ... threads and on all (NovaPhy on a copy of
+// the worlds per thread count, all taking the same steps), in alternating rounds as BM_PairedStep's (each
+// round runs every line once, the order rotating; runs of at least 20 ms after as many steps not timed).
+// Counters per thread count t: each engine's robot-steps/s (median over rounds), its speed-up over one
+// thread and parallel efficiency (the speed-up over t), the ratio NovaPhy / MuJoCo, and NovaPhy's serial
+// share (solver.serial_seconds: the step's wall time outside its parallel work over the whole, over all
+// rounds). MuJoCo to 4096 worlds (its mjData of 16384 do not fit in 24 GiB); tools/scaling.sh runs it.
+std::vector<int> thread_counts() {
+  const int all = omp_get_num_procs();
+  std::vector<int> counts;
+  for (int t = 1; t < all; t *= 2) counts.push_back(t);
+  counts.push_back(all);
+  return counts;
+}
+
+void BM_ThreadSweep(benchmark::State& bm) {
+  const SceneSpec& spec = kScenes[bm.range(0)];
+  const Precision precision = bm.range(1) == 1 ? Precision::Float32 : Precision::Float64;
+  const int worlds = static_cast<int>(bm.range(2));
+  const bool with_mujoco = worlds <= 4096;
+  const std::vector<int> threads = thread_counts();
+  const int n = static_cast<int>(threads.size());
+  std::vector<std::unique_ptr<NovaPhyWorlds>> nova;
+  for (const int t : threads) nova.push_back(std::make_unique<NovaPhyWorlds>(spec, worlds, t, precision));
+  std::unique_ptr<MujocoWorlds> mujoco;
+  if (with_mujoco) mujoco = std::make_unique<MujocoWorlds>(kScenes[kMujocoScene[bm.range(0)]], worlds);
+  // lines 0 .. n-1 NovaPhy on threads[i], n .. 2n-1 MuJoCo; each line's steps make a run of about 20 ms
+  const int lines = with_mujoco ? 2 * n : n;
+  auto step = [&](int line) {
+    if (line < n) return nova[line]->step();
+    mujoco->step(threads[line - n]);
+  };
+  std::vector<int> steps(lines);
+  for (int line = 0; line < lines; ++line) {
+    const double one = seconds([&] { step(line); }, 1);
+    steps[line] = std::max(1, static_cast<int>(std::ceil(0.02 / one)));
+  }
+  for (auto& copy : nova) copy->solver.reset_serial_seconds();
+  std::vector<std::vector<double>> rate(lines);
+  int round = 0;
+  for (auto _ : bm) {
+    for (int turn = 0; turn < lines; ++turn) {
+      const int line = (turn + round) % lines;
+      rate[line].push_back(static_cast<double>(worlds) * steps[line] / seconds([&] { step(line); }, steps[line]));
+    }
+    ++round;
+  }
+  bm.counters["scene"] = static_cast<double>(bm.range(0));
+  bm.counters["precision"] = static_cast<double>(bm.range(1));
+  bm.counters["worlds"] = worlds;
+  for (int i = 0; i < n; ++i) {
+    const std::string t = "_t" + std::to_string(threads[i]);
+    const double nova_rate = median(rate[i]), nova_one = median(rate[0]);
+    bm.counters["novaphy" + t] = nova_rate;
+    bm.counters["novaphy_speedup" + t] = nova_rate / nova_one;
+    bm.counters["novaphy_efficiency" + t] = nova_rate / nova_one / threads[i];
+    bm.counters["serial_share" + t] = nova[i]->solver.serial_seconds().share();
+    if (!with_mujoco) continue;
+    const double mujoco_rate = median(rate[n + i]), mujoco_one = median(rate[n]);
+    bm.counters["mujoco" + t] = mujoco_rate;
+    bm.counters["mujoco_speedup" + t] = mujoco_rate / mujoco_one;
+    bm.counters["mujoco_efficiency" + t] = mujoco_rate / mujoco_one / threads[i];
+    bm.counters["ratio" + t] = nova_rate / mujoco_rate;
+  }
 }
 
 // worlds 1 .. 16384 at all threads (MuJoCo to 4096: 16384 of its mjData do not fit in 24 GiB);
@@ -328,6 +401,13 @@ BENCHMARK(BM_PairedStep)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 1}})
     ->ArgNames({"scene", "precision"})
     ->Iterations(16)
+    ->Repetitions(1)
+    ->UseRealTime();
+// scenes 1 (quadruped, no floor), 2 (standing) and 3 (humanoid.xml); its rounds are its repetitions
+BENCHMARK(BM_ThreadSweep)
+    ->ArgsProduct({{1, 2, 3}, {0, 1}, {256, 1024, 4096, 16384}})
+    ->ArgNames({"scene", "precision", "worlds"})
+    ->Iterations(9)
     ->Repetitions(1)
     ->UseRealTime();
 

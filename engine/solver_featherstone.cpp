@@ -38,6 +38,21 @@ std::int64_t now_ns() {
       .count();
 }
 
+// while one lives (and `on`), the wall time is added to *total in seconds
+class ParallelTimer {
+ public:
+  ParallelTimer(bool on, double* total) : total_(on ? total : nullptr), start_(on ? now_ns() : 0) {}
+  ~ParallelTimer() {
+    if (total_) *total_ += 1e-9 * static_cast<double>(now_ns() - start_);
+  }
+  ParallelTimer(const ParallelTimer&) = delete;
+  ParallelTimer& operator=(const ParallelTimer&) = delete;
+
+ private:
+  double* total_;
+  std::int64_t start_;
+};
+
 }  // namespace
 
 void SolverData::allocate(const SolverCounts& n) {
@@ -213,6 +228,7 @@ int SolverFeatherstone::thread_count() const {
 // ---- the step
 
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
+  const std::int64_t start = settings.count_serial_time ? now_ns() : 0;
   check_step(in, out, control, contacts, dt);
   plan();
   StepContext step = begin_step(in, out, control, contacts, dt);
@@ -229,6 +245,9 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   guard(step);
   if (last != Stage::Store) pass(step, Stage::Store, Stage::Store);
   end_step(in, out, step);
+  if (!settings.count_serial_time) return;
+  serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
+  ++serial_seconds_.steps;
 }
 
 void SolverFeatherstone::check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
@@ -440,6 +459,7 @@ void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threa
 void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) {
   const int blocks = batches_ ? batches_->unit_count() : 0, units = blocks + dense_->unit_count();
   auto run = [&](Stage from, Stage to) {
+    const ParallelTimer timer(settings.count_serial_time, &serial_seconds_.parallel);
     // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread
     auto unit = [&](int u) {
       if (u < blocks)
@@ -491,7 +511,10 @@ void SolverFeatherstone::solve_islands(const StepContext& step) {
   islands_->add_contact_rows(step, island_contacts_);
   islands_->add_constraint_rows(step);
   lap(stage_seconds_.contact_rows);
-  islands_->solve(step, island_articulations_, island_contacts_, thread_count());
+  {
+    const ParallelTimer timer(settings.count_serial_time, &serial_seconds_.parallel);
+    islands_->solve(step, island_articulations_, island_contacts_, thread_count());
+  }
   lap(stage_seconds_.solve);
 }
 

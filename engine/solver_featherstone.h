@@ -32,6 +32,16 @@ struct SolverStageSeconds {
   int steps = 0;
 };
 
+// wall time of whole steps and of their parallel work (the passes over blocks and dense articulations, each
+// unit's stages on its thread, and the islands' solve), accumulated while settings.count_serial_time is on;
+// the rest of a step (checks, lists, the regions' start and end) is the share more threads do not shorten
+struct SolverSerialSeconds {
+  double step = 0;
+  double parallel = 0;
+  int steps = 0;
+  double share() const { return step > 0 ? (step - parallel) / step : 0; }
+};
+
 struct JointSupportMatrix {
   struct Entry {
     std::string joint;
@@ -100,6 +110,8 @@ class SolverFeatherstone {
   const Model& model() const { return model_; }
   const SolverStageSeconds& stage_seconds() const { return stage_seconds_; }
   void reset_stage_seconds() { stage_seconds_ = {}; }
+  const SolverSerialSeconds& serial_seconds() const { return serial_seconds_; }
+  void reset_serial_seconds() { serial_seconds_ = {}; }
   // bytes the solver holds for its articulations: blocks, scalar scratch, rows, step vectors
   std::size_t memory_bytes() const;
   // the batches the articulations were grouped into (nullptr when none is batched)
@@ -176,6 +188,7 @@ class SolverFeatherstone {
   int max_threads_ = 1;  // the threads the routes keep scratch for
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;  // steady_clock nanoseconds at the last lap
+  SolverSerialSeconds serial_seconds_;
 };
 
 }  // namespace novaphy

@@ -51,6 +51,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(bool, profile_stages, false, 0, 0, "",                                                                            \
     "Accumulate each stage's wall time into stage_seconds; the blocks then run a stage over all blocks before the "   \
     "next (the same arithmetic as a block's whole step at a time).")                                                  \
+  X(bool, count_serial_time, false, 0, 0, "",                                                                         \
+    "Accumulate each step's wall time and that of its parallel work into serial_seconds (its serial share: the "      \
+    "rest over the whole).")                                                                                          \
   X(bool, weld_fixed_joints, true, 0, 0, "",                                                                          \
     "Merge bodies held by Fixed joints into their parent's link, so they cost nothing in the dynamics (read when "    \
     "the solver is made).")                                                                                           \

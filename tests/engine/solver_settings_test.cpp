@@ -223,5 +223,26 @@ TEST(SolverFeatherstoneSettingsEffect, ProfileStagesTimesEachStageOnlyWhenOn) {
   EXPECT_EQ(scene.solver.stage_seconds().steps, 0);
 }
 
+TEST(SolverFeatherstoneSettingsEffect, CountSerialTimeSplitsEachStepOnlyWhenOn) {
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  add_box(builder, Vec3(0, 0.19, 0));
+  Scene scene(builder);
+  scene.run(0.1);
+  EXPECT_EQ(scene.solver.serial_seconds().steps, 0);
+  EXPECT_EQ(scene.solver.serial_seconds().step, 0);
+  scene.solver.settings.count_serial_time = true;
+  scene.run(0.1);
+  const SolverSerialSeconds& t = scene.solver.serial_seconds();
+  EXPECT_EQ(t.steps, 12);
+  EXPECT_GT(t.parallel, 0);
+  EXPECT_LT(t.parallel, t.step);  // the parallel work is a part of the steps' time
+  EXPECT_GT(t.share(), 0);
+  EXPECT_LT(t.share(), 1);
+  scene.solver.reset_serial_seconds();
+  EXPECT_EQ(scene.solver.serial_seconds().steps, 0);
+  EXPECT_EQ(scene.solver.serial_seconds().share(), 0);
+}
+
 }  // namespace
 }  // namespace novaphy

@@ -276,6 +276,13 @@ def test_stage_seconds_and_implicit_coriolis_settings():
     assert t["steps"] == 5 and all(t[k] > 0 for k in ("dynamics", "contact_rows", "solve", "integrate"))
     solver.reset_stage_seconds()
     assert solver.stage_seconds["steps"] == 0
+    solver.settings.count_serial_time = True
+    for _ in range(3):
+        solver.step(state, state, control, contacts, 0.01)
+    s = solver.serial_seconds
+    assert s["steps"] == 3 and 0 < s["parallel"] < s["step"] and 0 < s["share"] < 1
+    solver.reset_serial_seconds()
+    assert solver.serial_seconds["steps"] == 0
     solver.settings.coriolis_implicitness = 1.5
     with pytest.raises(ValueError, match="coriolis_implicitness"):
         solver.step(state, state, control, contacts, 0.01)
