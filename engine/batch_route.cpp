@@ -73,6 +73,13 @@ class Batches final : public ArticulationBatches {
   const std::vector<int>& limit_cells() const override { return limit_cell_; }
   int limit_cell_count() const override { return limit_cell_count_; }
   int unit_count() const override { return static_cast<int>(units_.size()); }
+  int unit_articulations(int unit, int* out) const override {
+    const auto [g, b] = units_[unit];
+    const BatchGroup<T>& G = groups_[g];
+    const int lanes = G.lanes_in(b);
+    std::copy_n(&G.arts[static_cast<size_t>(b) * kLanes<T>], lanes, out);
+    return lanes;
+  }
   int group_count() const override { return static_cast<int>(groups_.size()); }
   int block_count() const override {
     int n = 0;

@@ -25,6 +25,10 @@ class DenseArticulations final : public StepRoute {
   const std::vector<int>& articulations() const { return units_; }
 
   int unit_count() const override { return static_cast<int>(units_.size()); }
+  int unit_articulations(int unit, int* out) const override {
+    out[0] = units_[unit];
+    return 1;
+  }
   void begin_step(const StepContext&) override {}
   void end_step(const StepContext&) override {}
   void run(int unit, Stage first, Stage last, const StepContext& step) override;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <type_traits>
 
@@ -124,6 +125,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     std::fill_n(index_.dof_articulation.begin() + art_[a].qd_begin(), art_[a].dof_count(), a);
   }
   group_actuators();
+  index_inputs();
   for (int s = 0; s < model.shape_count; ++s)
     contact_dims_ = std::max(contact_dims_, contact_row_count(model.shape_condim[s]));
 
@@ -194,6 +196,30 @@ void SolverFeatherstone::group_actuators() {
     entry_tendon_.insert(entry_tendon_.end(), model_.tendon_start[t + 1] - model_.tendon_start[t], t);
 }
 
+void SolverFeatherstone::index_inputs() {
+  const int articulations = model_.articulation_count;
+  std::vector<int> next(articulations + 1);
+  auto group = [&](int count, auto&& key, std::vector<int>& start, std::vector<int>& items, std::vector<int>& loose) {
+    start.assign(articulations + 1, 0);
+    items.assign(count, -1);
+    group_by_key(count, articulations, key, start.data(), items.data(), next.data());
+    items.resize(start[articulations]);
+    for (int i = 0; i < count; ++i)
+      if (key(i) < 0) loose.push_back(i);
+  };
+  group(
+      model_.body_count, [&](int b) { return index_.body_articulation[b]; }, art_body_start_, art_bodies_,
+      loose_bodies_);
+  group(
+      model_.actuator_count,
+      [&](int u) {
+        const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u];
+        if (joint >= 0) return index_.dof_articulation[model_.joint_qd_start[joint]];
+        return tendon >= 0 ? index_.dof_articulation[model_.tendon_dof[model_.tendon_start[tendon]]] : -1;
+      },
+      art_actuator_start_, art_actuators_, loose_actuators_);
+}
+
 void SolverFeatherstone::mark_constrained() {
   constrained_.assign(model_.articulation_count, 0);
   auto mark_body = [&](int body) {
@@ -260,7 +286,63 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   if (!same_layout(contacts, model_))
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
-  check_finite_step(in, control, &wrenches_, &drives_, thread_count());
+  bool loose_finite = true;
+  for (const int b : loose_bodies_)
+    for (int k = 0; k < 6; ++k) loose_finite &= std::isfinite(in.body_f[6 * static_cast<size_t>(b) + k]);
+  for (const int u : loose_actuators_) loose_finite &= std::isfinite(control.actuator_ctrl[u]);
+  if (loose_finite) return;
+  bool wrenches, drives;
+  check_finite_step(in, control, &wrenches, &drives);  // throws naming the first non-finite entry
+}
+
+bool SolverFeatherstone::check_unit(StepRoute& route, int u, StepContext& local) const {
+  // one pass over the bits, as check_finite_step's: an exponent of all ones is inf or NaN; any bit but the
+  // sign's, a nonzero
+  constexpr std::uint64_t kExponent = 0x7ff0000000000000;
+  std::uint64_t bad = 0;
+  auto scan = [&](const std::vector<Scalar>& x, int begin, int count) {
+    std::uint64_t nonzero = 0;
+    for (int k = begin; k < begin + count; ++k) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &x[k], sizeof(bits));
+      bad |= (bits & kExponent) == kExponent;
+      nonzero |= bits << 1;
+    }
+    return nonzero != 0;
+  };
+  const State& in = *local.in;
+  const Control& control = *local.control;
+  int arts[kMostUnitArticulations];
+  const int count = route.unit_articulations(u, arts);
+  bool wrenches = false, drives = false;
+  for (int i = 0; i < count; ++i) {
+    const ArticulationView& art = art_[arts[i]];
+    const int q = art.q_begin(), qd = art.qd_begin(), dofs = art.dof_count();
+    scan(in.joint_q, q, art.coord_count());
+    scan(in.joint_qd, qd, dofs);
+    scan(control.joint_f, qd, dofs);
+    drives |= scan(control.joint_target_ke, qd, dofs) | scan(control.joint_target_kd, qd, dofs);
+    for (int k = art_body_start_[arts[i]]; k < art_body_start_[arts[i] + 1]; ++k)
+      wrenches |= scan(in.body_f, 6 * art_bodies_[k], 6);
+    for (int k = art_actuator_start_[arts[i]]; k < art_actuator_start_[arts[i] + 1]; ++k)
+      scan(control.actuator_ctrl, art_actuators_[k], 1);
+  }
+  for (int i = 0; drives && i < count; ++i) {  // the targets, read only where a gain is nonzero
+    const ArticulationView& art = art_[arts[i]];
+    scan(control.joint_target_pos, art.qd_begin(), art.dof_count());
+    scan(control.joint_target_vel, art.qd_begin(), art.dof_count());
+  }
+  local.wrenches = wrenches;
+  local.drives = drives;
+  return bad == 0;
+}
+
+void SolverFeatherstone::raise_failed_units(const StepContext& step) {
+  if (std::find(unit_failed_.begin(), unit_failed_.end(), 1) == unit_failed_.end()) return;
+  factor_kept_ = false;  // (the units not stepped made no factor for the next step to keep)
+  bool wrenches, drives;
+  check_finite_step(*step.in, *step.control, &wrenches, &drives);  // throws naming the first non-finite entry
+  fail("a step input is not finite");                              // (not reached)
 }
 
 void SolverFeatherstone::plan() {
@@ -301,8 +383,6 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.keep_factor = interval > 1;
   step.fuse = settings.fuse_cholesky;
   step.tile_gemm = settings.use_tile_gemm;
-  step.wrenches = wrenches_;
-  step.drives = drives_;
   step.keep = std::max<Scalar>(0, 1 - settings.angular_damping * dt);
   step.coriolis_implicitness = settings.coriolis_implicitness;
   step.aba_min_dofs = settings.aba_min_dofs;
@@ -458,14 +538,21 @@ void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threa
 
 void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) {
   const int blocks = batches_ ? batches_->unit_count() : 0, units = blocks + dense_->unit_count();
+  unit_failed_.resize(units);
   auto run = [&](Stage from, Stage to) {
     const ParallelTimer timer(settings.count_serial_time, &serial_seconds_.parallel);
-    // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread
+    // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread. A unit
+    // checks its input first and is not stepped at all where some of it is not finite
     auto unit = [&](int u) {
-      if (u < blocks)
-        batches_->run(u, from, to, step);
-      else
-        dense_->run(u - blocks, from, to, step);
+      StepRoute& route = u < blocks ? static_cast<StepRoute&>(*batches_) : *dense_;
+      const int r = u < blocks ? u : u - blocks;
+      if (from != Stage::Dynamics) {
+        if (!unit_failed_[u]) route.run(r, from, to, step);
+        return;
+      }
+      StepContext local = step;
+      unit_failed_[u] = !check_unit(route, r, local);
+      if (!unit_failed_[u]) route.run(r, from, to, local);
     };
     auto done = [&] {
       if (step.stream) stream_fence();
@@ -478,7 +565,10 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
   };
   if (step.block_major) {
     run(first, last);
-    if (first == Stage::Dynamics) check_factors();
+    if (first == Stage::Dynamics) {
+      raise_failed_units(step);
+      check_factors();
+    }
     return;
   }
   for (int s = static_cast<int>(first); s <= static_cast<int>(last); ++s) {
@@ -486,7 +576,10 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
     const RowPhaseSeconds before = batches_ ? batches_->row_phases() : RowPhaseSeconds{};
     const std::int64_t start = lap_mark_;
     run(stage, stage);
-    if (stage == Stage::Dynamics) check_factors();
+    if (stage == Stage::Dynamics) {
+      raise_failed_units(step);
+      check_factors();
+    }
     if (stage != Stage::Rows) {
       lap(stage == Stage::Dynamics ? stage_seconds_.dynamics : stage_seconds_.integrate);
       continue;

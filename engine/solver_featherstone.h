@@ -99,9 +99,10 @@ class SolverFeatherstone {
   explicit SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings = {});
 
   // state_in may be state_out; on error nothing is written, with one exception: under on_divergence Flag
-  // or Reset each world's new state is written as its unit steps it, so a mass matrix that is not positive
-  // definite in some world (a massless leaf link, which no builder call makes) raises after the other
-  // worlds' states were written; that world's is left as it was
+  // or Reset each world's new state is written as its unit steps it, and each unit checks its own worlds'
+  // input (joint_q, joint_qd, body_f, the control) as it starts, so a non-finite input or a mass matrix that
+  // is not positive definite in some world (a massless leaf link, which no builder call makes) raises after
+  // the other worlds' states were written; the worlds of that unit are left as they were
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
 
   JointSupportMatrix joint_support() const;
@@ -120,8 +121,16 @@ class SolverFeatherstone {
   SolverFeatherstoneSettings settings;
 
  private:
-  // throws Error naming the first bad argument; notes whether the step has wrenches and drives
+  // throws Error naming the first bad argument but the finite checks of the articulations' inputs, which each
+  // unit makes of its own (check_unit), and checks the entries no articulation reads (loose_*)
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
+  // the inputs articulation a's step reads by articulation: its bodies' body_f entries, its actuators
+  void index_inputs();
+  // whether unit u's articulations' inputs are all finite: their joint_q, joint_qd, body_f, actuator_ctrl and
+  // per-dof control (the PD targets where a gain is nonzero); notes in `local` whether it has wrenches and drives
+  bool check_unit(StepRoute& route, int u, StepContext& local) const;
+  // after a pass whose unit found a non-finite input: throws naming the first one (check_finite_step's message)
+  void raise_failed_units(const StepContext& step);
   // the actuators by dof and by tendon, the tendon entries by dof
   void group_actuators();
   // constrained_ and the articulations it marks touched
@@ -180,8 +189,6 @@ class SolverFeatherstone {
   SolverCounts counts_;
   SolverData data_;
   std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays
-  bool wrenches_ = false;        // the step's input has a nonzero body_f
-  bool drives_ = false;          // the step's control has a nonzero PD gain
   int steps_since_factor_ = 0;
   bool factor_kept_ = false;  // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
   Scalar factored_dt_ = 0;
@@ -189,6 +196,10 @@ class SolverFeatherstone {
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;  // steady_clock nanoseconds at the last lap
   SolverSerialSeconds serial_seconds_;
+  // index_inputs: per articulation its bodies and actuators; the bodies and actuators of none
+  std::vector<int> art_body_start_, art_bodies_, art_actuator_start_, art_actuators_;
+  std::vector<int> loose_bodies_, loose_actuators_;
+  std::vector<std::uint8_t> unit_failed_;  // [unit] 1: its input was not finite this step (it was not stepped)
 };
 
 }  // namespace novaphy

@@ -11,6 +11,7 @@
 #include "engine/collision.h"
 #include "engine/model.h"
 #include "engine/parts/row_params.h"
+#include "kernels/lanes.h"
 
 namespace novaphy {
 
@@ -98,11 +99,16 @@ struct RowPhaseSeconds {
   double limits = 0, contacts = 0, sweeps = 0;
 };
 
+// the most articulations a unit steps: a block's lanes of float32 worlds
+inline constexpr int kMostUnitArticulations = kLanes<float>;
+
 class StepRoute {
  public:
   virtual ~StepRoute() = default;
   // units: what one thread steps at a time
   virtual int unit_count() const = 0;
+  // the articulations unit `unit` steps into out (at most kMostUnitArticulations); returns their count
+  virtual int unit_articulations(int unit, int* out) const = 0;
   // before and after the step's passes, on the calling thread
   virtual void begin_step(const StepContext& step) = 0;
   virtual void end_step(const StepContext& step) = 0;

@@ -197,9 +197,9 @@ TEST(DivergenceGuard, ResetRestartsFromTheInitialState) {
   EXPECT_NE(wild.state.joint_q[1], wild.model.joint_q0[1]);  // the others went on swinging
 }
 
-// four worlds of one pendulum, in one block: the blocks write each world's new state as they step it,
+// `count` worlds of one pendulum (four: one block): the blocks write each world's new state as they step it,
 // all but the worlds they flag
-ModelBuilder pendulum_worlds(Precision precision) {
+ModelBuilder pendulum_worlds(Precision precision, int count = 4) {
   ModelBuilder robot, worlds;
   const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
   JointOptions options;
@@ -208,7 +208,7 @@ ModelBuilder pendulum_worlds(Precision precision) {
   options.child_xform.p = Vec3(-0.25, 0, 0);
   robot.add_joint_revolute(-1, link, options);
   worlds.set_precision(precision);
-  worlds.replicate(robot, 4);
+  worlds.replicate(robot, count);
   return worlds;
 }
 
@@ -267,6 +267,38 @@ TEST(SolverFeatherstoneErrors, AFailedMassMatrixLeavesItsWorldAsItWas) {
       EXPECT_NE(state.joint_qd[0], before.joint_qd[0]);
     }
   }
+}
+
+// each unit checks its own worlds' input as it steps them: a world with a non-finite entry is not stepped and
+// the step raises naming the entry; under Raise nothing is written, under Flag the other worlds are stepped
+TEST(SolverFeatherstoneErrors, AWorldWithNonFiniteInputIsLeftAsItWas) {
+  constexpr int kLast = 39;  // forty worlds: the last in a block of its own
+  for (const Precision precision : {Precision::Float32, Precision::Float64})
+    for (const DivergencePolicy policy : {DivergencePolicy::Flag, DivergencePolicy::Raise}) {
+      const Model model = pendulum_worlds(precision, kLast + 1).finalize();
+      SolverFeatherstoneSettings settings;
+      settings.on_divergence = policy;
+      SolverFeatherstone solver(model, settings);
+      CollisionPipeline pipeline(model);
+      Contacts contacts = pipeline.contacts();
+      State state = model.state();
+      Control control = model.control();
+      control.joint_f[kLast] = std::nan("");
+      const State before = state;
+      EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), "joint_f[39] is not finite: nan");
+      EXPECT_EQ(state.joint_q[kLast], before.joint_q[kLast]);
+      EXPECT_EQ(state.joint_qd[kLast], before.joint_qd[kLast]);
+      for (int m = 0; m < 7; ++m) EXPECT_EQ(state.body_q[7 * kLast + m], before.body_q[7 * kLast + m]);
+      if (policy == DivergencePolicy::Raise) {
+        EXPECT_EQ(state.joint_qd, before.joint_qd);
+        EXPECT_EQ(state.body_q, before.body_q);
+      } else {  // the worlds of the other blocks were stepped
+        EXPECT_NE(state.joint_qd[0], before.joint_qd[0]);
+      }
+      control.joint_f[kLast] = 0;  // and the next step goes on from there
+      solver.step(state, state, control, contacts, kDt);
+      EXPECT_NE(state.joint_qd[kLast], before.joint_qd[kLast]);
+    }
 }
 
 // a body whose step overflows to infinity while it rests on another: no NaN crosses the contact
