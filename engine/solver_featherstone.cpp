@@ -165,7 +165,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   islands_ = std::make_unique<IslandRows>(model, art_, index_, limited_joints_, limited_start_, limit_cell_);
   route_.assign(model.articulation_count, nullptr);
   counts_ = {model.joint_dof_count, model.joint_coord_count, model.articulation_count, cells, 0,
-             16 * max_threads_,     model.tendon_count,      model.equality_count};
+             model.tendon_count,    model.equality_count};
   data_.allocate(counts_);
   std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
   mark_constrained();
@@ -218,6 +218,11 @@ void SolverFeatherstone::index_inputs() {
         return tendon >= 0 ? index_.dof_articulation[model_.tendon_dof[model_.tendon_start[tendon]]] : -1;
       },
       art_actuator_start_, art_actuators_, loose_actuators_);
+  // (a tendon's dofs are one articulation's: the builder's rule)
+  std::vector<int> none;
+  group(
+      model_.tendon_count, [&](int t) { return index_.dof_articulation[model_.tendon_dof[model_.tendon_start[t]]]; },
+      art_tendon_start_, art_tendons_, none);
 }
 
 void SolverFeatherstone::mark_constrained() {
@@ -295,7 +300,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   check_finite_step(in, control, &wrenches, &drives);  // throws naming the first non-finite entry
 }
 
-bool SolverFeatherstone::check_unit(StepRoute& route, int u, StepContext& local) const {
+bool SolverFeatherstone::check_unit(const int* arts, int count, StepContext& local) const {
   // one pass over the bits, as check_finite_step's: an exponent of all ones is inf or NaN; any bit but the
   // sign's, a nonzero
   constexpr std::uint64_t kExponent = 0x7ff0000000000000;
@@ -312,8 +317,6 @@ bool SolverFeatherstone::check_unit(StepRoute& route, int u, StepContext& local)
   };
   const State& in = *local.in;
   const Control& control = *local.control;
-  int arts[kMostUnitArticulations];
-  const int count = route.unit_articulations(u, arts);
   bool wrenches = false, drives = false;
   for (int i = 0; i < count; ++i) {
     const ArticulationView& art = art_[arts[i]];
@@ -414,35 +417,42 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
 void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
   step.tau = control.joint_f.data();
   if (model_.actuator_count == 0 && model_.tendon_count == 0) return;
-  const State& in = *step.in;
-  // the force along each tendon (engine/parts/tendon.h), then each dof's joint force with its actuators'
-  // (engine/parts/actuator.h) and its tendons', in order, the dofs in runs over the threads; a run notes
-  // whether an actuator of its dofs has a position or velocity term (the step's implicit stiffness and damping)
-  if (model_.tendon_count > 0)
-    parallel_for(thread_count(), model_.tendon_count, [&](int t) {
-      const Scalar length = tendon_length(model_, t, in.joint_q.data());
-      const Scalar velocity = tendon_velocity(model_, t, in.joint_qd.data());
-      Scalar force = tendon_passive_force(model_, t, length, velocity);
-      for (int k = tendon_actuator_start_[t]; k < tendon_actuator_start_[t + 1]; ++k) {
-        const int u = tendon_actuators_[k];
-        force += actuator_joint_force(model_, u, control.actuator_ctrl[u], length, velocity);
-      }
-      data_.tendon_force[t] = force;
-    });
-  const int n = model_.joint_dof_count, runs = std::min(n, counts_.runs);
-  const int *start = dof_actuator_start_.data(), *actuator = dof_actuators_.data();
-  parallel_for(thread_count(), runs, [&](int r) {
-    const int end = static_cast<int>(static_cast<std::int64_t>(n) * (r + 1) / runs);
-    bool affine = false;
-    for (int d = static_cast<int>(static_cast<std::int64_t>(n) * r / runs); d < end; ++d) {
+  step.tau = data_.tau.data();
+}
+
+Scalar SolverFeatherstone::tendon_force(int t, const State& in, const Control& control) const {
+  // its spring's, damper's and actuators' (engine/parts/tendon.h, engine/parts/actuator.h)
+  const Scalar length = tendon_length(model_, t, in.joint_q.data());
+  const Scalar velocity = tendon_velocity(model_, t, in.joint_qd.data());
+  Scalar force = tendon_passive_force(model_, t, length, velocity);
+  for (int k = tendon_actuator_start_[t]; k < tendon_actuator_start_[t + 1]; ++k) {
+    const int u = tendon_actuators_[k];
+    force += actuator_joint_force(model_, u, control.actuator_ctrl[u], length, velocity);
+  }
+  return force;
+}
+
+void SolverFeatherstone::actuate_unit(const int* arts, int count, StepContext& local) {
+  if (model_.actuator_count == 0 && model_.tendon_count == 0) return;
+  const State& in = *local.in;
+  const Control& control = *local.control;
+  // the force along each tendon of these articulations, then each dof's joint force with its actuators' and its
+  // tendons', in order; noting whether an actuator has a position or velocity term (taken implicitly)
+  bool affine = false;
+  for (int i = 0; i < count; ++i) {
+    const int a = arts[i];
+    for (int k = art_tendon_start_[a]; k < art_tendon_start_[a + 1]; ++k)
+      data_.tendon_force[art_tendons_[k]] = tendon_force(art_tendons_[k], in, control);
+    const ArticulationView& art = art_[a];
+    for (int d = art.qd_begin(); d < art.qd_begin() + art.dof_count(); ++d) {
       Scalar sum = control.joint_f[d], stiffness = 0, damping = 0;
-      for (int k = start[d]; k < start[d + 1]; ++k) {
-        const int u = actuator[k];
+      for (int k = dof_actuator_start_[d]; k < dof_actuator_start_[d + 1]; ++k) {
+        const int u = dof_actuators_[k];
         const Scalar q = in.joint_q[model_.joint_q_start[model_.actuator_joint[u]]];
-        const ActuatorForce a = actuator_force(model_, u, control.actuator_ctrl[u], q, in.joint_qd[d]);
-        sum += a.force;
-        stiffness += a.stiffness;
-        damping += a.damping;
+        const ActuatorForce f = actuator_force(model_, u, control.actuator_ctrl[u], q, in.joint_qd[d]);
+        sum += f.force;
+        stiffness += f.stiffness;
+        damping += f.damping;
       }
       for (int k = dof_entry_start_[d]; k < dof_entry_start_[d + 1]; ++k) {
         const int e = dof_entries_[k];
@@ -453,13 +463,9 @@ void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
       data_.actuator_damping[d] = damping;
       affine |= stiffness != 0 || damping != 0;
     }
-    data_.affine_run[r] = affine;
-  });
-  step.tau = data_.tau.data();
-  if (std::find(data_.affine_run.begin(), data_.affine_run.begin() + runs, 1) == data_.affine_run.begin() + runs)
-    return;
-  step.actuator_stiffness = data_.actuator_stiffness.data();
-  step.actuator_damping = data_.actuator_damping.data();
+  }
+  local.actuator_stiffness = affine ? data_.actuator_stiffness.data() : nullptr;
+  local.actuator_damping = affine ? data_.actuator_damping.data() : nullptr;
 }
 
 void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& step) {
@@ -550,9 +556,13 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
         if (!unit_failed_[u]) route.run(r, from, to, step);
         return;
       }
+      int arts[kMostUnitArticulations];
+      const int count = route.unit_articulations(r, arts);
       StepContext local = step;
-      unit_failed_[u] = !check_unit(route, r, local);
-      if (!unit_failed_[u]) route.run(r, from, to, local);
+      unit_failed_[u] = !check_unit(arts, count, local);
+      if (unit_failed_[u]) return;
+      actuate_unit(arts, count, local);
+      route.run(r, from, to, local);
     };
     auto done = [&] {
       if (step.stream) stream_fence();

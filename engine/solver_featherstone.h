@@ -56,7 +56,6 @@ struct JointSupportMatrix {
 // SolverCounts n: the table sizes them (and again as a step's contacts outgrow them) and counts their bytes
 struct SolverCounts {
   int dofs = 0, coords = 0, articulations = 0, limit_cells = 0, contacts = 0;
-  int runs = 0;  // the runs of dofs the actuators are summed in
   int tendons = 0, equalities = 0;
 };
 #define NOVAPHY_SOLVER_DATA(X)                                                                                      \
@@ -66,7 +65,6 @@ struct SolverCounts {
   X(Scalar, actuator_stiffness, n.dofs, "the actuators' stiffness on each dof, taken implicitly")                   \
   X(Scalar, actuator_damping, n.dofs, "the actuators' damping on each dof, taken implicitly")                       \
   X(Scalar, tendon_force, n.tendons, "the force along each tendon: its spring's, damper's and actuators'")          \
-  X(std::uint8_t, affine_run, n.runs, "1 where an actuator of the run's dofs has a position or velocity term")      \
   X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")          \
   X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")      \
   X(Scalar, equality_impulse, 6 * n.equalities, "the last step's equality impulses, the warm starts of their rows") \
@@ -124,11 +122,11 @@ class SolverFeatherstone {
   // throws Error naming the first bad argument but the finite checks of the articulations' inputs, which each
   // unit makes of its own (check_unit), and checks the entries no articulation reads (loose_*)
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
-  // the inputs articulation a's step reads by articulation: its bodies' body_f entries, its actuators
+  // per articulation what its step reads beside its coordinates and dofs: its bodies (body_f), actuators, tendons
   void index_inputs();
-  // whether unit u's articulations' inputs are all finite: their joint_q, joint_qd, body_f, actuator_ctrl and
+  // whether these articulations' inputs are all finite: their joint_q, joint_qd, body_f, actuator_ctrl and
   // per-dof control (the PD targets where a gain is nonzero); notes in `local` whether it has wrenches and drives
-  bool check_unit(StepRoute& route, int u, StepContext& local) const;
+  bool check_unit(const int* arts, int count, StepContext& local) const;
   // after a pass whose unit found a non-finite input: throws naming the first one (check_finite_step's message)
   void raise_failed_units(const StepContext& step);
   // the actuators by dof and by tendon, the tendon entries by dof
@@ -138,8 +136,14 @@ class SolverFeatherstone {
   // the routes: each articulation's, made again when a setting that decides them changed
   void plan();
   StepContext begin_step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt);
-  // step.tau: the control's joint forces with its actuators' added
+  // step.tau: the control's joint forces, or where the model has actuators or tendons the sums each unit makes
+  // for its articulations (actuate_unit)
   void actuate(const Control& control, StepContext& step);
+  // the force along tendon t
+  Scalar tendon_force(int t, const State& in, const Control& control) const;
+  // the joint forces of these articulations' dofs with their actuators' and tendons', and in `local` whether
+  // some actuator has a position or velocity term (the step's implicit stiffness and damping)
+  void actuate_unit(const int* arts, int count, StepContext& local);
   // each contact to its articulation's unit, or to the islands with every row of the articulations it joins
   void list_contacts(const Contacts& contacts, StepContext& step);
   // data_.touched: the articulations a contact joins to another moving one (throws for a contact between
@@ -196,8 +200,8 @@ class SolverFeatherstone {
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;  // steady_clock nanoseconds at the last lap
   SolverSerialSeconds serial_seconds_;
-  // index_inputs: per articulation its bodies and actuators; the bodies and actuators of none
-  std::vector<int> art_body_start_, art_bodies_, art_actuator_start_, art_actuators_;
+  // index_inputs: per articulation its bodies, actuators and tendons; the bodies and actuators of none
+  std::vector<int> art_body_start_, art_bodies_, art_actuator_start_, art_actuators_, art_tendon_start_, art_tendons_;
   std::vector<int> loose_bodies_, loose_actuators_;
   std::vector<std::uint8_t> unit_failed_;  // [unit] 1: its input was not finite this step (it was not stepped)
 };
