@@ -126,15 +126,25 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
       n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
       p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
     }
+    const Model& model = *lists.model;
+    const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
+    const ContactFriction f = contact_friction_of(model, sa, sb);
+    Scalar softness[5];
+    contact_softness_row(contact_softness(model, sa, sb, C.contact_depth[c], step.dt), softness);
     in[0][l] = static_cast<T>(C.contact_depth[c]);
-    in[1][l] = static_cast<T>(lists.mu[c]);
-    in[2][l] = static_cast<T>(lists.restitution[c]);
+    in[1][l] = static_cast<T>(f.mu);
+    in[2][l] = static_cast<T>(contact_restitution(model, sa, sb));
     if (const Scalar* P = C.previous(c))
       for (int m = 0; m < 3; ++m) in[3 + m][l] = static_cast<T>(P[m]);
-    for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(lists.softness[5 * static_cast<size_t>(c) + m]);
-    for (int m = 0; m < 3; ++m) in[11 + m][l] = static_cast<T>(lists.friction[3 * static_cast<size_t>(c) + m]);
-    link[l][0] = lists.link_b[c];
-    link[l][1] = lists.link_a[c];
+    for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(softness[m]);
+    in[11][l] = static_cast<T>(f.condim);
+    in[12][l] = static_cast<T>(f.torsion);
+    in[13][l] = static_cast<T>(f.rolling);
+    // the links holding the bodies in this articulation (-1: a static body)
+    const ArticulationIndex& index = *lists.index;
+    const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
+    link[l][0] = index.moving(bb) >= 0 ? index.body_link[bb] : -1;
+    link[l][1] = index.moving(ba) >= 0 ? index.body_link[ba] : -1;
     if (*uniform == -1) *uniform = l;
     if (*uniform >= 0 && (link[l][0] != link[*uniform][0] || link[l][1] != link[*uniform][1])) *uniform = -2;
   }

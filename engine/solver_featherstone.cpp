@@ -39,6 +39,9 @@ std::int64_t now_ns() {
       .count();
 }
 
+// no thread wakes in the contact lists for fewer contacts (a parallel region costs about as much)
+constexpr int kContactsPerThread = 512;
+
 // while one lives (and `on`), the wall time is added to *total in seconds
 class ParallelTimer {
  public:
@@ -474,14 +477,7 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
-  step.lists = {data_.contact_start.data(),
-                data_.contact_list.data(),
-                data_.contact_link_a.data(),
-                data_.contact_link_b.data(),
-                data_.contact_mu.data(),
-                data_.contact_restitution.data(),
-                data_.contact_softness.data(),
-                data_.contact_friction.data(),
+  step.lists = {data_.contact_start.data(), data_.contact_list.data(), &model_, &index_,
                 std::min(contact_dims_, contact_row_count(settings.max_condim))};
   step.touched = data_.touched.data();
   island_contacts_.clear();
@@ -489,37 +485,52 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
   step.split = !island_articulations_.empty();
   if (n == 0 && listed_ == 0) return;  // the lists are empty already
   listed_ = n;
-  const int threads = std::min(thread_count(), n / 1024);
-  touch_articulations(contacts, threads);
+  // each contact to the unit of the articulation it moves (its units read the rest, engine/batch_rows.cpp), else
+  // to the islands; a contact is owned in order where each owner's contacts follow the one before's, as the
+  // collision pipeline lists a robot's worlds (then the lists are the contacts in order, made in parallel)
+  const int threads = std::min(thread_count(), std::max(1, n / kContactsPerThread));
+  const ParallelTimer timer(settings.count_serial_time && threads > 1, &serial_seconds_.parallel);
+  const bool touched = touch_articulations(contacts, threads);
+  auto owner = [&](int c) {
+    const int a = index_.moving(contacts.contact_body_a[c]), b = index_.moving(contacts.contact_body_b[c]);
+    const int art = a >= 0 ? a : b;
+    return art >= 0 && route_[art] == batches_.get() && !data_.touched[art] ? art : -1;
+  };
+  int unordered = 0;
   parallel_for(threads, n, [&](int c) {
-    const int ba = contacts.contact_body_a[c], bb = contacts.contact_body_b[c];
-    const int a = index_.moving(ba), b = index_.moving(bb), art = a >= 0 ? a : b;
-    const bool unit = art >= 0 && route_[art] == batches_.get() && !data_.touched[art];
-    data_.contact_owner[c] = unit ? art : -1;
-    if (!unit) return;
-    data_.contact_link_a[c] = a >= 0 ? index_.body_link[ba] : -1;
-    data_.contact_link_b[c] = b >= 0 ? index_.body_link[bb] : -1;
-    const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];
-    const ContactFriction f = contact_friction_of(model_, sa, sb);
-    data_.contact_mu[c] = f.mu;
-    Scalar* friction = &data_.contact_friction[3 * static_cast<size_t>(c)];
-    friction[0] = f.condim, friction[1] = f.torsion, friction[2] = f.rolling;
-    data_.contact_restitution[c] = contact_restitution(model_, sa, sb);
-    contact_softness_row(contact_softness(model_, sa, sb, contacts.contact_depth[c], step.dt),
-                         &data_.contact_softness[5 * static_cast<size_t>(c)]);
+    const int o = owner(c);
+    data_.contact_owner[c] = o;
+    if (o < 0 || (c > 0 && owner(c - 1) > o)) {
+#pragma omp atomic write
+      unordered = 1;
+    }
   });
-  group_by_key(
-      n, articulations, [&](int c) { return data_.contact_owner[c]; }, data_.contact_start.data(),
-      data_.contact_list.data(), data_.fill.data());
-  for (int c = 0; c < n; ++c)
-    if (data_.contact_owner[c] < 0) island_contacts_.push_back(c);
-  for (int a = 0; a < articulations; ++a)
-    if (data_.touched[a] && !constrained_[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
+  if (!unordered) {
+    // contact c starts the lists of the owners after c - 1's up to its own; the last ends the rest
+    parallel_for(threads, n, [&](int c) {
+      data_.contact_list[c] = c;
+      const int before = c > 0 ? data_.contact_owner[c - 1] : -1;
+      for (int a = before + 1; a <= data_.contact_owner[c]; ++a) data_.contact_start[a] = c;
+      if (c == n - 1)
+        for (int a = data_.contact_owner[c] + 1; a <= articulations; ++a) data_.contact_start[a] = n;
+    });
+    if (n == 0) std::fill_n(data_.contact_start.begin(), articulations + 1, 0);
+  } else {
+    group_by_key(
+        n, articulations, [&](int c) { return data_.contact_owner[c]; }, data_.contact_start.data(),
+        data_.contact_list.data(), data_.fill.data());
+    for (int c = 0; c < n; ++c)
+      if (data_.contact_owner[c] < 0) island_contacts_.push_back(c);
+  }
+  if (touched)
+    for (int a = 0; a < articulations; ++a)
+      if (data_.touched[a] && !constrained_[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
   step.split = !island_articulations_.empty() || !island_contacts_.empty();
 }
 
-void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threads) {
+bool SolverFeatherstone::touch_articulations(const Contacts& contacts, int threads) {
   std::copy(constrained_.begin(), constrained_.end(), data_.touched.begin());
+  int any = 0;
   int unexpected = -1;  // a contact joining bodies of two worlds
   parallel_for(threads, contacts.contact_count, [&](int c) {
     const int body_a = contacts.contact_body_a[c], body_b = contacts.contact_body_b[c];
@@ -534,12 +545,15 @@ void SolverFeatherstone::touch_articulations(const Contacts& contacts, int threa
     data_.touched[a] = 1;
 #pragma omp atomic write
     data_.touched[b] = 1;
+#pragma omp atomic write
+    any = 1;
   });
   if (unexpected >= 0) {
     const int body_a = contacts.contact_body_a[unexpected], body_b = contacts.contact_body_b[unexpected];
     fail("contact ", unexpected, " joins body ", body_a, " of world ", model_.body_world[body_a], " and body ", body_b,
          " of world ", model_.body_world[body_b], ": worlds never touch");
   }
+  return any != 0;
 }
 
 void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) {

@@ -75,12 +75,6 @@ struct SolverCounts {
   X(int, contact_start, n.articulations + 1, "where each articulation's contacts start in contact_list")            \
   X(int, contact_list, n.contacts, "the contacts each articulation's unit solves, by articulation")                 \
   X(int, contact_owner, n.contacts, "the articulation whose unit solves the contact, else -1 (the islands)")        \
-  X(int, contact_link_a, n.contacts, "the link holding body a in its articulation, -1 for a static body")           \
-  X(int, contact_link_b, n.contacts, "likewise for body b")                                                         \
-  X(Scalar, contact_mu, n.contacts, "the contact's friction coefficient")                                           \
-  X(Scalar, contact_restitution, n.contacts, "the contact's restitution")                                           \
-  X(Scalar, contact_friction, 3 * n.contacts, "a contact's condim, torsional and rolling friction coefficients")    \
-  X(Scalar, contact_softness, 5 * n.contacts, "a soft contact's cfm of its rows, B, K imp (pos - margin), margin")  \
   X(int, fill, n.articulations + 1, "scratch of the counting sorts")
 
 struct SolverData {
@@ -147,8 +141,8 @@ class SolverFeatherstone {
   // each contact to its articulation's unit, or to the islands with every row of the articulations it joins
   void list_contacts(const Contacts& contacts, StepContext& step);
   // data_.touched: the articulations a contact joins to another moving one (throws for a contact between
-  // two worlds, which no CollisionPipeline makes)
-  void touch_articulations(const Contacts& contacts, int threads);
+  // two worlds, which no CollisionPipeline makes); returns whether a contact touched any
+  bool touch_articulations(const Contacts& contacts, int threads);
   // the stages first..last over every unit of both routes: block-major, a unit's in turn on its thread;
   // stage-major (profiling), each over all units before the next; the factors checked after Dynamics
   void pass(const StepContext& step, Stage first, Stage last);

@@ -18,20 +18,16 @@ namespace novaphy {
 // the per-unit stages of a step, in order
 enum class Stage : int { Dynamics = 0, Rows = 1, Integrate = 2, Store = 3 };
 
+struct ArticulationIndex;
+
 // the contacts whose rows an articulation's own unit solves (with static bodies or with itself), listed
-// per articulation in contact order
+// per articulation in contact order; the unit reads each one's links, friction, restitution and softness from
+// the model (engine/parts/rows.h) as it builds its rows
 struct ContactLists {
-  const int* start = nullptr;           // [articulation + 1]: a's are list[start[a] .. start[a + 1])
-  const int* list = nullptr;            // contact indices
-  const int* link_a = nullptr;          // [contact] the link holding body a in its articulation, -1 for a static body
-  const int* link_b = nullptr;          // [contact] likewise for body b
-  const Scalar* mu = nullptr;           // [contact] friction coefficient
-  const Scalar* restitution = nullptr;  // [contact]
-  // [contact][5] a soft contact's (engine/parts/rows.h ContactSoftness): the normal row's cfm, the friction rows',
-  // B, K imp (pos - margin) and the active margin; all 0 with a cfm of -1 for a rigid contact
-  const Scalar* softness = nullptr;
-  // [contact][3]: its condim (as a number), torsional and rolling friction coefficients
-  const Scalar* friction = nullptr;
+  const int* start = nullptr;  // [articulation + 1]: a's are list[start[a] .. start[a + 1])
+  const int* list = nullptr;   // contact indices
+  const Model* model = nullptr;
+  const ArticulationIndex* index = nullptr;
   int dims = 3;  // the rows of a contact of the most: 3, 4 (torsional) or 6 (and rolling), by the shapes' condim
 };
 
