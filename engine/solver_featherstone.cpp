@@ -211,7 +211,7 @@ void SolverFeatherstone::index_inputs() {
       if (key(i) < 0) loose.push_back(i);
   };
   group(
-      model_.body_count, [&](int b) { return index_.body_articulation[b]; }, art_body_start_, art_bodies_,
+      model_.body_count, [&](int b) { return index_.body_articulation[b]; }, art_body_start_, art_body_runs_,
       loose_bodies_);
   group(
       model_.actuator_count,
@@ -220,7 +220,26 @@ void SolverFeatherstone::index_inputs() {
         if (joint >= 0) return index_.dof_articulation[model_.joint_qd_start[joint]];
         return tendon >= 0 ? index_.dof_articulation[model_.tendon_dof[model_.tendon_start[tendon]]] : -1;
       },
-      art_actuator_start_, art_actuators_, loose_actuators_);
+      art_actuator_start_, art_actuator_runs_, loose_actuators_);
+  // the bodies and actuators as runs of consecutive indices (a robot's are one run each): [begin, count] pairs
+  auto to_runs = [&](std::vector<int>& start, std::vector<int>& items) {
+    std::vector<int> runs, run_start(articulations + 1, 0);
+    for (int a = 0; a < articulations; ++a) {
+      for (int k = start[a]; k < start[a + 1]; ++k) {
+        if (k > start[a] && items[k] == items[k - 1] + 1) {
+          ++runs.back();
+          continue;
+        }
+        runs.push_back(items[k]);
+        runs.push_back(1);
+      }
+      run_start[a + 1] = static_cast<int>(runs.size()) / 2;
+    }
+    start = std::move(run_start);
+    items = std::move(runs);
+  };
+  to_runs(art_body_start_, art_body_runs_);
+  to_runs(art_actuator_start_, art_actuator_runs_);
   // (a tendon's dofs are one articulation's: the builder's rule)
   std::vector<int> none;
   group(
@@ -303,43 +322,70 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   check_finite_step(in, control, &wrenches, &drives);  // throws naming the first non-finite entry
 }
 
-bool SolverFeatherstone::check_unit(const int* arts, int count, StepContext& local) const {
-  // one pass over the bits, as check_finite_step's: an exponent of all ones is inf or NaN; any bit but the
-  // sign's, a nonzero
-  constexpr std::uint64_t kExponent = 0x7ff0000000000000;
-  std::uint64_t bad = 0;
-  auto scan = [&](const std::vector<Scalar>& x, int begin, int count) {
-    std::uint64_t nonzero = 0;
-    for (int k = begin; k < begin + count; ++k) {
+namespace {
+
+// the entries of one array a unit reads, in ranges joined where one starts as the last ended (a block's worlds
+// lie one after another), scanned a run at a time in one pass over the bits, as check_finite_step's: an exponent
+// of all ones is inf or NaN; any bit but the sign's, a nonzero
+class RunScan {
+ public:
+  RunScan(const std::vector<Scalar>& x, std::uint64_t* bad) : x_(x), bad_(bad) {}
+  void add(int begin, int count) {
+    if (begin != end_) flush();
+    if (begin != end_) begin_ = begin;
+    end_ = begin + count;
+  }
+  // scans what is pending; returns whether any entry scanned so far is nonzero
+  bool flush() {
+    constexpr std::uint64_t kExponent = 0x7ff0000000000000;
+    std::uint64_t bad = 0;
+    for (int k = begin_; k < end_; ++k) {
       std::uint64_t bits;
-      std::memcpy(&bits, &x[k], sizeof(bits));
+      std::memcpy(&bits, &x_[k], sizeof(bits));
       bad |= (bits & kExponent) == kExponent;
-      nonzero |= bits << 1;
+      nonzero_ |= bits << 1;
     }
-    return nonzero != 0;
-  };
+    *bad_ |= bad;
+    begin_ = end_;
+    return nonzero_ != 0;
+  }
+
+ private:
+  const std::vector<Scalar>& x_;
+  std::uint64_t* bad_;
+  std::uint64_t nonzero_ = 0;
+  int begin_ = 0, end_ = 0;
+};
+
+}  // namespace
+
+bool SolverFeatherstone::check_unit(const int* arts, int count, StepContext& local) const {
   const State& in = *local.in;
   const Control& control = *local.control;
-  bool wrenches = false, drives = false;
+  std::uint64_t bad = 0;
+  RunScan q(in.joint_q, &bad), qd(in.joint_qd, &bad), f(control.joint_f, &bad), ke(control.joint_target_ke, &bad),
+      kd(control.joint_target_kd, &bad), body_f(in.body_f, &bad), ctrl(control.actuator_ctrl, &bad);
   for (int i = 0; i < count; ++i) {
-    const ArticulationView& art = art_[arts[i]];
-    const int q = art.q_begin(), qd = art.qd_begin(), dofs = art.dof_count();
-    scan(in.joint_q, q, art.coord_count());
-    scan(in.joint_qd, qd, dofs);
-    scan(control.joint_f, qd, dofs);
-    drives |= scan(control.joint_target_ke, qd, dofs) | scan(control.joint_target_kd, qd, dofs);
-    for (int k = art_body_start_[arts[i]]; k < art_body_start_[arts[i] + 1]; ++k)
-      wrenches |= scan(in.body_f, 6 * art_bodies_[k], 6);
-    for (int k = art_actuator_start_[arts[i]]; k < art_actuator_start_[arts[i] + 1]; ++k)
-      scan(control.actuator_ctrl, art_actuators_[k], 1);
+    const int a = arts[i];
+    const ArticulationView& art = art_[a];
+    q.add(art.q_begin(), art.coord_count());
+    for (RunScan* dof : {&qd, &f, &ke, &kd}) dof->add(art.qd_begin(), art.dof_count());
+    for (int k = art_body_start_[a]; k < art_body_start_[a + 1]; ++k)
+      body_f.add(6 * art_body_runs_[2 * k], 6 * art_body_runs_[2 * k + 1]);
+    for (int k = art_actuator_start_[a]; k < art_actuator_start_[a + 1]; ++k)
+      ctrl.add(art_actuator_runs_[2 * k], art_actuator_runs_[2 * k + 1]);
   }
-  for (int i = 0; drives && i < count; ++i) {  // the targets, read only where a gain is nonzero
-    const ArticulationView& art = art_[arts[i]];
-    scan(control.joint_target_pos, art.qd_begin(), art.dof_count());
-    scan(control.joint_target_vel, art.qd_begin(), art.dof_count());
-  }
-  local.wrenches = wrenches;
+  for (RunScan* x : {&q, &qd, &f, &ctrl}) x->flush();
+  const bool drives = ke.flush() | kd.flush();
+  local.wrenches = body_f.flush();
   local.drives = drives;
+  if (drives) {  // the targets, read only where a gain is nonzero
+    RunScan pos(control.joint_target_pos, &bad), vel(control.joint_target_vel, &bad);
+    for (int i = 0; i < count; ++i)
+      for (RunScan* dof : {&pos, &vel}) dof->add(art_[arts[i]].qd_begin(), art_[arts[i]].dof_count());
+    pos.flush();
+    vel.flush();
+  }
   return bad == 0;
 }
 

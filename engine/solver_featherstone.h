@@ -194,8 +194,10 @@ class SolverFeatherstone {
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;  // steady_clock nanoseconds at the last lap
   SolverSerialSeconds serial_seconds_;
-  // index_inputs: per articulation its bodies, actuators and tendons; the bodies and actuators of none
-  std::vector<int> art_body_start_, art_bodies_, art_actuator_start_, art_actuators_, art_tendon_start_, art_tendons_;
+  // index_inputs: per articulation its bodies and actuators as runs ([begin, count] pairs from *_start_[a]) and
+  // its tendons; the bodies and actuators of none
+  std::vector<int> art_body_start_, art_body_runs_, art_actuator_start_, art_actuator_runs_;
+  std::vector<int> art_tendon_start_, art_tendons_;
   std::vector<int> loose_bodies_, loose_actuators_;
   std::vector<std::uint8_t> unit_failed_;  // [unit] 1: its input was not finite this step (it was not stepped)
 };
