@@ -535,23 +535,28 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
   // to the islands; a contact is owned in order where each owner's contacts follow the one before's, as the
   // collision pipeline lists a robot's worlds (then the lists are the contacts in order, made in parallel)
   const int threads = std::min(thread_count(), std::max(1, n / kContactsPerThread));
-  const ParallelTimer timer(settings.count_serial_time && threads > 1, &serial_seconds_.parallel);
-  const bool touched = touch_articulations(contacts, threads);
+  const bool timed = settings.count_serial_time && threads > 1;  // (on one thread the regions are serial work)
   auto owner = [&](int c) {
     const int a = index_.moving(contacts.contact_body_a[c]), b = index_.moving(contacts.contact_body_b[c]);
     const int art = a >= 0 ? a : b;
     return art >= 0 && route_[art] == batches_.get() && !data_.touched[art] ? art : -1;
   };
+  bool touched;
   int unordered = 0;
-  parallel_for(threads, n, [&](int c) {
-    const int o = owner(c);
-    data_.contact_owner[c] = o;
-    if (o < 0 || (c > 0 && owner(c - 1) > o)) {
+  {
+    const ParallelTimer timer(timed, &serial_seconds_.parallel);
+    touched = touch_articulations(contacts, threads);
+    parallel_for(threads, n, [&](int c) {
+      const int o = owner(c);
+      data_.contact_owner[c] = o;
+      if (o < 0 || (c > 0 && owner(c - 1) > o)) {
 #pragma omp atomic write
-      unordered = 1;
-    }
-  });
+        unordered = 1;
+      }
+    });
+  }
   if (!unordered) {
+    const ParallelTimer timer(timed, &serial_seconds_.parallel);
     // contact c starts the lists of the owners after c - 1's up to its own; the last ends the rest
     parallel_for(threads, n, [&](int c) {
       data_.contact_list[c] = c;
