@@ -33,8 +33,9 @@ struct SolverStageSeconds {
 };
 
 // wall time of whole steps and of their parallel work (the passes over blocks and dense articulations, each
-// unit's stages on its thread, and the islands' solve), accumulated while settings.count_serial_time is on;
-// the rest of a step (checks, lists, the regions' start and end) is the share more threads do not shorten
+// unit's stages on its thread; the islands' solve; the contact lists' regions when they take more than one
+// thread), accumulated while settings.count_serial_time is on; the rest of a step (argument checks, the guard,
+// the counting sort of unordered contacts) is the share more threads do not shorten
 struct SolverSerialSeconds {
   double step = 0;
   double parallel = 0;
