@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <memory>
 
 #include "engine/articulation_batches.h"
@@ -35,20 +34,13 @@ constexpr int kMostChecked = 16;
 // sign's, a nonzero), vectorised; on `threads` threads when the arrays are long, all of them in one
 // parallel region (each thread its share of every array); the search only on failure
 void check_finite(Checked* arrays, int count, int threads) {
-  static_assert(sizeof(Scalar) == sizeof(std::uint64_t));
   std::uint64_t not_finite[kMostChecked] = {}, nonzero[kMostChecked] = {};
   auto scan = [&](int t, int teams) {
-    constexpr std::uint64_t kExponent = 0x7ff0000000000000;
     for (int a = 0; a < count; ++a) {
       const std::vector<Scalar>& x = *arrays[a].x;
-      const long n = static_cast<long>(x.size()), end = n * (t + 1) / teams;
+      const long n = static_cast<long>(x.size());
       std::uint64_t bad = 0, any = 0;
-      for (long k = n * t / teams; k < end; ++k) {
-        std::uint64_t bits;
-        std::memcpy(&bits, &x[k], sizeof(bits));
-        bad |= (bits & kExponent) == kExponent;
-        any |= bits << 1;
-      }
+      scan_bits(x.data(), n * t / teams, n * (t + 1) / teams, &bad, &any);
       if (teams == 1) {
         not_finite[a] = bad;
         nonzero[a] = any;

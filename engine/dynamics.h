@@ -5,6 +5,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 
 #include "engine/model.h"
 
@@ -46,6 +48,22 @@ void store_body_state(const ArticulationView& art, const ArticulationScratch& s,
 // qdd from tau = eval_control_force(model, control); CRBA + Cholesky or ABA
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
                            ForwardDynamicsMethod method = ForwardDynamicsMethod::Crba);
+
+// one pass over the bits of x[begin, end): ORs into *bad a nonzero where an entry is inf or NaN (an exponent of all
+// ones) and into *nonzero one where an entry is not +-0 (any bit but the sign's); vectorises
+inline void scan_bits(const Scalar* x, long begin, long end, std::uint64_t* bad, std::uint64_t* nonzero) {
+  static_assert(sizeof(Scalar) == sizeof(std::uint64_t));
+  constexpr std::uint64_t kExponent = 0x7ff0000000000000;
+  std::uint64_t b = 0, any = 0;
+  for (long k = begin; k < end; ++k) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &x[k], sizeof(bits));
+    b |= (bits & kExponent) == kExponent;
+    any |= bits << 1;
+  }
+  *bad |= b;
+  *nonzero |= any;
+}
 
 // throws Error naming the first non-finite entry of state.joint_q / joint_qd / body_f; any_wrench
 // (when given) is set to whether body_f holds a nonzero entry

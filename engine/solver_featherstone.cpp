@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <sstream>
 #include <type_traits>
 
@@ -325,8 +324,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
 namespace {
 
 // the entries of one array a unit reads, in ranges joined where one starts as the last ended (a block's worlds
-// lie one after another), scanned a run at a time in one pass over the bits, as check_finite_step's: an exponent
-// of all ones is inf or NaN; any bit but the sign's, a nonzero
+// lie one after another), scanned a run at a time (scan_bits, as check_finite_step's)
 class RunScan {
  public:
   RunScan(const std::vector<Scalar>& x, std::uint64_t* bad) : x_(x), bad_(bad) {}
@@ -337,15 +335,7 @@ class RunScan {
   }
   // scans what is pending; returns whether any entry scanned so far is nonzero
   bool flush() {
-    constexpr std::uint64_t kExponent = 0x7ff0000000000000;
-    std::uint64_t bad = 0;
-    for (int k = begin_; k < end_; ++k) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &x_[k], sizeof(bits));
-      bad |= (bits & kExponent) == kExponent;
-      nonzero_ |= bits << 1;
-    }
-    *bad_ |= bad;
+    scan_bits(x_.data(), begin_, end_, bad_, &nonzero_);
     begin_ = end_;
     return nonzero_ != 0;
   }
