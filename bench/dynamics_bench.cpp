@@ -31,8 +31,8 @@ struct Scene {
     import = import_mujoco_model(builder, m.get());
     model = builder.finalize();
     state = model.state();
-    import.to_joint_q(m.get(), d->qpos, state.joint_q.data());
-    import.to_joint_qd(m.get(), d->qpos, d->qvel, state.joint_qd.data());
+    import.to_joint_q(d->qpos, state.joint_q.data());
+    import.to_joint_qd(d->qpos, d->qvel, state.joint_qd.data());
     tau.setConstant(model.joint_dof_count, 0.3);
     qdd.setZero(model.joint_dof_count);
     zero.setZero(model.joint_dof_count);

@@ -16,6 +16,7 @@ void bind_dynamics(py::module_& m);
 void bind_collision(py::module_& m);
 void bind_solver_featherstone(py::module_& m);
 void bind_shard(py::module_& m);
+void bind_mujoco(py::module_& m);  // after bind_builder: adds ModelBuilder.add_mujoco_model
 
 // a numpy view of `count` rows of `width` values owned by `owner` (no copy); width 1 gives a 1-D array
 template <typename T>

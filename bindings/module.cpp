@@ -8,6 +8,7 @@ PYBIND11_MODULE(_novaphy, m) {
   py::register_exception<novaphy::Error>(m, "Error", PyExc_ValueError);
   novaphy::python::bind_model(m);
   novaphy::python::bind_builder(m);
+  novaphy::python::bind_mujoco(m);
   novaphy::python::bind_dynamics(m);
   novaphy::python::bind_collision(m);
   novaphy::python::bind_solver_featherstone(m);

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <initializer_list>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -228,6 +229,13 @@ class Translator {
 
 }  // namespace
 
+void narrow_force_range(double lower, double upper, double gear, double* force_lower, double* force_upper) {
+  if (gear == 0) return;
+  const double a = lower / gear, b = upper / gear;
+  *force_lower = std::max(*force_lower, std::min(a, b));
+  *force_upper = std::min(*force_upper, std::max(a, b));
+}
+
 void apply_translation(mjModel* m, const TranslatedMjcf& translated) {
   if (translated.dampratio) set_dampratio(m);
   auto id = [&](mjtObj type, const std::string& name, const char* what) {
@@ -247,11 +255,9 @@ void apply_translation(mjModel* m, const TranslatedMjcf& translated) {
            " actuators on it has no MuJoCo 2.2.2 equivalent (one actuator: its force range)");
     if (on.empty() || m->actuator_gear[6 * on[0]] == 0) continue;
     const int u = on[0];
-    const mjtNum gear = m->actuator_gear[6 * u], a = range[0] / gear, b = range[1] / gear;
     mjtNum* limit = m->actuator_forcerange + 2 * u;
-    const bool limited = m->actuator_forcelimited[u];
-    limit[0] = limited ? std::max(limit[0], std::min(a, b)) : std::min(a, b);
-    limit[1] = limited ? std::min(limit[1], std::max(a, b)) : std::max(a, b);
+    if (!m->actuator_forcelimited[u]) limit[0] = -std::numeric_limits<mjtNum>::infinity(), limit[1] = -limit[0];
+    narrow_force_range(range[0], range[1], m->actuator_gear[6 * u], limit, limit + 1);
     m->actuator_forcelimited[u] = 1;
   }
   // a position servo's inheritrange: its control range the target's range about its middle, scaled
@@ -273,15 +279,15 @@ void set_dampratio(mjModel* m) {
   const std::unique_ptr<mjData, void (*)(mjData*)> d(mj_makeData(m), mj_deleteData);
   mju_copy(d->qpos, m->qpos0, m->nq);
   mj_fwdPosition(m, d.get());
+  std::vector<mjtNum> x(m->nv);
   for (int u = 0; u < m->nu; ++u) {
     const mjtNum kp = m->actuator_gainprm[mjNGAIN * u];
     mjtNum* bias = m->actuator_biasprm + mjNBIAS * u;
     if (kp != -bias[1] || bias[2] <= 0) continue;
-    mjtNum mass = 0;
-    for (int j = 0; j < m->nv; ++j) {
-      const mjtNum moment = d->actuator_moment[u * m->nv + j];
-      if (moment * moment > mjMINVAL) mass += d->qM[m->dof_Madr[j]] / (moment * moment);
-    }
+    const mjtNum* moment = d->actuator_moment + static_cast<size_t>(u) * m->nv;
+    mj_solveM(m, d.get(), x.data(), moment, 1);
+    const mjtNum inverse_mass = mju_dot(moment, x.data(), m->nv);
+    const mjtNum mass = inverse_mass > mjMINVAL ? 1 / inverse_mass : 0;
     bias[2] = -2 * bias[2] * std::sqrt(kp * mass);
   }
 }

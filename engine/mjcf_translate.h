@@ -28,9 +28,13 @@ struct TranslatedMjcf {
 // tendon's range scaled about its middle (Error without a range)
 void apply_translation(mjModel* m, const TranslatedMjcf& translated);
 
-// MuJoCo 3's damping of a position servo given by a ratio (gain kp = -biasprm[1], biasprm[2] > 0 the ratio):
-// kv = 2 ratio sqrt(kp m), m the inertia its transmission moves at qpos0 (each dof's diagonal of the mass
-// matrix over its moment squared, summed), written as biasprm[2] = -kv
+// MuJoCo 3's joint actuatorfrcrange [lower, upper] as the force range of the joint's one actuator, of gear
+// `gear`: intersected with the actuator's own [*force_lower, *force_upper] (both routes of the import use it)
+void narrow_force_range(double lower, double upper, double gear, double* force_lower, double* force_upper);
+
+// today's MuJoCo's damping of a position servo given by a ratio (gain kp = -biasprm[1], biasprm[2] > 0 the
+// ratio; the rule of MuJoCo >= 3.15): kv = 2 ratio sqrt(kp m), m = (J M^-1 J^T)^-1 the inertia its transmission
+// J moves at qpos0 (off-diagonal coupling included), written as biasprm[2] = -kv
 void set_dampratio(mjModel* m);
 
 // reads `path` (MJCF) and its includes and translates them; throws Error for a MuJoCo >= 3 attribute without a

@@ -72,10 +72,10 @@ OracleErrors MujocoOracle::compare_random_state(std::mt19937& rng) {
   mj_forward(m_, d_);
 
   State state = model_.state();
-  import_.to_joint_q(m_, d_->qpos, state.joint_q.data());
-  import_.to_joint_qd(m_, d_->qpos, d_->qvel, state.joint_qd.data());
+  import_.to_joint_q(d_->qpos, state.joint_q.data());
+  import_.to_joint_qd(d_->qpos, d_->qvel, state.joint_qd.data());
   eval_fk(model_, state);
-  const MatX T = import_.velocity_map(m_, d_->qpos);
+  const MatX T = import_.velocity_map(d_->qpos);
 
   OracleErrors e;
   // body poses and velocities ([v_com; w] against MuJoCo's [w; v] at the centre of mass)

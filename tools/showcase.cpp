@@ -270,7 +270,7 @@ NovaPhyRun run_novaphy(const Model& model, const Robot& robot, const std::vector
   const int nv = robot.model.joint_dof_count;
   std::vector<Scalar> kick(nv);
   for (int w = 0; w < model.world_count; ++w) {
-    robot.import.to_joint_qd(m, qpos, &qvel[static_cast<size_t>(w) * m->nv], kick.data());
+    robot.import.to_joint_qd(qpos, &qvel[static_cast<size_t>(w) * m->nv], kick.data());
     for (int k = 0; k < nv; ++k) state.joint_qd[w * nv + k] += kick[k];
   }
   std::vector<int> world_of(model.articulation_count);  // an articulation's world

@@ -102,7 +102,7 @@ Loaded load(const Scene& scene) {
   loaded.import = import_mujoco_model(builder, loaded.mujoco.get(), options);
   loaded.model = builder.finalize();
   loaded.start = loaded.model.state();
-  loaded.import.to_joint_q(loaded.mujoco.get(), loaded.mujoco->qpos0, loaded.start.joint_q.data());
+  loaded.import.to_joint_q(loaded.mujoco->qpos0, loaded.start.joint_q.data());
   eval_fk(loaded.model, loaded.start);
   return loaded;
 }
@@ -189,7 +189,7 @@ std::vector<std::vector<Scalar>> mujoco_rk4(const Loaded& loaded, double dt, con
   for (const double t : seconds) {
     for (; done < steps_to(t, dt); ++done) mj_step(m.get(), d.get());
     q.emplace_back(loaded.model.joint_coord_count);
-    loaded.import.to_joint_q(m.get(), d->qpos, q.back().data());
+    loaded.import.to_joint_q(d->qpos, q.back().data());
   }
   return q;
 }

@@ -70,9 +70,9 @@ TEST(MjcfTranslate, MujocoThreeSyntaxLoadsAsMujocoThreeMeansIt) {
   std::filesystem::remove(main);
 }
 
-TEST(MjcfTranslate, ADampingRatioGivesMujocoThreesKvFromTheInertiaAtQpos0) {
-  // kv = 2 dampratio sqrt(kp m), m the joint's diagonal of the mass matrix at qpos0 (armature included) over
-  // the gear squared: NovaPhy's own mass matrix at the initial coordinates is the oracle
+TEST(MjcfTranslate, ADampingRatioGivesTodaysMujocosKvFromTheInertiaAtQpos0) {
+  // kv = 2 dampratio sqrt(kp m), m = 1 / (J M^-1 J^T) at qpos0 (armature included), J the joint's gear:
+  // NovaPhy's own mass matrix at the initial coordinates is the oracle
   const std::string path = test::write_temp_file("three_dampratio.xml", R"(<mujoco>
   <default><default class="critical"><position kp="30" dampratio="1"/></default></default>
   <worldbody>
@@ -94,9 +94,9 @@ TEST(MjcfTranslate, ADampingRatioGivesMujocoThreesKvFromTheInertiaAtQpos0) {
   ASSERT_TRUE(builder.add_mjcf(path).empty());
   const Model model = builder.finalize();
   EXPECT_EQ(model.joint_q0[1], 0.4 * M_PI / 180);  // the model starts at MuJoCo's qpos0: ref, in degrees
-  const MatX H = eval_mass_matrix(model, model.state());
-  EXPECT_NEAR(model.actuator_bias[2], -2 * 0.5 * std::sqrt(10 * H(0, 0) / 4), 1e-12);
-  EXPECT_NEAR(model.actuator_bias[5], -2 * 1.0 * std::sqrt(30 * H(1, 1)), 1e-12);
+  const MatX H_inverse = eval_mass_matrix(model, model.state()).inverse();
+  EXPECT_NEAR(model.actuator_bias[2], -2 * 0.5 * std::sqrt(10 / (4 * H_inverse(0, 0))), 1e-12);
+  EXPECT_NEAR(model.actuator_bias[5], -2 * 1.0 * std::sqrt(30 / H_inverse(1, 1)), 1e-12);
   EXPECT_EQ(model.actuator_bias[4], -30);
   std::filesystem::remove(path);
 }

@@ -16,6 +16,7 @@ from ._novaphy import (
     JointDofConfig,
     JointType,
     Model,
+    MujocoImport,
     ModelBuilder,
     Precision,
     RigidBody,
@@ -51,6 +52,8 @@ __all__ = [
     "JointDofConfig",
     "JointType",
     "Model",
+    "MujocoImport",
+    "from_mujoco",
     "ModelBuilder",
     "Precision",
     "RigidBody",
@@ -76,3 +79,15 @@ __all__ = [
     "world_layout",
     "world_view",
 ]
+
+
+def from_mujoco(model, worlds=1, precision=Precision.Float64):
+    """A Model of `worlds` worlds, each the compiled mujoco.MjModel `model` (of the user's MuJoCo, 3.x or 4.x):
+    the model add_mjcf builds from the same file. Warns about what is not modelled, as add_mjcf does;
+    ModelBuilder.add_mujoco_model gives the state maps (qpos / qvel <-> joint_q / joint_qd)."""
+    robot = ModelBuilder()
+    robot.add_mujoco_model(model)
+    batch = ModelBuilder(gravity=robot.gravity)
+    batch.precision = precision
+    batch.replicate(robot, worlds)
+    return batch.finalize()

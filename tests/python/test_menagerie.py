@@ -1,0 +1,26 @@
+"""Every robot of the installed mujoco-menagerie that is on disk (MENAGERIE_ROOT, or the package's cache): its scene
+loads through both routes (today's MuJoCo's compile with add_mujoco_model, the file with add_mjcf), its contact-free
+dynamics match today's MuJoCo to 1e-9 with actuators on, and NovaPhy steps it 1 s from its keyframe without
+diverging. A robot not on disk is skipped, never fetched; without the PyPI packages the module is skipped."""
+
+import pytest
+
+pytest.importorskip("mujoco", reason="PyPI's mujoco is not installed for this interpreter (tools/setup.sh)")
+mujoco_menagerie = pytest.importorskip(
+    "mujoco_menagerie", reason="PyPI's mujoco-menagerie is not installed for this interpreter (tools/setup.sh)"
+)
+
+from mujoco_checks import menagerie_path, menagerie_status  # noqa: E402
+
+
+@pytest.mark.parametrize("name", mujoco_menagerie.names())
+def test_menagerie_robot(name):
+    path = menagerie_path(name)
+    if path is None:
+        pytest.skip(f"{name} is not on disk (set MENAGERIE_ROOT, or run `mujoco-menagerie` to fetch it)")
+    robot = mujoco_menagerie.get(name)
+    entry = robot.entry(robot.default_scene)
+    status = menagerie_status(name, path, entry)
+    assert status["mjcf"] == "loads"
+    assert status["dynamics"] < 1e-9
+    assert status["finite"]

@@ -1,0 +1,74 @@
+"""A compiled mujoco.MjModel of today's MuJoCo (PyPI) through ModelBuilder.add_mujoco_model and novaphy.from_mujoco:
+the same model add_mjcf builds from the file (MuJoCo 2.2.2's compile), bit for bit, and the same contact-free
+dynamics as that MuJoCo's own. Skipped where PyPI's mujoco is not installed (tools/setup.sh installs it into
+build/venv; docs/python.md)."""
+
+import os
+import warnings
+
+import numpy as np
+import pytest
+
+import novaphy
+
+mujoco = pytest.importorskip(
+    "mujoco", reason="PyPI's mujoco is not installed for this interpreter (tools/setup.sh puts it in build/venv)"
+)
+
+from mujoco_checks import by_file, largest_dynamics_difference, quiet, random_state, run  # noqa: E402
+
+MODELS = os.path.join(os.path.dirname(__file__), "models")
+SCENES = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "scenes")
+FILES = [
+    os.path.join(SCENES, "quadruped.xml"),
+    os.path.join(MODELS, "arm.xml"),
+    os.path.join(MODELS, "hand.xml"),
+]
+
+
+@pytest.mark.parametrize("precision", [novaphy.Precision.Float64, novaphy.Precision.Float32])
+@pytest.mark.parametrize("path", FILES, ids=os.path.basename)
+def test_from_mujoco_steps_bit_identically_to_add_mjcf(path, precision):
+    m = mujoco.MjModel.from_xml_path(path)
+    imported = quiet(novaphy.from_mujoco, m, 3, precision)
+    read = by_file(path, 3, precision)
+    q_a, qd_a = run(imported, 300, m.opt.timestep)
+    q_b, qd_b = run(read, 300, m.opt.timestep)
+    assert np.all(np.isfinite(q_a))
+    assert q_a.tobytes() == q_b.tobytes()
+    assert qd_a.tobytes() == qd_b.tobytes()
+
+
+@pytest.mark.parametrize("path", FILES + ["/usr/share/mujoco/model/humanoid/humanoid.xml"], ids=os.path.basename)
+def test_contact_free_dynamics_match_todays_mujoco(path):
+    if not os.path.exists(path):
+        pytest.skip(f"{path} is not installed (libmujoco-samples)")
+    assert largest_dynamics_difference(mujoco.MjModel.from_xml_path(path)) < 1e-9
+
+
+def test_state_maps_go_both_ways():
+    m = mujoco.MjModel.from_xml_path(os.path.join(SCENES, "quadruped.xml"))
+    d = mujoco.MjData(m)
+    random_state(m, d, np.random.default_rng(3))
+    imported = quiet(novaphy.ModelBuilder().add_mujoco_model, m)
+    q = imported.to_joint_q(d.qpos)
+    qd = imported.to_joint_qd(d.qpos, d.qvel)
+    assert q[:3].tolist() == d.qpos[:3].tolist()  # the base position; then [x y z w] for MuJoCo's [w x y z]
+    assert np.allclose(q[3:7], [d.qpos[4], d.qpos[5], d.qpos[6], d.qpos[3]], rtol=0, atol=1e-15)
+    assert np.allclose(imported.to_qpos(q), d.qpos, rtol=0, atol=1e-15)
+    assert np.allclose(imported.to_qvel(d.qpos, qd), d.qvel, rtol=0, atol=1e-14)
+    with pytest.raises(ValueError, match="qpos has 3 entries; the imported model has 19"):
+        imported.to_joint_q(np.zeros(3))
+
+
+def test_what_is_not_an_mjmodel_is_named():
+    with pytest.raises(ValueError, match="has no field 'nq'"):
+        novaphy.ModelBuilder().add_mujoco_model(object())
+
+
+def test_an_unmodelled_field_of_todays_mujoco_is_reported():
+    m = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><body gravcomp="1"><joint type="hinge"/><geom size="0.1"/></body></worldbody></mujoco>'
+    )
+    with pytest.warns(UserWarning, match="gravity compensation"):
+        novaphy.ModelBuilder().add_mujoco_model(m)
