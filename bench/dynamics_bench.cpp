@@ -1,13 +1,14 @@
 // Forward dynamics of one robot, NovaPhy's reference kernels beside MuJoCo 2.2.2 on the same MJCF
 // (contacts and limits off): the single-world baseline the batched kernels are measured against.
-// BM_NovaPhyBlock: the same on the batched kernels, the robot alone in a block (made once; argument 2:
-// precision, 0 float64, 1 float32): what one robot costs on the step's own path.
+// BM_NovaPhyForwardDynamics: the same through ForwardDynamics (engine/dynamics.h: the step's batched kernels, the
+// robot alone in a block made once; argument 2: precision, 0 float64, 1 float32), the input checks and the
+// control forces included as mj_forward includes them: what one robot costs on the step's own path.
 //   novaphy_bench_dynamics --benchmark_format=json
 #include <benchmark/benchmark.h>
 
 #include <memory>
 
-#include "engine/articulation_batches.h"
+#include "engine/dynamics.h"
 #include "engine/mjcf_import.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
@@ -95,27 +96,26 @@ void BM_MujocoForward(benchmark::State& bm) {
   label(bm, s);
 }
 
-void BM_NovaPhyBlock(benchmark::State& bm) {
+void BM_NovaPhyForwardDynamics(benchmark::State& bm) {
   Scene& s = scene(bm.range(0));
-  const Model& model = s.model;
-  std::vector<ArticulationView> art{model.articulation(0)};
-  const std::unique_ptr<ArticulationBatches> batches =
-      ArticulationBatches::make(model, art, {1}, {{}}, model.body_com, std::vector<int>(model.joint_dof_count, -1),
-                                bm.range(1) == 1 ? Precision::Float32 : Precision::Float64);
-  const Control control = model.control();
-  int failure = -1;
+  ModelBuilder builder;
+  import_mujoco_model(builder, s.m.get());
+  builder.set_precision(bm.range(1) == 1 ? Precision::Float32 : Precision::Float64);
+  const Model model = builder.finalize();
+  Control control = model.control();
+  for (int k = 0; k < model.joint_dof_count; ++k) control.joint_f[k] = s.tau[k];
+  ForwardDynamics dynamics(model);
   for (auto _ : bm) {
-    batches->accelerations(s.state, control, s.tau.data(), false, s.qdd.data(), &failure);
+    dynamics.evaluate(s.state, control, s.qdd.data());
     benchmark::DoNotOptimize(s.qdd.data());
   }
-  if (failure >= 0) bm.SkipWithError("the mass matrix is not positive definite");
   label(bm, s);
 }
 
 BENCHMARK(BM_NovaPhyCrbaCholesky)->DenseRange(0, std::size(kScenes) - 1);
 BENCHMARK(BM_NovaPhyAba)->DenseRange(0, std::size(kScenes) - 1);
 BENCHMARK(BM_MujocoForward)->DenseRange(0, std::size(kScenes) - 1);
-BENCHMARK(BM_NovaPhyBlock)->ArgsProduct({{0, 1, 2}, {0, 1}});
+BENCHMARK(BM_NovaPhyForwardDynamics)->ArgsProduct({{0, 1, 2}, {0, 1}});
 
 }  // namespace
 }  // namespace novaphy

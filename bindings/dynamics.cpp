@@ -56,6 +56,22 @@ void bind_dynamics(py::module_& m) {
       py::arg("model"), py::arg("control"), py::arg("state") = nullptr, release,
       "tau = control.joint_f plus every actuator's joint force at the state (needed where an actuator has a "
       "position or velocity term).");
+  py::class_<ForwardDynamics>(m, "ForwardDynamics",
+                              "Forward dynamics of one model evaluated again and again: the solver's batched kernels "
+                              "(the model's precision) made once, so an evaluation sets nothing up.")
+      .def(py::init<const Model&>(), py::arg("model"), py::keep_alive<1, 2>())
+      .def(
+          "evaluate",
+          [](ForwardDynamics& self, const State& state, const Control& control) {
+            VecX qdd(state.joint_qd.size());
+            {
+              py::gil_scoped_release unlocked;
+              self.evaluate(state, control, qdd.data());
+            }
+            return qdd;
+          },
+          py::arg("state"), py::arg("control"),
+          "qdd as eval_forward_dynamics(model, state, control) gives it, on the batched kernels.");
   m.def(
       "eval_forward_dynamics",
       [](const Model& model, const State& state, const Control& control, const std::string& method) {

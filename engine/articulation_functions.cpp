@@ -1,5 +1,7 @@
 #include "engine/articulation_functions.h"
 
+#include <memory>
+
 #include "engine/dynamics.h"
 #include "engine/error.h"
 
@@ -22,6 +24,46 @@ State articulation_state(const Model& model, const VecX& q, const VecX& qd) {
   assign(state.joint_qd, qd, "qd");
   return state;
 }
+
+bool same_joints(const std::vector<Joint>& a, const std::vector<Joint>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (a[i].type != b[i].type || a[i].axis != b[i].axis || a[i].parent != b[i].parent ||
+        a[i].parent_to_joint.p != b[i].parent_to_joint.p ||
+        a[i].parent_to_joint.q.coeffs() != b[i].parent_to_joint.q.coeffs())
+      return false;
+  return true;
+}
+
+bool same_bodies(const std::vector<RigidBody>& a, const std::vector<RigidBody>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (a[i].mass != b[i].mass || a[i].com != b[i].com || a[i].inertia != b[i].inertia) return false;
+  return true;
+}
+
+// the articulation forward_dynamics last evaluated on this thread, with its model and kernels: a controller that
+// asks about the same joints and bodies at every tick pays for the model and the kernels' set-up once
+struct LastArticulation {
+  std::vector<Joint> joints;
+  std::vector<RigidBody> bodies;
+  Vec3 gravity = Vec3::Zero();
+  std::unique_ptr<Model> model;
+  std::unique_ptr<ForwardDynamics> dynamics;
+  State state;
+  Control control;
+
+  void use(const std::vector<Joint>& j, const std::vector<RigidBody>& b, const Vec3& g) {
+    if (dynamics && gravity == g && same_joints(joints, j) && same_bodies(bodies, b)) return;
+    std::unique_ptr<Model> made = std::make_unique<Model>(articulation_model(j, b, g));  // (throws on bad input)
+    dynamics.reset();
+    model = std::move(made);
+    dynamics = std::make_unique<ForwardDynamics>(*model);
+    state = model->state();
+    control = model->control();
+    joints = j, bodies = b, gravity = g;
+  }
+};
 
 }  // namespace
 
@@ -65,10 +107,14 @@ MatX mass_matrix_crba(const std::vector<Joint>& joints, const std::vector<RigidB
 
 VecX forward_dynamics(const std::vector<Joint>& joints, const std::vector<RigidBody>& bodies, const VecX& q,
                       const VecX& qd, const VecX& tau, const Vec3& gravity) {
-  const Model model = articulation_model(joints, bodies, gravity);
-  Control control = model.control();
-  assign(control.joint_f, tau, "tau");
-  return eval_forward_dynamics(model, articulation_state(model, q, qd), control);
+  thread_local LastArticulation last;
+  last.use(joints, bodies, gravity);
+  assign(last.state.joint_q, q, "q");
+  assign(last.state.joint_qd, qd, "qd");
+  assign(last.control.joint_f, tau, "tau");
+  VecX qdd(last.model->joint_dof_count);
+  last.dynamics->evaluate(last.state, last.control, qdd.data());
+  return qdd;
 }
 
 }  // namespace novaphy

@@ -117,26 +117,6 @@ void articulation_inverse_dynamics(const Model& model, const State& state, const
        art.qd_begin() + dof, " (joint ", j, " '", model.joint_name[j], "'; a massless link without children?)");
 }
 
-// qdd from the batched kernels: their unconstrained step with dt = 0 and no drives
-VecX batched_forward_dynamics(const Model& model, const State& state, const Control& control, const VecX& tau,
-                              bool wrenches) {
-  std::vector<ArticulationView> art;
-  std::vector<std::uint8_t> batched(model.articulation_count);
-  for (int a = 0; a < model.articulation_count; ++a) {
-    art.push_back(model.articulation(a));
-    batched[a] = art.back().dof_count() > 0;
-  }
-  const std::unique_ptr<ArticulationBatches> batches =
-      ArticulationBatches::make(model, art, batched, std::vector<std::vector<WeldedBody>>(model.articulation_count),
-                                model.body_com, std::vector<int>(model.joint_dof_count, -1), model.precision);
-  VecX qdd = VecX::Zero(model.joint_dof_count);
-  std::vector<int> failure(model.articulation_count, -1);
-  batches->accelerations(state, control, tau.data(), wrenches, qdd.data(), failure.data());
-  for (int a = 0; a < model.articulation_count; ++a)
-    if (failure[a] >= 0) fail_not_positive_definite(model, art[a], failure[a] - art[a].qd_begin());
-  return qdd;
-}
-
 }  // namespace
 
 void check_finite_state(const State& state, bool* any_wrench, int threads) {
@@ -298,14 +278,46 @@ VecX eval_control_force(const Model& model, const Control& control, const State*
   return tau;
 }
 
-VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
-                           ForwardDynamicsMethod method) {
-  model.check(state);
+ForwardDynamics::ForwardDynamics(const Model& model) : model_(model), tau_(model.joint_dof_count) {
+  std::vector<std::uint8_t> batched(model.articulation_count);
+  for (int a = 0; a < model.articulation_count; ++a) {
+    articulations_.push_back(model.articulation(a));
+    batched[a] = articulations_.back().dof_count() > 0;
+  }
+  batches_ = ArticulationBatches::make(model, articulations_, batched,
+                                       std::vector<std::vector<WeldedBody>>(model.articulation_count), model.body_com,
+                                       std::vector<int>(model.joint_dof_count, -1), model.precision);
+  failure_.assign(model.articulation_count, -1);
+}
+
+ForwardDynamics::~ForwardDynamics() = default;
+
+// the batched kernels' unconstrained step with dt = 0 and no drives
+void ForwardDynamics::evaluate(const State& state, const Control& control, Scalar* qdd) {
+  model_.check(state);
+  model_.check(control);
   bool wrenches = false;
   check_finite_state(state, &wrenches);
+  check_finite_control(control);
+  control_force(model_, control, &state, tau_.data());
+  std::fill_n(qdd, model_.joint_dof_count, Scalar(0));
+  std::fill(failure_.begin(), failure_.end(), -1);
+  batches_->accelerations(state, control, tau_.data(), wrenches, qdd, failure_.data());
+  for (int a = 0; a < model_.articulation_count; ++a)
+    if (failure_[a] >= 0)
+      fail_not_positive_definite(model_, articulations_[a], failure_[a] - articulations_[a].qd_begin());
+}
+
+VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
+                           ForwardDynamicsMethod method) {
+  if (method == ForwardDynamicsMethod::Batched) {
+    VecX qdd(model.joint_dof_count);
+    ForwardDynamics(model).evaluate(state, control, qdd.data());
+    return qdd;
+  }
+  model.check(state);
+  check_finite_state(state);
   const VecX tau_control = eval_control_force(model, control, &state);
-  if (method == ForwardDynamicsMethod::Batched)
-    return batched_forward_dynamics(model, state, control, tau_control, wrenches);
   VecX qdd(model.joint_dof_count);
   ArticulationScratch s;
   for (int a = 0; a < model.articulation_count; ++a) {

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <memory>
+#include <vector>
 
 #include "engine/model.h"
 
@@ -48,6 +50,29 @@ void store_body_state(const ArticulationView& art, const ArticulationScratch& s,
 // qdd from tau = eval_control_force(model, control); CRBA + Cholesky or ABA
 VecX eval_forward_dynamics(const Model& model, const State& state, const Control& control,
                            ForwardDynamicsMethod method = ForwardDynamicsMethod::Crba);
+
+class ArticulationBatches;
+
+// Forward dynamics of one model evaluated again and again (a controller's model of one robot, or many): the
+// batched kernels of the solver's step (each articulation a lane of its block, in the model's precision) are made
+// once here, so an evaluation does no set-up and allocates nothing. The model must outlive it, unchanged.
+class ForwardDynamics {
+ public:
+  explicit ForwardDynamics(const Model& model);
+  ~ForwardDynamics();
+  ForwardDynamics(const ForwardDynamics&) = delete;
+  ForwardDynamics& operator=(const ForwardDynamics&) = delete;
+  // qdd [joint_dof_count] from tau = eval_control_force(model, control, &state), checked as eval_forward_dynamics
+  // checks its arguments
+  void evaluate(const State& state, const Control& control, Scalar* qdd);
+
+ private:
+  const Model& model_;
+  std::vector<ArticulationView> articulations_;
+  std::unique_ptr<ArticulationBatches> batches_;
+  std::vector<Scalar> tau_;
+  std::vector<int> failure_;
+};
 
 // one pass over the bits of x[begin, end): ORs into *bad a nonzero where an entry is inf or NaN (an exponent of all
 // ones) and into *nonzero one where an entry is not +-0 (any bit but the sign's); vectorises

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/dynamics.h"
 #include "test_support_errors.h"
 
 namespace novaphy {
@@ -58,6 +59,31 @@ TEST(ArticulationFunctions, InverseDynamicsInvertsForwardDynamics) {
   const Vec3 g(0, -9.81, 0);
   const VecX qdd = forward_dynamics(arm.joints, arm.bodies, q, qd, tau, g);
   EXPECT_LT((inverse_dynamics(arm.joints, arm.bodies, q, qd, qdd, g) - tau).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(ArticulationFunctions, ForwardDynamicsOfAnotherArmInBetweenIsItsOwn) {
+  // the free function keeps the last articulation's kernels: asking about another in between, or about the same
+  // joints with other bodies, gives each its own accelerations (the reference kernels' CRBA the oracle)
+  const TwoLinkArm arm;
+  TwoLinkArm heavier, longer;
+  heavier.bodies[1].mass = 3;
+  longer.joints[1].parent_to_joint.p = Vec3(0, -1.5, 0);
+  const VecX q = (VecX(2) << 0.3, -1.1).finished(), qd = (VecX(2) << 0.5, 2.0).finished();
+  const VecX tau = (VecX(2) << 1.5, -0.25).finished();
+  const Vec3 g(0, -9.81, 0);
+  for (const TwoLinkArm* a : std::vector<const TwoLinkArm*>{&arm, &heavier, &arm, &longer, &longer, &arm}) {
+    const Model model = articulation_model(a->joints, a->bodies, g);
+    State state = model.state();
+    Control control = model.control();
+    for (int k = 0; k < 2; ++k) state.joint_q[k] = q[k], state.joint_qd[k] = qd[k], control.joint_f[k] = tau[k];
+    const VecX expected = eval_forward_dynamics(model, state, control);
+    EXPECT_LT((forward_dynamics(a->joints, a->bodies, q, qd, tau, g) - expected).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  // a call that fails leaves the next ones right
+  const VecX before = forward_dynamics(arm.joints, arm.bodies, q, qd, tau, g);
+  EXPECT_NOVAPHY_ERROR(forward_dynamics(arm.joints, arm.bodies, q, qd, tau, Vec3(0, kNaN, 0)),
+                       "gravity[1] is not finite: nan");
+  EXPECT_EQ(forward_dynamics(arm.joints, arm.bodies, q, qd, tau, g), before);
 }
 
 TEST(ArticulationFunctionsErrors, WrongLengthsAndNonFiniteValues) {

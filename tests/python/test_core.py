@@ -103,6 +103,12 @@ def test_humanoid_dynamics_oracles():
     np.testing.assert_allclose(novaphy.eval_forward_dynamics(model, state, control, method="aba"), qdd, atol=1e-10)
     np.testing.assert_allclose(novaphy.eval_forward_dynamics(model, state, control, method="batched"), qdd, atol=1e-10)
     np.testing.assert_allclose(novaphy.eval_inverse_dynamics(model, state, qdd), control.joint_f, atol=1e-10)
+    dynamics = novaphy.ForwardDynamics(model)  # the batched kernels made once, evaluated again and again
+    np.testing.assert_allclose(dynamics.evaluate(state, control), qdd, atol=1e-10)
+    state.joint_qd[0] += 1.0
+    np.testing.assert_allclose(
+        dynamics.evaluate(state, control), novaphy.eval_forward_dynamics(model, state, control), atol=1e-10
+    )
 
 
 def test_humanoid_motors_drive_through_their_gear():

@@ -105,6 +105,11 @@ Members:
 
 class Error(ValueError): ...
 
+class ForwardDynamics:
+    """Forward dynamics of one model evaluated again and again: the solver's batched kernels (the model's precision) made once, so an evaluation sets nothing up."""
+    def __init__(self, model: Model) -> None: ...
+    def evaluate(self, state: State, control: Control) -> numpy.ndarray: ...
+
 class FrictionRule:
     """How a contact combines its shapes' friction: GeometricMean sqrt(mu_a mu_b); Mujoco: the shape of higher priority decides, else the larger mu; condim 1: frictionless.
 
