@@ -231,7 +231,8 @@ class MjcfImporter {
       default:
         if (m_.geom_contype[g] != 0 || m_.geom_conaffinity[g] != 0)
           warn_motion("geom '" + m_.name(MjKind::Geom, g) + "' of type " + std::to_string(m_.geom_type[g]) +
-                      " (height field) is not modelled for collision; its mass is kept");
+                      (m_.geom_type[g] == mjGEOM_HFIELD ? " (height field)" : " (MuJoCo >= 3's SDF or later)") +
+                      " is not modelled for collision; its mass is kept");
     }
   }
 

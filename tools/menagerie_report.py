@@ -19,14 +19,15 @@ from mujoco_checks import menagerie_path, menagerie_status  # noqa: E402
 def row(name):
     path = menagerie_path(name)
     if path is None:
-        return f"| {name} | not on disk here | | | | |"
+        return f"| {name} | not on disk here | | | | | |"
     robot = mujoco_menagerie.get(name)
     s = menagerie_status(name, path, robot.entry(robot.default_scene))
     mjcf = "loads" if s["mjcf"] == "loads" else s["mjcf"].replace("|", "/")
     steps = "finite" if s["finite"] else "diverges"
     notes = "; ".join(w.replace("novaphy: ", "") for w in s["warnings"]) or "nothing left out"
+    bits = "yes" if s["same_bits"] else "no"
     return (
-        f"| {name} | loads | {mjcf} | {s['dynamics']:.1e} | {steps}, {s['qpos_difference_1s']:.2g} | {notes} |"
+        f"| {name} | loads | {mjcf} | {bits} | {s['dynamics']:.1e} | {steps}, {s['qpos_difference_1s']:.2g} | {notes} |"
     )
 
 
@@ -38,13 +39,14 @@ def main():
         f"mujoco-menagerie {mujoco_menagerie.__version__} (Menagerie commit {mujoco_menagerie.commit()[:12]})."
     )
     print("Columns: `from_mujoco` (today's MuJoCo's compiled model through `add_mujoco_model`), `add_mjcf` (the file")
-    print("through MuJoCo 2.2.2's parser), the largest relative difference of contact-free forward dynamics")
+    print("through MuJoCo 2.2.2's parser), whether the two step alike bit for bit (1 s, two worlds, float32), the")
+    print("largest relative difference of contact-free forward dynamics")
     print("against today's MuJoCo at random states with actuators on, one second from the first keyframe (NovaPhy")
     print("finite or not, and the largest difference of its qpos from today's MuJoCo's after it, contacts on: the")
     print("solvers differ, see docs/step.md), and what the import reports as not modelled.")
     print()
-    print("| robot | from_mujoco | add_mjcf | dynamics | 1 s from keyframe | not modelled |")
-    print("|---|---|---|---|---|---|")
+    print("| robot | from_mujoco | add_mjcf | same bits | dynamics | 1 s from keyframe | not modelled |")
+    print("|---|---|---|---|---|---|---|")
     for name in mujoco_menagerie.names():
         print(row(name))
 

@@ -125,8 +125,14 @@ def menagerie_status(name, path, entry):
     try:
         quiet(novaphy.ModelBuilder().add_mjcf, str(path / entry.file))
         status["mjcf"] = "loads"
+        # both routes stepped 1 s from the first keyframe, two worlds each, float32: the same bits?
+        steps = round(1.0 / m.opt.timestep)
+        from_model = run(quiet(novaphy.from_mujoco, m, 2, novaphy.Precision.Float32), steps, m.opt.timestep)
+        from_file = run(by_file(str(path / entry.file), 2, novaphy.Precision.Float32), steps, m.opt.timestep)
+        status["same_bits"] = all(a.tobytes() == b.tobytes() for a, b in zip(from_model, from_file))
     except ValueError as e:
         status["mjcf"] = str(e)
+        status["same_bits"] = False
     status["finite"], status["qpos_difference_1s"] = one_second_from_keyframe(m, model, imported)
     status["dynamics"] = largest_dynamics_difference(mujoco.MjModel.from_xml_path(str(path / entry.file)))
     return status
