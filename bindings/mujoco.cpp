@@ -42,6 +42,8 @@ class MjModelFields {
     read_geoms();
     read_tendons_and_actuators();
     read_equalities();
+    for (auto [count, name] : {std::pair{&f_.nflex, "nflex"}, {&f_.nplugin, "nplugin"}})
+      if (py::hasattr(m_, name)) *count = m_.attr(name).cast<int>();
   }
   const MujocoFields& fields() const { return f_; }
 

@@ -439,6 +439,8 @@ class MjcfImporter {
     for (int b = 0; b < m_.nbody && m_.body_gravcomp; ++b)
       if (m_.body_gravcomp[b] != 0)
         warn_motion("body '" + m_.name(MjKind::Body, b) + "': gravity compensation (gravcomp) is not modelled");
+    if (m_.nflex > 0) warn_motion(std::to_string(m_.nflex) + " flex object(s) (deformables) are not modelled");
+    if (m_.nplugin > 0) warn_motion(std::to_string(m_.nplugin) + " engine plugin instance(s) are not modelled");
     if (m_.npair > 0) warn_motion(std::to_string(m_.npair) + " explicit contact pair(s) are not modelled");
     if (m_.density != 0 || m_.viscosity != 0) warn_motion("fluid forces (density, viscosity) are not modelled");
   }

@@ -68,6 +68,7 @@ struct MujocoFields {
   const int *eq_objtype = nullptr;
   const double *body_gravcomp = nullptr, *actuator_damping = nullptr, *actuator_armature = nullptr,
                *tendon_armature = nullptr;
+  int nflex = 0, nplugin = 0;  // deformables and engine plugins (MuJoCo >= 3)
 
   // the name of object `id` of a kind, or "#id" for an unnamed one
   std::string name(MjKind kind, int id) const;

@@ -72,3 +72,13 @@ def test_an_unmodelled_field_of_todays_mujoco_is_reported():
     )
     with pytest.warns(UserWarning, match="gravity compensation"):
         novaphy.ModelBuilder().add_mujoco_model(m)
+
+
+def test_a_deformable_of_todays_mujoco_is_reported():
+    m = mujoco.MjModel.from_xml_string(
+        """<mujoco><worldbody><body><joint type="hinge"/><geom size="0.1"/></body>
+        <flexcomp name="cloth" type="grid" count="3 3 1" spacing="0.1 0.1 0.1" dim="2"/></worldbody></mujoco>"""
+    )
+    assert m.nflex == 1
+    with pytest.warns(UserWarning, match="1 flex object"):
+        novaphy.ModelBuilder().add_mujoco_model(m)
