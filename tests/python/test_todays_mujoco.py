@@ -82,3 +82,24 @@ def test_a_deformable_of_todays_mujoco_is_reported():
     assert m.nflex == 1
     with pytest.warns(UserWarning, match="1 flex object"):
         novaphy.ModelBuilder().add_mujoco_model(m)
+
+
+def test_a_joint_force_range_over_several_actuators_is_named():
+    m = mujoco.MjModel.from_xml_string(
+        """<mujoco><worldbody><body><joint name="elbow" type="hinge" actuatorfrcrange="-1 1"/><geom size="0.1"/>
+        </body></worldbody><actuator><motor joint="elbow"/><motor joint="elbow"/></actuator></mujoco>"""
+    )
+    with pytest.raises(ValueError, match="joint 'elbow' limits the force of its several actuators together"):
+        novaphy.ModelBuilder().add_mujoco_model(m)
+
+
+def test_a_joint_force_range_narrows_its_actuators_force_as_add_mjcf_does(tmp_path):
+    xml = """<mujoco><worldbody><body><joint name="elbow" type="hinge" actuatorfrcrange="-3 2"/><geom size="0.1"/>
+        </body></worldbody><actuator><motor joint="elbow" gear="2" forcerange="-1 5"/></actuator></mujoco>"""
+    imported, read = novaphy.ModelBuilder(), novaphy.ModelBuilder()
+    imported.add_mujoco_model(mujoco.MjModel.from_xml_string(xml))
+    (tmp_path / "elbow.xml").write_text(xml)
+    read.add_mjcf(str(tmp_path / "elbow.xml"))
+    for model in (imported.finalize(), read.finalize()):
+        # [-3, 2] over gear 2 within the actuator's own [-1, 5]
+        assert (model.actuator_force_lower[0], model.actuator_force_upper[0]) == (-1.0, 1.0)
