@@ -279,7 +279,7 @@ class MjcfImporter {
     options.stiffness = m_.tendon_stiffness[t];
     options.damping = m_.tendon_damping[t];
     const double* spring = m_.tendon_lengthspring + m_.tendon_lengthspring_width * t;
-    if (m_.tendon_lengthspring_width == 2 && spring[1] != spring[0])
+    if (m_.tendon_lengthspring_width == 2 && spring[1] != spring[0] && m_.tendon_stiffness[t] != 0)
       warn_motion("tendon '" + name + "': a spring of a dead band (springlength, two values) is not modelled");
     options.rest_length = spring[0];
     if (m_.tendon_armature && m_.tendon_armature[t] != 0)
