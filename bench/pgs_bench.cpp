@@ -1,7 +1,8 @@
 // The lane PGS (kernels/batch/pgs) alone on rows shaped like a standing quadruped's in one block: 18 dofs, a
 // dry-friction row on each of the 12 leg joints (J = e_k), and four feet in contact with condim 6 (a normal row,
 // the sliding pair, the torsional row, the rolling pair), J nonzero on the base and the foot's leg; every lane has
-// every row; 20 sweeps (no tolerance). Argument: precision (0 float64, 1 float32).
+// every row; 20 sweeps (no tolerance). Arguments: precision (0 float64, 1 float32), feet in contact (0-4: the
+// rows' bytes against the L1 cache).
 //   novaphy_bench_pgs
 #include <benchmark/benchmark.h>
 
@@ -24,14 +25,14 @@ struct QuadrupedRows {
   std::vector<V> J, z, target, cfm, mu, bound, inv_mass, lambda, lambda0, coupling, qd, qd0;
   std::vector<IntLanes<T>> active;
 
-  QuadrupedRows() {
+  explicit QuadrupedRows(int feet = 4) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-1, 1);
     auto row = [&](RowKind k, int n, int b, int e) {
       kind.push_back(k), normal.push_back(n), begin.push_back(b), end.push_back(e);
     };
     for (int k = 6; k < kDofs; ++k) row(RowKind::Bounded, -1, k, k + 1);
-    for (int foot = 0; foot < 4; ++foot) {
+    for (int foot = 0; foot < feet; ++foot) {
       const int r = static_cast<int>(kind.size()), leg_end = 9 + 3 * foot;
       row(RowKind::Unilateral, -1, 0, leg_end);
       row(RowKind::FrictionPair, r, 0, leg_end);
@@ -94,7 +95,7 @@ struct QuadrupedRows {
 
 template <typename T>
 void sweeps(benchmark::State& bm) {
-  QuadrupedRows<T> p;
+  QuadrupedRows<T> p(static_cast<int>(bm.range(1)));
   PgsSettings settings;
   settings.cfm = 1e-6;
   for (auto _ : bm) {
@@ -114,7 +115,7 @@ void BM_PgsQuadruped(benchmark::State& bm) {
   else
     sweeps<double>(bm);
 }
-BENCHMARK(BM_PgsQuadruped)->ArgName("float32")->Arg(0)->Arg(1);
+BENCHMARK(BM_PgsQuadruped)->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4}});
 
 }  // namespace
 }  // namespace novaphy
