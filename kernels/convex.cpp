@@ -201,15 +201,23 @@ Vec3 smooth_normal(const ConvexShape& s, const Vec3& p) {
 }
 
 // libccd's view of a shape: grown by half the margin
+// libccd's MPR bounds its last phase by max_iterations but not the two before it (discovering and refining the
+// portal), which can cycle without end on a nearly degenerate pair. A query's support calls are counted (both
+// shapes share the count) and past kMprSupportCalls each shape answers -d: the Minkowski difference's point then
+// lies behind the direction searched, which ends either phase as "no contact". A query within the bound (at most
+// about 2 x (10 + 30 + kMprIterations) calls) is unchanged
+constexpr int kMprSupportCalls = 512;
+
 struct CcdShape {
   const ConvexShape* shape;
   Scalar grow;
+  int* calls;
 };
 
 void ccd_support(const void* object, const ccd_vec3_t* direction, ccd_vec3_t* vertex) {
   const auto* s = static_cast<const CcdShape*>(object);
   const Vec3 d(direction->v[0], direction->v[1], direction->v[2]);
-  const Vec3 p = convex_support(*s->shape, d) + s->grow * d.normalized();
+  const Vec3 p = ++*s->calls > kMprSupportCalls ? Vec3(-d) : convex_support(*s->shape, d) + s->grow * d.normalized();
   for (int k = 0; k < 3; ++k) vertex->v[k] = p[k];
 }
 
@@ -259,7 +267,8 @@ Vec3 convex_support(const ConvexShape& s, const Vec3& d) {
 
 int collide_convex(const ConvexShape& a, const ConvexShape& b, Scalar margin, ContactPoint* out) {
   // the deepest point and the normal: MPR on the shapes grown by half the margin each
-  const CcdShape ca{&a, 0.5 * margin}, cb{&b, 0.5 * margin};
+  int calls = 0;
+  const CcdShape ca{&a, 0.5 * margin, &calls}, cb{&b, 0.5 * margin, &calls};
   ccd_t ccd;
   CCD_INIT(&ccd);
   ccd.support1 = ccd_support;

@@ -198,4 +198,20 @@ TEST(CollideConvex, SphereOnCylinderSideAndCap) {
 }
 
 }  // namespace
+TEST(CollideConvex, AnExtremePairEndsItsSearch) {
+  // fuzz_builder's finding: a cylinder of 1e-12 inside an ellipsoid of semi-axes 0.76 and 1e12, at one pose. libccd's
+  // portal search, unbounded but for its last phase, cycled without end on it in the clang build; the support calls
+  // a query makes are now bounded. Whatever it answers, it answers, and any contact it reports is finite
+  const Quat q(-0.57735026918962584, -0.57735026918962584, -0.57735026918962584, 5.7735026918962581e-13);
+  const Vec3 at(1e-12, 0, 1e-12);
+  const ConvexShape tiny{ConvexKind::Cylinder, Transform{at, q}, Vec3::Constant(1e-12), nullptr};
+  const ConvexShape huge{ConvexKind::Ellipsoid, Transform{at, q}, Vec3(0.76317647058845073, 1e12, 0.76317647058845073),
+                         nullptr};
+  ContactPoint out[4];
+  for (const auto& [a, b] : {std::pair{&tiny, &huge}, {&huge, &tiny}}) {
+    const int count = collide_convex(*a, *b, 0.01, out);
+    for (int k = 0; k < count; ++k) EXPECT_TRUE(out[k].point.allFinite() && out[k].normal.allFinite());
+  }
+}
+
 }  // namespace novaphy
