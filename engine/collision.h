@@ -148,6 +148,8 @@ class CollisionPipeline {
   void group_shapes(int g);
   // group g's planes in the order its worlds meet them, each with the shapes that may reach it
   void group_plane_reach(int g);
+  // group g's slots (group_slot_shapes_, group_slot_pairs_)
+  void group_slots(int g);
   // the poses and normals of the planes on no body; those on bodies listed as moving
   void place_static_planes();
   // collide()'s stages:
@@ -215,6 +217,12 @@ class CollisionPipeline {
   };
   std::vector<BodyRun> group_run_;
   std::vector<int> group_local_;
+  // per group of several worlds, its slots: the shapes on one body in every lane (or a shape on none) share a
+  // slot, whose box joins theirs. [group] where its slots start, then the end; per slot, a bit per shape in it and
+  // a bit per slot whose shapes some shape of it may collide with (after it, as world_pairs_): group_boxes tests
+  // two slots' shapes only where the slots' boxes overlap
+  std::vector<int> group_slot_start_;
+  std::vector<std::uint64_t> group_slot_shapes_, group_slot_pairs_;
   // [group] where its planes start in group_plane_, then the end; per plane of a group: its code
   // (plane_order) and a bit per shape may_collide lets meet it
   std::vector<int> group_plane_start_;
@@ -234,6 +242,7 @@ class CollisionPipeline {
     std::vector<Found> found;
     std::vector<Box> boxes;
     std::vector<ShapeLanes> lanes;
+    std::vector<ShapeLanes> slots;      // a group's slots' boxes (lower, upper)
     std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (group_run_)
     std::vector<std::uint64_t> hits, plane_hits;
   };

@@ -34,15 +34,42 @@ void CollisionPipeline::describe_groups() {
   group_same_.assign(groups, 0);
   group_run_.assign(groups, {});
   group_plane_start_.assign(1, 0);
+  group_slot_start_.assign(1, 0);
   for (int g = 0; g < groups; ++g) {
     const int first = group_first_[g], count = group_first_[g + 1] - first;
     if (count > 1) {
       group_shapes(g);
       group_runs(g);
       group_plane_reach(g);
+      group_slots(g);
     }
     group_plane_start_.push_back(static_cast<int>(group_plane_.size()));
+    group_slot_start_.push_back(static_cast<int>(group_slot_shapes_.size()));
   }
+}
+
+void CollisionPipeline::group_slots(int g) {
+  constexpr int L = kLanes<Scalar>;
+  const int first = group_first_[g], start = static_cast<int>(group_slot_shapes_.size());
+  const int n = static_cast<int>(world_others_[first].size());
+  const int* body = group_body_.data() + group_body_start_[g];
+  std::vector<int> slot(n, -1);
+  for (int i = 0; i < n; ++i) {
+    for (int u = start; u < static_cast<int>(group_slot_shapes_.size()) && slot[i] < 0 && body[L * i] >= 0; ++u) {
+      const int j = __builtin_ctzll(group_slot_shapes_[u]);
+      if (std::equal(body + L * i, body + L * (i + 1), body + L * j)) slot[i] = u - start;
+    }
+    if (slot[i] < 0) {
+      slot[i] = static_cast<int>(group_slot_shapes_.size()) - start;
+      group_slot_shapes_.push_back(0);
+    }
+    group_slot_shapes_[start + slot[i]] |= std::uint64_t{1} << i;
+  }
+  group_slot_pairs_.resize(group_slot_shapes_.size(), 0);
+  const std::uint64_t* mask = world_pairs_.data() + world_pair_start_[first];
+  for (int i = 0; i < n; ++i)
+    for (std::uint64_t m = mask[i]; m != 0; m &= m - 1)
+      group_slot_pairs_[start + slot[i]] |= std::uint64_t{1} << slot[__builtin_ctzll(m)];
 }
 
 void CollisionPipeline::group_shapes(int g) {
@@ -196,18 +223,47 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
     shape_bounds(bounds_kind(model_.shape_type[world_others_[first][i]]), body, local, scale, options_.margin, X.pose,
                  X.lower, X.upper);
   }
-  // the pairs the masks allow whose boxes overlap, tested in every world at once
+  // the slots' boxes, each joining its shapes'
+  const int slot_start = group_slot_start_[g], slots = group_slot_start_[g + 1] - slot_start;
+  const std::uint64_t* slot_shapes = group_slot_shapes_.data() + slot_start;
+  const std::uint64_t* slot_pairs = group_slot_pairs_.data() + slot_start;
+  scratch.slots.resize(slots);
+  for (int u = 0; u < slots; ++u) {
+    ShapeLanes& U = scratch.slots[u];
+    std::uint64_t m = slot_shapes[u];
+    const ShapeLanes& X = scratch.lanes[__builtin_ctzll(m)];
+    std::copy(X.lower, X.lower + 3, U.lower);
+    std::copy(X.upper, X.upper + 3, U.upper);
+    for (m &= m - 1; m != 0; m &= m - 1) {
+      const ShapeLanes& Y = scratch.lanes[__builtin_ctzll(m)];
+      for (int k = 0; k < 3; ++k) {
+        U.lower[k] = Y.lower[k] < U.lower[k] ? Y.lower[k] : U.lower[k];
+        U.upper[k] = Y.upper[k] > U.upper[k] ? Y.upper[k] : U.upper[k];
+      }
+    }
+  }
+  // the pairs the masks allow whose boxes overlap, tested in every world at once, where their slots' boxes
+  // overlap in some world
   scratch.hits.assign(static_cast<size_t>(L) * n, 0);
   const std::uint64_t* mask = world_pairs_.data() + world_pair_start_[first];
-  for (int i = 0; i < n; ++i) {
-    const ShapeLanes& A = scratch.lanes[i];
-    for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
-      const int j = __builtin_ctzll(m);
-      const ShapeLanes& B = scratch.lanes[j];
-      const IntLanes<Scalar> hit = boxes_overlap(A.lower, A.upper, B.lower, B.upper);
-      if (!any_lane<Scalar>(hit)) continue;
-      for (int l = 0; l < count; ++l)
-        if (hit[l]) scratch.hits[l * n + i] |= std::uint64_t{1} << j;
+  for (int u = 0; u < slots; ++u) {
+    const ShapeLanes& U = scratch.slots[u];
+    for (std::uint64_t pairs = slot_pairs[u]; pairs != 0; pairs &= pairs - 1) {
+      const int v = __builtin_ctzll(pairs);
+      const ShapeLanes& W = scratch.slots[v];
+      if (!any_lane<Scalar>(boxes_overlap(U.lower, U.upper, W.lower, W.upper))) continue;
+      for (std::uint64_t shapes = slot_shapes[u]; shapes != 0; shapes &= shapes - 1) {
+        const int i = __builtin_ctzll(shapes);
+        const ShapeLanes& A = scratch.lanes[i];
+        for (std::uint64_t m = mask[i] & slot_shapes[v]; m != 0; m &= m - 1) {
+          const int j = __builtin_ctzll(m);
+          const ShapeLanes& B = scratch.lanes[j];
+          const IntLanes<Scalar> hit = boxes_overlap(A.lower, A.upper, B.lower, B.upper);
+          if (!any_lane<Scalar>(hit)) continue;
+          for (int l = 0; l < count; ++l)
+            if (hit[l]) scratch.hits[l * n + i] |= std::uint64_t{1} << j;
+        }
+      }
     }
   }
 }

@@ -304,8 +304,9 @@ TEST(CollisionPipeline, ShapesOfNoWorldMeetEveryWorld) {
 // path), bit for bit. The batch mixes worlds of one robot with a copy whose ball is larger (alike, not
 // the same size: its sizes are read per world), a robot of one shape fewer (not alike: a group apart)
 // and one whose shapes sit on its bodies in reverse order (alike, but its group has no common run of
-// bodies: read number by number); each world has its floor and a box on no body, and a tilted plane of
-// no world cuts through them all
+// bodies: read number by number; two shapes on one body in the others' worlds are on two in its); one body has
+// two shapes (the broad phase joins a body's shapes' boxes); each world has its floor and a box on no body, and a
+// tilted plane of no world cuts through them all
 TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   auto robot = [](Scalar radius, bool capsule, bool reversed) {
     ModelBuilder world;
@@ -327,6 +328,9 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
       if (k % 3 == 1) world.add_shape_box(b, Vec3(0.12, 0.08, 0.1));
       if (k % 3 == 2 && (capsule || k < 5)) world.add_shape_capsule(b, 0.06, 0.1);
     }
+    ShapeOptions beside;  // a second shape on a body: the broad phase joins a body's shapes' boxes
+    beside.xform.p = Vec3(0.25, 0, 0);
+    world.add_shape_sphere(body[1], 0.12, beside);
     return world;
   };
   const ModelBuilder kinds[4] = {robot(0.15, true, false), robot(0.2, true, false), robot(0.15, false, false),
@@ -347,7 +351,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   pipeline.collide(state, contacts);
-  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0;
+  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0, beside = 0;
   for (int w = 0; w < model.world_count; ++w) {
     ModelBuilder one;
     one.add_builder(kinds[kind_of[w]]);
@@ -371,7 +375,8 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
       EXPECT_EQ(in_alone(contacts.contact_shape_a[m]), c.contact_shape_a[k]) << "world " << w << " contact " << k;
       EXPECT_EQ(in_alone(contacts.contact_shape_b[m]), c.contact_shape_b[k]) << "world " << w << " contact " << k;
       tilted_plane += c.contact_shape_a[k] == own_shapes;
-      step_box += c.contact_shape_a[k] == 1 || c.contact_shape_b[k] == 1;  // (after the floor: shape 1)
+      step_box += c.contact_shape_a[k] == 1 || c.contact_shape_b[k] == 1;            // (after the floor: shape 1)
+      beside += c.contact_shape_b[k] == own_shapes - 1 && c.contact_shape_a[k] > 1;  // (with a robot's shape)
       EXPECT_EQ(contacts.contact_feature[m], c.contact_feature[k]);
       EXPECT_EQ(contacts.contact_depth[m], c.contact_depth[k]) << "world " << w << " contact " << k;
       for (int i = 0; i < 3; ++i) {
@@ -387,6 +392,33 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   EXPECT_GT(checked, 13 * 4);
   EXPECT_GT(tilted_plane, 13);
   EXPECT_GT(step_box, 13);
+  EXPECT_GT(beside, 13);
+}
+
+// a body's shape far from its other shape meets a shape of another body in every world of a group found together
+// (the broad phase tests two bodies' shapes where the boxes joining each body's shapes overlap)
+TEST(CollisionPipeline, ABodysShapesAreJoinedInTheBroadPhase) {
+  ModelBuilder world;
+  const int a = world.add_body(RigidBody::from_sphere(1, 0.1), Transform{});
+  world.add_shape_box(a, Vec3(0.1, 0.1, 0.1));
+  ShapeOptions far;
+  far.xform.p = Vec3(1, 0, 0);
+  world.add_shape_sphere(a, 0.1, far);
+  const int b = world.add_body(RigidBody::from_sphere(1, 0.1), Transform{Vec3(1.15, 0, 0)});
+  world.add_shape_sphere(b, 0.1);
+  ModelBuilder builder;
+  const int worlds = 2 * kLanes<Scalar> + 1;
+  for (int w = 0; w < worlds; ++w) builder.add_builder(world, Transform{Vec3(0, 0, 3.0 * w)}, -1);
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  ASSERT_EQ(contacts.contact_count, worlds);
+  for (int w = 0; w < worlds; ++w) {
+    EXPECT_EQ(contacts.contact_shape_a[w], 3 * w + 1) << "world " << w;
+    EXPECT_EQ(contacts.contact_shape_b[w], 3 * w + 2) << "world " << w;
+    EXPECT_NEAR(contacts.contact_depth[w], 0.05, 1e-12) << "world " << w;
+  }
 }
 
 TEST(CollisionPipelineErrors, BadOptions) {
