@@ -349,39 +349,44 @@ class RunScan {
 
 }  // namespace
 
-bool SolverFeatherstone::check_unit(const int* arts, int count, StepContext& local) const {
+void SolverFeatherstone::scan_unit(const int* arts, int count, StepContext& local, bool* finite) const {
   const State& in = *local.in;
   const Control& control = *local.control;
   std::uint64_t bad = 0;
-  RunScan q(in.joint_q, &bad), qd(in.joint_qd, &bad), f(control.joint_f, &bad), ke(control.joint_target_ke, &bad),
-      kd(control.joint_target_kd, &bad), body_f(in.body_f, &bad), ctrl(control.actuator_ctrl, &bad);
+  RunScan ke(control.joint_target_ke, &bad), kd(control.joint_target_kd, &bad), body_f(in.body_f, &bad);
   for (int i = 0; i < count; ++i) {
     const int a = arts[i];
-    const ArticulationView& art = art_[a];
-    q.add(art.q_begin(), art.coord_count());
-    for (RunScan* dof : {&qd, &f, &ke, &kd}) dof->add(art.qd_begin(), art.dof_count());
+    for (RunScan* dof : {&ke, &kd}) dof->add(art_[a].qd_begin(), art_[a].dof_count());
     for (int k = art_body_start_[a]; k < art_body_start_[a + 1]; ++k)
       body_f.add(6 * art_body_runs_[2 * k], 6 * art_body_runs_[2 * k + 1]);
-    for (int k = art_actuator_start_[a]; k < art_actuator_start_[a + 1]; ++k)
+  }
+  local.drives = ke.flush() | kd.flush();
+  local.wrenches = body_f.flush();
+  if (!finite) return;
+  RunScan q(in.joint_q, &bad), qd(in.joint_qd, &bad), f(control.joint_f, &bad), ctrl(control.actuator_ctrl, &bad),
+      pos(control.joint_target_pos, &bad), vel(control.joint_target_vel, &bad);
+  for (int i = 0; i < count; ++i) {
+    const ArticulationView& art = art_[arts[i]];
+    q.add(art.q_begin(), art.coord_count());
+    for (RunScan* dof : {&qd, &f}) dof->add(art.qd_begin(), art.dof_count());
+    if (local.drives)  // the targets, read only where a gain is nonzero
+      for (RunScan* dof : {&pos, &vel}) dof->add(art.qd_begin(), art.dof_count());
+    for (int k = art_actuator_start_[arts[i]]; k < art_actuator_start_[arts[i] + 1]; ++k)
       ctrl.add(art_actuator_runs_[2 * k], art_actuator_runs_[2 * k + 1]);
   }
-  for (RunScan* x : {&q, &qd, &f, &ctrl}) x->flush();
-  const bool drives = ke.flush() | kd.flush();
-  local.wrenches = body_f.flush();
-  local.drives = drives;
-  if (drives) {  // the targets, read only where a gain is nonzero
-    RunScan pos(control.joint_target_pos, &bad), vel(control.joint_target_vel, &bad);
-    for (int i = 0; i < count; ++i)
-      for (RunScan* dof : {&pos, &vel}) dof->add(art_[arts[i]].qd_begin(), art_[arts[i]].dof_count());
-    pos.flush();
-    vel.flush();
-  }
-  return bad == 0;
+  for (RunScan* x : {&q, &qd, &f, &ctrl, &pos, &vel}) x->flush();
+  *finite = bad == 0;
 }
 
-void SolverFeatherstone::raise_failed_units(const StepContext& step) {
-  if (std::find(unit_failed_.begin(), unit_failed_.end(), 1) == unit_failed_.end()) return;
-  factor_kept_ = false;  // (the units not stepped made no factor for the next step to keep)
+bool SolverFeatherstone::input_finite(int a, const StepContext& step) const {
+  StepContext local = step;
+  bool finite = true;
+  scan_unit(&a, 1, local, &finite);
+  return finite;
+}
+
+void SolverFeatherstone::raise_bad_input(const StepContext& step) {
+  factor_kept_ = false;  // (a non-finite input may have left its lanes of the factor non-finite)
   bool wrenches, drives;
   check_finite_step(*step.in, *step.control, &wrenches, &drives);  // throws naming the first non-finite entry
   fail("a step input is not finite");                              // (not reached)
@@ -599,23 +604,21 @@ bool SolverFeatherstone::touch_articulations(const Contacts& contacts, int threa
 
 void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) {
   const int blocks = batches_ ? batches_->unit_count() : 0, units = blocks + dense_->unit_count();
-  unit_failed_.resize(units);
   auto run = [&](Stage from, Stage to) {
     const ParallelTimer timer(settings.count_serial_time, &serial_seconds_.parallel);
     // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread. A unit
-    // checks its input first and is not stepped at all where some of it is not finite
+    // notes whether its worlds have wrenches and drives, then actuates and steps them
     auto unit = [&](int u) {
       StepRoute& route = u < blocks ? static_cast<StepRoute&>(*batches_) : *dense_;
       const int r = u < blocks ? u : u - blocks;
       if (from != Stage::Dynamics) {
-        if (!unit_failed_[u]) route.run(r, from, to, step);
+        route.run(r, from, to, step);
         return;
       }
       int arts[kMostUnitArticulations];
       const int count = route.unit_articulations(r, arts);
       StepContext local = step;
-      unit_failed_[u] = !check_unit(arts, count, local);
-      if (unit_failed_[u]) return;
+      scan_unit(arts, count, local, nullptr);
       actuate_unit(arts, count, local);
       route.run(r, from, to, local);
     };
@@ -630,10 +633,7 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
   };
   if (step.block_major) {
     run(first, last);
-    if (first == Stage::Dynamics) {
-      raise_failed_units(step);
-      check_factors();
-    }
+    if (first == Stage::Dynamics) check_factors(step);
     return;
   }
   for (int s = static_cast<int>(first); s <= static_cast<int>(last); ++s) {
@@ -641,10 +641,7 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
     const RowPhaseSeconds before = batches_ ? batches_->row_phases() : RowPhaseSeconds{};
     const std::int64_t start = lap_mark_;
     run(stage, stage);
-    if (stage == Stage::Dynamics) {
-      raise_failed_units(step);
-      check_factors();
-    }
+    if (stage == Stage::Dynamics) check_factors(step);
     if (stage != Stage::Rows) {
       lap(stage == Stage::Dynamics ? stage_seconds_.dynamics : stage_seconds_.integrate);
       continue;
@@ -677,10 +674,16 @@ void SolverFeatherstone::solve_islands(const StepContext& step) {
 }
 
 void SolverFeatherstone::guard(const StepContext& step) {
-  // an articulation whose state went non-finite or beyond divergence_speed is raised, kept as it was
-  // (Flag: the input state is finite) or reset to the model's initial state at rest (Reset)
+  // an articulation whose state went non-finite or beyond divergence_speed: where some input it read was not
+  // finite, it is left as it was (the pass wrote none of it) and the step raises naming the first such entry,
+  // after the others; else it is raised, kept as it was (Flag: the input state is finite) or reset to the
+  // model's initial state at rest (Reset)
+  bool bad_input = false;
+  for (int a = 0; a < model_.articulation_count && !bad_input; ++a)
+    bad_input = (data_.diverged[a] || data_.factor_failure[a] >= 0) && !input_finite(a, step);
+  if (bad_input && settings.on_divergence == DivergencePolicy::Raise) raise_bad_input(step);
   for (int a = 0; a < model_.articulation_count; ++a) {
-    if (!data_.diverged[a]) continue;
+    if (!data_.diverged[a] || (bad_input && !input_finite(a, step))) continue;
     if (settings.on_divergence == DivergencePolicy::Raise)
       fail("step diverged in articulation ", a, " (a non-finite state or a speed beyond ", settings.divergence_speed,
            "; dt ", step.dt, " too large for the model's stiffness or forces?)");
@@ -692,6 +695,7 @@ void SolverFeatherstone::guard(const StepContext& step) {
       data_.qd[k] = keep ? step.in->joint_qd[k] : 0;
     dense_->store(a, step);
   }
+  if (bad_input) raise_bad_input(step);
   lap(stage_seconds_.integrate);
 }
 
@@ -701,9 +705,10 @@ void SolverFeatherstone::end_step(const State& in, State& out, const StepContext
   stage_seconds_.steps += settings.profile_stages;
 }
 
-void SolverFeatherstone::check_factors() const {
+void SolverFeatherstone::check_factors(const StepContext& step) const {
+  // (a factor that failed on a non-finite input is the guard's to raise, after the other worlds' step)
   for (int a = 0; a < model_.articulation_count; ++a)
-    if (data_.factor_failure[a] >= 0)
+    if (data_.factor_failure[a] >= 0 && input_finite(a, step))
       fail("articulation ", a, ": mass matrix is not positive definite at dof ", data_.factor_failure[a],
            " (a massless link without children?)");
 }

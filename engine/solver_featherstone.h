@@ -92,10 +92,10 @@ class SolverFeatherstone {
   explicit SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings = {});
 
   // state_in may be state_out; on error nothing is written, with one exception: under on_divergence Flag
-  // or Reset each world's new state is written as its unit steps it, and each unit checks its own worlds'
-  // input (joint_q, joint_qd, body_f, the control) as it starts, so a non-finite input or a mass matrix that
-  // is not positive definite in some world (a massless leaf link, which no builder call makes) raises after
-  // the other worlds' states were written; the worlds of that unit are left as they were
+  // or Reset each world's new state is written as its unit steps it, so a non-finite input (joint_q, joint_qd,
+  // body_f, the control: found from the world's output) or a mass matrix that is not positive definite in some
+  // world (a massless leaf link, which no builder call makes) raises after the other worlds' states were
+  // written; that world is left as it was
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
 
   JointSupportMatrix joint_support() const;
@@ -114,16 +114,21 @@ class SolverFeatherstone {
   SolverFeatherstoneSettings settings;
 
  private:
-  // throws Error naming the first bad argument but the finite checks of the articulations' inputs, which each
-  // unit makes of its own (check_unit), and checks the entries no articulation reads (loose_*)
+  // throws Error naming the first bad argument but a non-finite input an articulation reads, which its step finds
+  // from its outputs (guard, check_factors), and checks the entries no articulation reads (loose_*)
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
   // per articulation what its step reads beside its coordinates and dofs: its bodies (body_f), actuators, tendons
   void index_inputs();
-  // whether these articulations' inputs are all finite: their joint_q, joint_qd, body_f, actuator_ctrl and
-  // per-dof control (the PD targets where a gain is nonzero); notes in `local` whether it has wrenches and drives
-  bool check_unit(const int* arts, int count, StepContext& local) const;
-  // after a pass whose unit found a non-finite input: throws naming the first one (check_finite_step's message)
-  void raise_failed_units(const StepContext& step);
+  // notes in `local` whether these articulations have wrenches (a nonzero body_f) and drives (a nonzero PD gain);
+  // with `finite`, whether all they read is finite: their joint_q, joint_qd, body_f, actuator_ctrl and per-dof
+  // control (the PD targets where a gain is nonzero). A non-finite input reaches the step's output (a drive's
+  // gain or a wrench that is not finite is nonzero), so the pass scans only body_f and the gains; the guard and
+  // check_factors scan all of an articulation whose step went wrong
+  void scan_unit(const int* arts, int count, StepContext& local, bool* finite) const;
+  // whether all articulation a reads is finite
+  bool input_finite(int a, const StepContext& step) const;
+  // throws naming the first non-finite input (check_finite_step's message); the next step refactors
+  [[noreturn]] void raise_bad_input(const StepContext& step);
   // the actuators by dof and by tendon, the tendon entries by dof
   void group_actuators();
   // constrained_ and the articulations it marks touched
@@ -152,8 +157,8 @@ class SolverFeatherstone {
   // the diverged articulations raised, kept or reset (settings.on_divergence)
   void guard(const StepContext& step);
   void end_step(const State& in, State& out, const StepContext& step);
-  // throws naming the first articulation whose factor failed this step
-  void check_factors() const;
+  // throws naming the first articulation whose factor failed this step on finite input
+  void check_factors(const StepContext& step) const;
   // the wall time since the last lap, added to `total` while profiling
   void lap(double& total);
   int thread_count() const;
@@ -200,7 +205,6 @@ class SolverFeatherstone {
   std::vector<int> art_body_start_, art_body_runs_, art_actuator_start_, art_actuator_runs_;
   std::vector<int> art_tendon_start_, art_tendons_;
   std::vector<int> loose_bodies_, loose_actuators_;
-  std::vector<std::uint8_t> unit_failed_;  // [unit] 1: its input was not finite this step (it was not stepped)
 };
 
 }  // namespace novaphy

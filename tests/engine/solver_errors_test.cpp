@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <functional>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "engine/builder.h"
@@ -269,36 +272,67 @@ TEST(SolverFeatherstoneErrors, AFailedMassMatrixLeavesItsWorldAsItWas) {
   }
 }
 
-// each unit checks its own worlds' input as it steps them: a world with a non-finite entry is not stepped and
-// the step raises naming the entry; under Raise nothing is written, under Flag the other worlds are stepped
+// a world whose input is not finite is left as it was and the step raises naming the entry, whichever input it
+// is (the step finds it from the world's output, which a non-finite input reaches: a wrench or a gain that is not
+// finite is nonzero, so it is applied); under Raise nothing is written, under Flag and Reset every other world is
+// stepped, its block-mates too; on the blocks and on the dense route, and the next step goes on
 TEST(SolverFeatherstoneErrors, AWorldWithNonFiniteInputIsLeftAsItWas) {
-  constexpr int kLast = 39;  // forty worlds: the last in a block of its own
+  constexpr int kWorlds = 40, kBad = 38;  // world 38 shares its block with world 39
+  const Scalar nan = std::nan(""), inf = std::numeric_limits<Scalar>::infinity();
+  struct Poison {
+    const char* message;
+    std::function<void(State&, Control&)> set;
+  };
+  const Poison poisons[] = {
+      {"joint_q[38] is not finite: nan", [&](State& s, Control&) { s.joint_q[kBad] = nan; }},
+      {"joint_qd[38] is not finite: inf", [&](State& s, Control&) { s.joint_qd[kBad] = inf; }},
+      {"joint_f[38] is not finite: nan", [&](State&, Control& c) { c.joint_f[kBad] = nan; }},
+      {"body_f[230] is not finite: inf", [&](State& s, Control&) { s.body_f[6 * kBad + 2] = inf; }},
+      {"actuator_ctrl[38] is not finite: nan", [&](State&, Control& c) { c.actuator_ctrl[kBad] = nan; }},
+      {"joint_target_kd[38] is not finite: nan", [&](State&, Control& c) { c.joint_target_kd[kBad] = nan; }},
+      {"joint_target_pos[38] is not finite: nan", [&](State&, Control& c) {
+         c.joint_target_ke[kBad] = 10;
+         c.joint_target_pos[kBad] = nan;
+       }}};
+  auto same_bits = [](Scalar a, Scalar b) { return std::memcmp(&a, &b, sizeof(a)) == 0; };
   for (const Precision precision : {Precision::Float32, Precision::Float64})
-    for (const DivergencePolicy policy : {DivergencePolicy::Flag, DivergencePolicy::Raise}) {
-      const Model model = pendulum_worlds(precision, kLast + 1).finalize();
-      SolverFeatherstoneSettings settings;
-      settings.on_divergence = policy;
-      SolverFeatherstone solver(model, settings);
-      CollisionPipeline pipeline(model);
-      Contacts contacts = pipeline.contacts();
-      State state = model.state();
-      Control control = model.control();
-      control.joint_f[kLast] = std::nan("");
-      const State before = state;
-      EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), "joint_f[39] is not finite: nan");
-      EXPECT_EQ(state.joint_q[kLast], before.joint_q[kLast]);
-      EXPECT_EQ(state.joint_qd[kLast], before.joint_qd[kLast]);
-      for (int m = 0; m < 7; ++m) EXPECT_EQ(state.body_q[7 * kLast + m], before.body_q[7 * kLast + m]);
-      if (policy == DivergencePolicy::Raise) {
-        EXPECT_EQ(state.joint_qd, before.joint_qd);
-        EXPECT_EQ(state.body_q, before.body_q);
-      } else {  // the worlds of the other blocks were stepped
-        EXPECT_NE(state.joint_qd[0], before.joint_qd[0]);
-      }
-      control.joint_f[kLast] = 0;  // and the next step goes on from there
-      solver.step(state, state, control, contacts, kDt);
-      EXPECT_NE(state.joint_qd[kLast], before.joint_qd[kLast]);
-    }
+    for (const bool batched : {true, false})
+      for (const DivergencePolicy policy : {DivergencePolicy::Flag, DivergencePolicy::Reset, DivergencePolicy::Raise})
+        for (const Poison& poison : poisons) {
+          ModelBuilder builder = pendulum_worlds(precision, kWorlds);
+          for (int w = 0; w < kWorlds; ++w) builder.add_motor(w, 2);
+          const Model model = builder.finalize();
+          SolverFeatherstoneSettings settings;
+          settings.on_divergence = policy;
+          settings.use_batch_kernels = batched;
+          SolverFeatherstone solver(model, settings);
+          CollisionPipeline pipeline(model);
+          Contacts contacts = pipeline.contacts();
+          State state = model.state();
+          Control control = model.control();
+          std::fill(control.actuator_ctrl.begin(), control.actuator_ctrl.end(), 0.5);
+          poison.set(state, control);
+          const State before = state;
+          const std::string where = std::string(poison.message) + (batched ? ", blocks" : ", dense");
+          SCOPED_TRACE(where);
+          EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), poison.message);
+          EXPECT_TRUE(same_bits(state.joint_q[kBad], before.joint_q[kBad]));
+          EXPECT_TRUE(same_bits(state.joint_qd[kBad], before.joint_qd[kBad]));
+          for (int m = 0; m < 7; ++m) EXPECT_EQ(state.body_q[7 * kBad + m], before.body_q[7 * kBad + m]);
+          for (const int w : {0, kBad + 1})
+            if (policy == DivergencePolicy::Raise)
+              EXPECT_EQ(state.joint_qd[w], before.joint_qd[w]) << "world " << w;
+            else
+              EXPECT_NE(state.joint_qd[w], before.joint_qd[w]) << "world " << w;
+          const Model fresh = builder.finalize();  // the next step goes on from there, its input mended
+          state.joint_q[kBad] = fresh.joint_q0[kBad];
+          state.joint_qd[kBad] = 0;
+          state.body_f = fresh.state().body_f;
+          control = fresh.control();
+          solver.step(state, state, control, contacts, kDt);
+          EXPECT_NE(state.joint_qd[kBad], 0);
+          EXPECT_TRUE(std::isfinite(state.joint_qd[kBad]));
+        }
 }
 
 // a body whose step overflows to infinity while it rests on another: no NaN crosses the contact
