@@ -22,7 +22,7 @@ struct QuadrupedRows {
   using V = Lanes<T>;
   std::vector<RowKind> kind;
   std::vector<int> normal, begin, end;
-  std::vector<V> J, z, target, cfm, mu, bound, inv_mass, lambda, lambda0, coupling, qd, qd0;
+  std::vector<V> J, z, target, cfm, mu, bound, inv_mass, lambda, lambda0, qd, qd0;
   std::vector<IntLanes<T>> active;
 
   explicit QuadrupedRows(int feet = 4) {
@@ -43,7 +43,7 @@ struct QuadrupedRows {
     }
     const int rows = static_cast<int>(kind.size());
     J.resize(rows * kDofs), z.resize(rows * kDofs);
-    for (auto* x : {&target, &cfm, &mu, &bound, &inv_mass, &lambda, &coupling}) x->resize(2 * rows);
+    for (auto* x : {&target, &cfm, &mu, &bound, &inv_mass, &lambda}) x->resize(rows);
     qd.resize(kDofs);
     active.resize(rows);
     for (int l = 0; l < kLanes<T>; ++l) {

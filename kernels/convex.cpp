@@ -200,7 +200,6 @@ Vec3 smooth_normal(const ConvexShape& s, const Vec3& p) {
   return n.squaredNorm() > 0 ? Vec3(s.pose.q * n.normalized()) : Vec3::Zero();
 }
 
-// libccd's view of a shape: grown by half the margin
 // libccd's MPR bounds its last phase by max_iterations but not the two before it (discovering and refining the
 // portal), which can cycle without end on a nearly degenerate pair. A query's support calls are counted (both
 // shapes share the count) and past kMprSupportCalls each shape answers -d: the Minkowski difference's point then
@@ -208,6 +207,7 @@ Vec3 smooth_normal(const ConvexShape& s, const Vec3& p) {
 // about 2 x (10 + 30 + kMprIterations) calls) is unchanged
 constexpr int kMprSupportCalls = 512;
 
+// libccd's view of a shape: grown by half the margin, its query's count of support calls
 struct CcdShape {
   const ConvexShape* shape;
   Scalar grow;

@@ -301,15 +301,12 @@ TEST(SolverFeatherstoneErrors, AWorldWithNonFiniteInputIsLeftAsItWas) {
         for (const Poison& poison : poisons) {
           ModelBuilder builder = pendulum_worlds(precision, kWorlds);
           for (int w = 0; w < kWorlds; ++w) builder.add_motor(w, 2);
-          const Model model = builder.finalize();
           SolverFeatherstoneSettings settings;
           settings.on_divergence = policy;
           settings.use_batch_kernels = batched;
-          SolverFeatherstone solver(model, settings);
-          CollisionPipeline pipeline(model);
-          Contacts contacts = pipeline.contacts();
-          State state = model.state();
-          Control control = model.control();
+          Scene scene(builder, settings);
+          State& state = scene.state;
+          Control& control = scene.control;
           std::fill(control.actuator_ctrl.begin(), control.actuator_ctrl.end(), 0.5);
           poison.set(state, control);
           const State before = state;
@@ -317,7 +314,7 @@ TEST(SolverFeatherstoneErrors, AWorldWithNonFiniteInputIsLeftAsItWas) {
                                     std::to_string(static_cast<int>(policy)) + ", precision " +
                                     std::to_string(static_cast<int>(precision));
           SCOPED_TRACE(where);
-          EXPECT_NOVAPHY_ERROR(solver.step(state, state, control, contacts, kDt), poison.message);
+          EXPECT_NOVAPHY_ERROR(scene.solver.step(state, state, control, scene.contacts, kDt), poison.message);
           EXPECT_TRUE(same_bits(state.joint_q[kBad], before.joint_q[kBad]));
           EXPECT_TRUE(same_bits(state.joint_qd[kBad], before.joint_qd[kBad]));
           for (int m = 0; m < 7; ++m) EXPECT_EQ(state.body_q[7 * kBad + m], before.body_q[7 * kBad + m]);
@@ -326,11 +323,11 @@ TEST(SolverFeatherstoneErrors, AWorldWithNonFiniteInputIsLeftAsItWas) {
               EXPECT_EQ(state.joint_qd[w], before.joint_qd[w]) << "world " << w;
             else
               EXPECT_NE(state.joint_qd[w], before.joint_qd[w]) << "world " << w;
-          state.joint_q[kBad] = model.joint_q0[kBad];  // the next step goes on from there, its input mended
+          state.joint_q[kBad] = scene.model.joint_q0[kBad];  // the next step goes on from there, its input mended
           state.joint_qd[kBad] = 0;
-          state.body_f = model.state().body_f;
-          control = model.control();
-          solver.step(state, state, control, contacts, kDt);
+          state.body_f = scene.model.state().body_f;
+          control = scene.model.control();
+          scene.solver.step(state, state, control, scene.contacts, kDt);
           EXPECT_NE(state.joint_qd[kBad], 0);
           EXPECT_TRUE(std::isfinite(state.joint_qd[kBad]));
         }

@@ -197,7 +197,6 @@ TEST(CollideConvex, SphereOnCylinderSideAndCap) {
   EXPECT_GT(out[0].normal.dot(Vec3::UnitY()), 1 - 1e-6);
 }
 
-}  // namespace
 TEST(CollideConvex, AnExtremePairEndsItsSearch) {
   // fuzz_builder's finding: a cylinder of 1e-12 inside an ellipsoid of semi-axes 0.76 and 1e12, at one pose. libccd's
   // portal search, unbounded but for its last phase, cycled without end on it in the clang build; the support calls
@@ -214,4 +213,5 @@ TEST(CollideConvex, AnExtremePairEndsItsSearch) {
   }
 }
 
+}  // namespace
 }  // namespace novaphy
