@@ -21,7 +21,7 @@ template <typename T>
 struct QuadrupedRows {
   using V = Lanes<T>;
   std::vector<RowKind> kind;
-  std::vector<int> normal, begin, end;
+  std::vector<int> normal, begin, end, zero_begin, zero_end;
   std::vector<V> J, z, target, cfm, mu, bound, inv_mass, lambda, lambda0, qd, qd0;
   std::vector<IntLanes<T>> active;
 
@@ -30,6 +30,8 @@ struct QuadrupedRows {
     std::uniform_real_distribution<double> u(-1, 1);
     auto row = [&](RowKind k, int n, int b, int e) {
       kind.push_back(k), normal.push_back(n), begin.push_back(b), end.push_back(e);
+      // the other legs' quads between the base's dofs and the foot's leg
+      zero_begin.push_back(k == RowKind::Bounded ? 0 : 8), zero_end.push_back(k == RowKind::Bounded ? 0 : (e - 3) & ~3);
     };
     for (int k = 6; k < kDofs; ++k) row(RowKind::Bounded, -1, k, k + 1);
     for (int foot = 0; foot < feet; ++foot) {
@@ -81,6 +83,8 @@ struct QuadrupedRows {
     b.J = J.data();
     b.nonzero_begin = begin.data();
     b.nonzero_end = end.data();
+    b.zero_begin = zero_begin.data();
+    b.zero_end = zero_end.data();
     b.MinvJT = z.data();
     b.target = target.data();
     b.cfm = cfm.data();

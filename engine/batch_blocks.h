@@ -90,7 +90,7 @@ struct alignas(64) RowWork {
   int dofs = 0;
   std::vector<RowKind> kind;
   std::vector<int> normal;
-  std::vector<int> nonzero_begin, nonzero_end;  // [row]: where J may be nonzero
+  std::vector<int> nonzero_begin, nonzero_end, zero_begin, zero_end;  // [row]: where J may be nonzero (BatchRows)
   std::vector<IntLanes<T>> active;
   std::vector<V> J, z, target, cfm, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
   std::vector<int> limit_row;                              // [limited][2] its row, or -1
@@ -110,6 +110,8 @@ struct alignas(64) RowWork {
       active.resize(rows_);
       nonzero_begin.resize(rows_);
       nonzero_end.resize(rows_);
+      zero_begin.resize(rows_);
+      zero_end.resize(rows_);
       limit_row.resize(rows_);
       friction_row.resize(rows_);
       for (auto* x : {&target, &cfm, &mu, &inv_mass, &lambda, &bound}) x->resize(rows_);

@@ -15,7 +15,7 @@ std::size_t RowWork<T>::bytes() const {
              sizeof(V) +
          active.size() * sizeof(IntLanes<T>) +
          (limit_row.size() + friction_row.size() + contact.size() + normal.size() + nonzero_begin.size() +
-          nonzero_end.size()) *
+          nonzero_end.size() + zero_begin.size() + zero_end.size()) *
              sizeof(int) +
          kind.size() * sizeof(RowKind);
 }
@@ -38,6 +38,7 @@ int add_row(RowWork<T>& R, RowKind kind, const IntLanes<T>& on, const V<T>& targ
   R.cfm[r] = V<T>{};
   R.nonzero_begin[r] = R.dofs;
   R.nonzero_end[r] = 0;
+  R.zero_begin[r] = R.zero_end[r] = 0;
   return r;
 }
 
@@ -151,11 +152,17 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
   return on;
 }
 
+// where a slot's rows are nonzero: the dofs [begin, end) less the quads [skip_begin, skip_end) (BatchRows')
+struct RowSpan {
+  int begin, end, skip_begin, skip_end;
+};
+
 // R.coef_k: +1 for the dofs on body b's path, -1 on body a's (the relative velocity is b's point's minus
-// a's), set for all lanes at once where they share their links; returns the range of dofs some lane has
+// a's), set for all lanes at once where they share their links; returns the dofs some lane has: their range,
+// less the longest run of whole quads between (another branch's dofs)
 template <typename T>
-std::pair<int, int> contact_paths(const BatchTopology<T>& topo, const IntLanes<T>& on, const int (*link)[2],
-                                  int uniform, RowWork<T>& R) {
+RowSpan contact_paths(const BatchTopology<T>& topo, const IntLanes<T>& on, const int (*link)[2], int uniform,
+                      RowWork<T>& R) {
   const int nv = topo.dof_count;
   for (int j = 0; j < nv; ++j) R.coef[j] = V<T>{};
   auto add_paths = [&](int l, auto&& add) {
@@ -172,13 +179,16 @@ std::pair<int, int> contact_paths(const BatchTopology<T>& topo, const IntLanes<T
     for (int l = 0; l < kLanes<T>; ++l)
       if (on[l]) add_paths(l, [&](int j, T sign) { R.coef[j][l] += sign; });
   }
-  int begin = nv, end = 0;
-  for (int j = 0; j < nv; ++j)
-    if (any_lane<T>(R.coef[j] != 0)) {
-      begin = std::min(begin, j);
-      end = j + 1;
-    }
-  return {begin, end};
+  RowSpan span{nv, 0, 0, 0};
+  for (int j = 0; j < nv; ++j) {
+    if (!any_lane<T>(R.coef[j] != 0)) continue;
+    const int skip_begin = (span.end + 3) & ~3, skip_end = j & ~3;
+    if (span.end > 0 && skip_end - skip_begin > span.skip_end - span.skip_begin)
+      span.skip_begin = skip_begin, span.skip_end = skip_end;
+    span.begin = std::min(span.begin, j);
+    span.end = j + 1;
+  }
+  return span;
 }
 
 // slot t's normal row and two friction rows; where the model has condim 4 or 6, a torsional row and two rolling
@@ -193,7 +203,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   int link[kLanes<T>][2];
   int uniform;
   const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
-  const auto [begin, end] = contact_paths(topo, on, link, uniform, R);
+  const RowSpan span = contact_paths(topo, on, link, uniform, R);
   V<T>* d = &R.frame[9 * t];
   contact_frame<T>(n, d);
   V<T> warm[3];
@@ -220,10 +230,12 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     }
     std::copy(J, J + nv, R.z_row(r));
     R.normal[r] = first;
-    R.nonzero_begin[r] = begin;
-    R.nonzero_end[r] = end;
+    R.nonzero_begin[r] = span.begin;
+    R.nonzero_end[r] = span.end;
+    R.zero_begin[r] = span.skip_begin;
+    R.zero_end[r] = span.skip_end;
   }
-  batch_solve_many(topo, kin.H, end, R.z_row(first), dims, nv);
+  batch_solve_many(topo, kin.H, span.end, R.z_row(first), dims, nv);
   // the rows' velocities at the step's start; their targets and a soft contact's cfm
   V<T> v[6] = {};
   for (int e = 0; e < dims; ++e)
@@ -251,6 +263,8 @@ void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
                           R.J.data(),
                           R.nonzero_begin.data(),
                           R.nonzero_end.data(),
+                          R.zero_begin.data(),
+                          R.zero_end.data(),
                           R.z.data(),
                           R.target.data(),
                           R.cfm.data(),

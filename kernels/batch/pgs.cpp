@@ -1,5 +1,6 @@
 #include "kernels/batch/pgs.h"
 
+#include <algorithm>
 #include <limits>
 
 namespace novaphy {
@@ -29,23 +30,36 @@ M<T> finite(const V<T>& x) {
   return lane_abs<T>(x) <= std::numeric_limits<T>::max();
 }
 
-// J qd over the dofs [begin, end) outside which the row is zero, in four sums (the dofs k = 0, 1,
-// 2, 3 mod 4) so that the latency of one does not hold up the others; skipping the zero terms
-// changes no bit
-template <typename T>
-V<T> row_velocity(const V<T>* j, const V<T>* qd, int begin, int end) {
-  V<T> v0{}, v1{}, v2{}, v3{};
+// J qd of R rows at once (qd loaded once for all), over the dofs [begin, end) outside which the rows are zero,
+// less the quads [skip_begin, skip_end) inside where they are zero too, in four sums a row (the dofs k = 0, 1,
+// 2, 3 mod 4) so that the latency of one does not hold up the others; skipping the zero terms changes no bit
+template <int R, typename T>
+void row_velocities(const V<T>* const* j, const V<T>* qd, int begin, int end, int skip_begin, int skip_end, V<T>* v) {
+  V<T> s[R][4] = {};
+  auto quads = [&](int k, int until) {
+    for (; k + 4 <= until; k += 4)
+      for (int r = 0; r < R; ++r)
+        for (int m = 0; m < 4; ++m) s[r][m] += j[r][k + m] * qd[k + m];
+    return k;
+  };
   int k = begin & ~3;
-  for (; k + 4 <= end; k += 4) {
-    v0 += j[k] * qd[k];
-    v1 += j[k + 1] * qd[k + 1];
-    v2 += j[k + 2] * qd[k + 2];
-    v3 += j[k + 3] * qd[k + 3];
+  if (skip_begin < skip_end) k = std::max(quads(k, skip_begin), skip_end);
+  k = quads(k, end);
+  for (int m = 0; m < 3; ++m)
+    if (k + m < end)
+      for (int r = 0; r < R; ++r) s[r][m] += j[r][k + m] * qd[k + m];
+  for (int r = 0; r < R; ++r) v[r] = (s[r][0] + s[r][1]) + (s[r][2] + s[r][3]);
+}
+
+// apply for both rows of a pair in one pass over qd: the first row's impulse added before the second's, as
+// two applies would add them
+template <typename T>
+void apply_pair(const V<T>* z1, const V<T>& i1, const M<T>& on1, const V<T>* z2, const V<T>& i2, const M<T>& on2, int n,
+                V<T>* qd) {
+  for (int k = 0; k < n; ++k) {
+    const V<T> x = on1 ? qd[k] + z1[k] * i1 : qd[k];
+    qd[k] = on2 ? x + z2[k] * i2 : x;
   }
-  if (k < end) v0 += j[k] * qd[k];
-  if (k + 1 < end) v1 += j[k + 1] * qd[k + 1];
-  if (k + 2 < end) v2 += j[k + 2] * qd[k + 2];
-  return (v0 + v1) + (v2 + v3);
 }
 
 }  // namespace
@@ -63,10 +77,16 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   }
   for (int r = 0; r < rows.count; ++r) apply<T>(z(r), lambda[r], rows.active[r], n, qd);
   // unconstrained step of one row: the impulse that would bring J qd to its target
-  auto velocity = [&](int r) { return row_velocity<T>(J(r), qd, rows.nonzero_begin[r], rows.nonzero_end[r]); };
-  auto step = [&](int r) {
-    return -(velocity(r) - rows.target[r] + (cfm + rows.cfm[r]) * lambda[r]) * rows.inv_mass[r];
+  auto velocity = [&](int r) {
+    const V<T>* j = J(r);
+    V<T> v;
+    row_velocities<1, T>(&j, qd, rows.nonzero_begin[r], rows.nonzero_end[r], rows.zero_begin[r], rows.zero_end[r], &v);
+    return v;
   };
+  auto step_at = [&](int r, const V<T>& v) {
+    return -(v - rows.target[r] + (cfm + rows.cfm[r]) * lambda[r]) * rows.inv_mass[r];
+  };
+  auto step = [&](int r) { return step_at(r, velocity(r)); };
   // a lane sweeps while some row's impulse in it moved by more than tolerance / (J M^-1 J^T) in the
   // sweep before (with tolerance 0: moved at all; a sweep that moves none is a fixed point, which
   // every further sweep would repeat bit for bit). A lane that stopped keeps its bits, as if alone in
@@ -99,7 +119,10 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
       // friction pair: both tangents, bounded by mu * normal impulse (box, disk or a blend)
       const int r2 = r + 1;
       const V<T> limit = rows.mu[r] * lambda[rows.normal[r]];
-      const V<T> l1 = lambda[r] + step(r), l2 = lambda[r2] + step(r2);
+      const V<T>* j[2] = {J(r), J(r2)};
+      V<T> v[2];
+      row_velocities<2, T>(j, qd, rows.nonzero_begin[r], rows.nonzero_end[r], rows.zero_begin[r], rows.zero_end[r], v);
+      const V<T> l1 = lambda[r] + step_at(r, v[0]), l2 = lambda[r2] + step_at(r2, v[1]);
       const V<T> box1 = l1 < -limit ? -limit : (l1 > limit ? limit : l1);
       const V<T> box2 = l2 < -limit ? -limit : (l2 > limit ? limit : l2);
       const V<T> norm = lane_sqrt<T>(l1 * l1 + l2 * l2);
@@ -107,8 +130,7 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
       const V<T> new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
       const M<T> on = live & rows.active[r] & finite<T>(new1) & finite<T>(new2);
       const M<T> on1 = on & (new1 != lambda[r]), on2 = on & (new2 != lambda[r2]);
-      if (any_lane<T>(on1)) apply<T>(z(r), new1 - lambda[r], on1, n, qd);
-      if (any_lane<T>(on2)) apply<T>(z(r2), new2 - lambda[r2], on2, n, qd);
+      if (any_lane<T>(on1 | on2)) apply_pair<T>(z(r), new1 - lambda[r], on1, z(r2), new2 - lambda[r2], on2, n, qd);
       moving |= (on1 & moved(r, new1 - lambda[r])) | (on2 & moved(r2, new2 - lambda[r2]));
       lambda[r] = on1 ? new1 : lambda[r];
       lambda[r2] = on2 ? new2 : lambda[r2];

@@ -20,6 +20,10 @@ struct BatchRows {
   // [row]: J is +-0 in every lane outside dofs nonzero_begin[r] .. nonzero_end[r] - 1, which J qd skips
   const int* nonzero_begin = nullptr;
   const int* nonzero_end = nullptr;
+  // [row]: and outside zero_begin[r] .. zero_end[r] - 1, both multiples of 4, which J qd skips too (equal: none
+  // skipped). A FrictionPair row's second tangent has the first's
+  const int* zero_begin = nullptr;
+  const int* zero_end = nullptr;
   const Lanes<T>* MinvJT = nullptr;     // [row][dof]
   const Lanes<T>* target = nullptr;     // [row] the velocity J qd the row drives towards
   const Lanes<T>* cfm = nullptr;        // [row] its own constraint force mixing, beyond the settings' cfm

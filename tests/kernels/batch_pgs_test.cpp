@@ -17,7 +17,7 @@ namespace {
 template <typename T>
 constexpr double kEps = std::numeric_limits<T>::epsilon();
 
-constexpr int kDofs = 7;
+constexpr int kDofs = 11;
 // two limit-like rows, then two contacts (a normal row, then its friction pair)
 const RowKind kKind[] = {RowKind::Unilateral,   RowKind::Unilateral, RowKind::Unilateral,   RowKind::FrictionPair,
                          RowKind::FrictionPair, RowKind::Unilateral, RowKind::FrictionPair, RowKind::FrictionPair};
@@ -32,7 +32,9 @@ struct Problem {
   static constexpr int W = kLanes<T>;
   std::vector<V> J, z, target, cfm, mu, inv_mass, lambda, qd;  // cfm: a soft row's own, on every other row
   std::vector<IntLanes<T>> active;
-  std::vector<int> nonzero_begin, nonzero_end;  // every row dense but the first, nonzero on dofs 2 .. 4
+  // every row dense but the first, nonzero on dofs 2, 3 and 9, and the first contact's, on 0, 1 and 8 .. 10: the
+  // quads 4 .. 7 between them skipped
+  std::vector<int> nonzero_begin, nonzero_end, zero_begin, zero_end;
 
   Problem(std::mt19937& rng, bool (*absent)(int lane, int row))
       : J(kRows * kDofs),
@@ -46,9 +48,17 @@ struct Problem {
         active(kRows) {
     std::uniform_real_distribution<double> u(-1, 1);
     for (int r = 0; r < kRows; ++r) {
-      nonzero_begin.push_back(r > 0 ? 0 : 2);
-      nonzero_end.push_back(r > 0 ? kDofs : 5);
+      const bool skips = r == 0 || (r >= 2 && r <= 4);
+      nonzero_begin.push_back(r == 0 ? 2 : 0);
+      nonzero_end.push_back(r == 0 ? 10 : kDofs);
+      zero_begin.push_back(skips ? 4 : 0);
+      zero_end.push_back(skips ? 8 : 0);
     }
+    auto nonzero = [](int r, int k) {
+      if (r == 0) return k == 2 || k == 3 || k == 9;
+      if (r >= 2 && r <= 4) return k <= 1 || k >= 8;
+      return true;
+    };
     for (int l = 0; l < W; ++l) {
       Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(kDofs, kDofs, [&] { return u(rng); });
       const Eigen::MatrixXd M = A * A.transpose() + Eigen::MatrixXd::Identity(kDofs, kDofs);
@@ -58,7 +68,7 @@ struct Problem {
         const bool on = !absent(l, r);
         active[r][l] = on ? -1 : 0;
         Eigen::VectorXd j(kDofs);
-        for (int k = 0; k < kDofs; ++k) j[k] = on && (r > 0 || (k >= 2 && k < 5)) ? static_cast<T>(u(rng)) : 0;
+        for (int k = 0; k < kDofs; ++k) j[k] = on && nonzero(r, k) ? static_cast<T>(u(rng)) : 0;
         const Eigen::VectorXd x = llt.solve(j);
         for (int k = 0; k < kDofs; ++k) {
           J[r * kDofs + k][l] = static_cast<T>(j[k]);
@@ -81,6 +91,8 @@ struct Problem {
     b.J = J.data();
     b.nonzero_begin = nonzero_begin.data();
     b.nonzero_end = nonzero_end.data();
+    b.zero_begin = zero_begin.data();
+    b.zero_end = zero_end.data();
     b.MinvJT = z.data();
     b.target = target.data();
     b.cfm = cfm.data();
@@ -326,7 +338,7 @@ void expect_bounded_rows_match_the_scalar_solve() {
   std::vector<V> J(kBounded * kDofs), z(kBounded * kDofs), target(kBounded), cfm(kBounded), mu(kBounded),
       bound(kBounded), inv_mass(kBounded), lambda(kBounded), qd(kDofs);
   std::vector<IntLanes<T>> active(kBounded, ~IntLanes<T>{});
-  std::vector<int> begin(kBounded, 0), end(kBounded, kDofs);
+  std::vector<int> begin(kBounded, 0), end(kBounded, kDofs), none(kBounded, 0);
   std::vector<Eigen::LLT<Eigen::MatrixXd>> llt;
   for (int l = 0; l < kLanes<T>; ++l) {
     Eigen::MatrixXd A = Eigen::MatrixXd::NullaryExpr(kDofs, kDofs, [&] { return u(rng); });
@@ -354,6 +366,7 @@ void expect_bounded_rows_match_the_scalar_solve() {
   rows.J = J.data();
   rows.nonzero_begin = begin.data();
   rows.nonzero_end = end.data();
+  rows.zero_begin = rows.zero_end = none.data();
   rows.MinvJT = z.data();
   rows.target = target.data();
   rows.cfm = cfm.data();
