@@ -3,8 +3,11 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <sstream>
 #include <type_traits>
 
@@ -177,13 +180,27 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
 }
 
 void SolverFeatherstone::group_actuators() {
-  dof_actuators_.resize(model_.actuator_count);
+  std::vector<int> by_dof(model_.actuator_count);
   dof_actuator_start_.resize(model_.joint_dof_count + 1);
   std::vector<int> next(std::max(model_.joint_dof_count, model_.tendon_count) + 1);
   group_by_key(
       model_.actuator_count, model_.joint_dof_count,
       [&](int u) { return model_.actuator_joint[u] < 0 ? -1 : model_.joint_qd_start[model_.actuator_joint[u]]; },
-      dof_actuator_start_.data(), dof_actuators_.data(), next.data());
+      dof_actuator_start_.data(), by_dof.data(), next.data());
+  // the distinct numbers, by their bits
+  constexpr int kNumbers = sizeof(ActuatorParams) / sizeof(Scalar);
+  std::map<std::array<std::uint64_t, kNumbers>, int> distinct;
+  dof_actuators_.clear();
+  actuator_params_.clear();
+  for (int k = 0; k < dof_actuator_start_[model_.joint_dof_count]; ++k) {
+    const int u = by_dof[k];
+    const ActuatorParams p = actuator_params(model_, u);
+    std::array<std::uint64_t, kNumbers> bits;
+    std::memcpy(bits.data(), &p, sizeof(p));
+    const auto [it, added] = distinct.try_emplace(bits, static_cast<int>(actuator_params_.size()));
+    if (added) actuator_params_.push_back(p);
+    dof_actuators_.push_back({u, model_.joint_q_start[model_.actuator_joint[u]], it->second});
+  }
   tendon_actuators_.resize(model_.actuator_count);
   tendon_actuator_start_.resize(model_.tendon_count + 1);
   group_by_key(
@@ -491,9 +508,9 @@ void SolverFeatherstone::actuate_unit(const int* arts, int count, StepContext& l
     for (int d = art.qd_begin(); d < art.qd_begin() + art.dof_count(); ++d) {
       Scalar sum = control.joint_f[d], stiffness = 0, damping = 0;
       for (int k = dof_actuator_start_[d]; k < dof_actuator_start_[d + 1]; ++k) {
-        const int u = dof_actuators_[k];
-        const Scalar q = in.joint_q[model_.joint_q_start[model_.actuator_joint[u]]];
-        const ActuatorForce f = actuator_force(model_, u, control.actuator_ctrl[u], q, in.joint_qd[d]);
+        const DofActuator& u = dof_actuators_[k];
+        const ActuatorForce f =
+            actuator_force(actuator_params_[u.params], control.actuator_ctrl[u.u], in.joint_q[u.q], in.joint_qd[d]);
         sum += f.force;
         stiffness += f.stiffness;
         damping += f.damping;

@@ -17,6 +17,7 @@
 #include "engine/collision.h"
 #include "engine/dense_articulations.h"
 #include "engine/island_rows.h"
+#include "engine/parts/actuator.h"
 #include "engine/solver_settings.h"
 #include "engine/weld.h"
 
@@ -171,8 +172,15 @@ class SolverFeatherstone {
   // Revolute and Prismatic joints with a finite limit, by articulation (a's from limited_start_[a]); their
   // impulses' cells in data_.limit_impulse, [2 m + side]
   std::vector<int> limited_joints_, limited_start_, limit_cell_;
-  // per dof: the actuators that drive it, in order, dof_actuators_[dof_actuator_start_[d] .. [d + 1])
-  std::vector<int> dof_actuator_start_, dof_actuators_;
+  // per dof: the actuators that drive it, in order, dof_actuators_[dof_actuator_start_[d] .. [d + 1]): each one's
+  // index, its joint's coordinate and its numbers in actuator_params_, the distinct ones of the Model (read-only
+  // after finalize): replicated robots' actuators share them, so a step reads one small table
+  struct DofActuator {
+    int u, q, params;
+  };
+  std::vector<int> dof_actuator_start_;
+  std::vector<DofActuator> dof_actuators_;
+  std::vector<ActuatorParams> actuator_params_;
   // per tendon: the actuators on it, tendon_actuators_[tendon_actuator_start_[t] .. [t + 1]); per dof: the
   // tendon entries on it likewise (dof_entries_, dof_entry_start_), entry_tendon_: each entry's tendon
   std::vector<int> tendon_actuator_start_, tendon_actuators_, dof_entry_start_, dof_entries_, entry_tendon_;
