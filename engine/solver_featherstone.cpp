@@ -395,6 +395,23 @@ void SolverFeatherstone::scan_unit(const int* arts, int count, StepContext& loca
   *finite = bad == 0;
 }
 
+void SolverFeatherstone::prefetch_inputs(const int* arts, int count, const StepContext& step) const {
+  auto fetch = [](const std::vector<Scalar>& x, int begin, int n) {
+    const char* p = reinterpret_cast<const char*>(x.data() + begin);
+    for (int k = 0; k < n * static_cast<int>(sizeof(Scalar)); k += 64) __builtin_prefetch(p + k);
+  };
+  const State& in = *step.in;
+  const Control& control = *step.control;
+  for (int i = 0; i < count; ++i) {
+    const ArticulationView& art = art_[arts[i]];
+    for (const auto* x : {&control.joint_target_ke, &control.joint_target_kd, &in.joint_qd})
+      fetch(*x, art.qd_begin(), art.dof_count());
+    fetch(in.joint_q, art.q_begin(), art.coord_count());
+    for (int k = art_body_start_[arts[i]]; k < art_body_start_[arts[i] + 1]; ++k)
+      fetch(in.body_f, 6 * art_body_runs_[2 * k], 6 * art_body_runs_[2 * k + 1]);
+  }
+}
+
 bool SolverFeatherstone::input_finite(int a, const StepContext& step) const {
   StepContext local = step;
   bool finite = true;
@@ -633,6 +650,7 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
         return;
       }
       int arts[kMostUnitArticulations];
+      if (u + 1 < blocks) prefetch_inputs(arts, batches_->unit_articulations(u + 1, arts), step);
       const int count = route.unit_articulations(r, arts);
       StepContext local = step;
       scan_unit(arts, count, local, nullptr);

@@ -126,6 +126,9 @@ class SolverFeatherstone {
   // gain or a wrench that is not finite is nonzero), so the pass scans only body_f and the gains; the guard and
   // check_factors scan all of an articulation whose step went wrong
   void scan_unit(const int* arts, int count, StepContext& local, bool* finite) const;
+  // asks the caches for what scan_unit and the unit's gathers will read of these articulations' inputs (the
+  // next unit's, while this one steps)
+  void prefetch_inputs(const int* arts, int count, const StepContext& step) const;
   // whether all articulation a reads is finite
   bool input_finite(int a, const StepContext& step) const;
   // throws naming the first non-finite input (check_finite_step's message); the next step refactors
