@@ -129,12 +129,16 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     }
     const Model& model = *lists.model;
     const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
-    const ContactFriction f = contact_friction_of(model, sa, sb);
+    const ContactMaterial &ma = lists.materials[lists.shape_material[sa]],
+                          &mb = lists.materials[lists.shape_material[sb]];
+    const ContactFriction f = contact_friction_of(model.friction_rule, ma, mb);
     Scalar softness[5];
-    contact_softness_row(contact_softness(model, sa, sb, C.contact_depth[c], step.dt), softness);
+    contact_softness_row(contact_softness(ma, mb, contact_weight(model, sa), contact_weight(model, sb), model.impratio,
+                                          C.contact_depth[c], step.dt),
+                         softness);
     in[0][l] = static_cast<T>(C.contact_depth[c]);
     in[1][l] = static_cast<T>(f.mu);
-    in[2][l] = static_cast<T>(contact_restitution(model, sa, sb));
+    in[2][l] = static_cast<T>(contact_restitution(ma, mb));
     if (const Scalar* P = C.previous(c))
       for (int m = 0; m < 3; ++m) in[3 + m][l] = static_cast<T>(P[m]);
     for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(softness[m]);

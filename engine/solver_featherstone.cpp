@@ -103,6 +103,27 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
 
 // ---- made once: the articulations the kernels see, where bodies and dofs sit, the routes and their data
 
+namespace {
+
+// the distinct values of P (by their bits) in a table, each value's index in it: a model of replicated robots
+// has few distinct actuators or shapes
+template <typename P>
+class Distinct {
+ public:
+  int index(const P& p, std::vector<P>& table) {
+    std::array<unsigned char, sizeof(P)> bits;
+    std::memcpy(bits.data(), &p, sizeof(P));
+    const auto [it, added] = index_.try_emplace(bits, static_cast<int>(table.size()));
+    if (added) table.push_back(p);
+    return it->second;
+  }
+
+ private:
+  std::map<std::array<unsigned char, sizeof(P)>, int> index_;
+};
+
+}  // namespace
+
 SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
     : settings(settings_), model_(model), welded_(weld_fixed_joints(model, settings_.weld_fixed_joints)) {
   settings.check();
@@ -131,8 +152,11 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   }
   group_actuators();
   index_inputs();
-  for (int s = 0; s < model.shape_count; ++s)
+  Distinct<ContactMaterial> materials;
+  for (int s = 0; s < model.shape_count; ++s) {
     contact_dims_ = std::max(contact_dims_, contact_row_count(model.shape_condim[s]));
+    shape_material_.push_back(materials.index(contact_material(model, s), contact_materials_));
+  }
 
   // limits kept per limited joint, by articulation: the blocks lay out their articulations' cells, the
   // others follow
@@ -187,19 +211,12 @@ void SolverFeatherstone::group_actuators() {
       model_.actuator_count, model_.joint_dof_count,
       [&](int u) { return model_.actuator_joint[u] < 0 ? -1 : model_.joint_qd_start[model_.actuator_joint[u]]; },
       dof_actuator_start_.data(), by_dof.data(), next.data());
-  // the distinct numbers, by their bits
-  constexpr int kNumbers = sizeof(ActuatorParams) / sizeof(Scalar);
-  std::map<std::array<std::uint64_t, kNumbers>, int> distinct;
+  Distinct<ActuatorParams> distinct;
   dof_actuators_.clear();
-  actuator_params_.clear();
   for (int k = 0; k < dof_actuator_start_[model_.joint_dof_count]; ++k) {
     const int u = by_dof[k];
-    const ActuatorParams p = actuator_params(model_, u);
-    std::array<std::uint64_t, kNumbers> bits;
-    std::memcpy(bits.data(), &p, sizeof(p));
-    const auto [it, added] = distinct.try_emplace(bits, static_cast<int>(actuator_params_.size()));
-    if (added) actuator_params_.push_back(p);
-    dof_actuators_.push_back({u, model_.joint_q_start[model_.actuator_joint[u]], it->second});
+    const int params = distinct.index(actuator_params(model_, u), actuator_params_);
+    dof_actuators_.push_back({u, model_.joint_q_start[model_.actuator_joint[u]], params});
   }
   tendon_actuators_.resize(model_.actuator_count);
   tendon_actuator_start_.resize(model_.tendon_count + 1);
@@ -552,8 +569,13 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
-  step.lists = {data_.contact_start.data(), data_.contact_list.data(), &model_, &index_,
-                std::min(contact_dims_, contact_row_count(settings.max_condim))};
+  step.lists = {data_.contact_start.data(),
+                data_.contact_list.data(),
+                &model_,
+                &index_,
+                std::min(contact_dims_, contact_row_count(settings.max_condim)),
+                contact_materials_.data(),
+                shape_material_.data()};
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;

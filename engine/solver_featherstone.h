@@ -18,6 +18,7 @@
 #include "engine/dense_articulations.h"
 #include "engine/island_rows.h"
 #include "engine/parts/actuator.h"
+#include "engine/parts/rows.h"
 #include "engine/solver_settings.h"
 #include "engine/weld.h"
 
@@ -184,6 +185,9 @@ class SolverFeatherstone {
   std::vector<int> dof_actuator_start_;
   std::vector<DofActuator> dof_actuators_;
   std::vector<ActuatorParams> actuator_params_;
+  // per shape: its contact numbers' place in contact_materials_, the distinct ones
+  std::vector<int> shape_material_;
+  std::vector<ContactMaterial> contact_materials_;
   // per tendon: the actuators on it, tendon_actuators_[tendon_actuator_start_[t] .. [t + 1]); per dof: the
   // tendon entries on it likewise (dof_entries_, dof_entry_start_), entry_tendon_: each entry's tendon
   std::vector<int> tendon_actuator_start_, tendon_actuators_, dof_entry_start_, dof_entries_, entry_tendon_;

@@ -72,6 +72,29 @@ inline V friction_loss_bound(const V& frictionloss, const V& dt) {
 // 4 a torsional row (the relative angular velocity about the normal, |impulse| <= mu_torsion normal impulse),
 // with 6 also two rolling rows (about the tangents, bounded together by mu_rolling normal impulse)
 
+// a shape's numbers as a contact's friction and softness read them (the step reads a table of the distinct ones,
+// made once: a model of replicated robots has few)
+struct ContactMaterial {
+  int condim = 3, priority = 0;
+  Scalar mu = 0, torsion = 0, rolling = 0, restitution = 0, solmix = 0, solref[2] = {}, solimp[5] = {}, margin = 0,
+         gap = 0;
+};
+inline ContactMaterial contact_material(const Model& model, int shape) {
+  ContactMaterial m;
+  m.condim = model.shape_condim[shape];
+  m.priority = model.shape_priority[shape];
+  m.mu = model.shape_mu[shape];
+  m.torsion = model.shape_mu_torsion[shape];
+  m.rolling = model.shape_mu_rolling[shape];
+  m.restitution = model.shape_restitution[shape];
+  m.solmix = model.shape_solmix[shape];
+  for (int k = 0; k < 2; ++k) m.solref[k] = model.shape_solref[2 * shape + k];
+  for (int k = 0; k < 5; ++k) m.solimp[k] = model.shape_solimp[5 * shape + k];
+  m.margin = model.shape_margin[shape];
+  m.gap = model.shape_gap[shape];
+  return m;
+}
+
 // a contact's friction: its condim and coefficients (sliding, torsional, rolling), by the model's FrictionRule:
 // GeometricMean the means of the shapes' and the larger condim; Mujoco the shape of higher priority decides,
 // else the larger of each (condim 1: none)
@@ -79,24 +102,26 @@ struct ContactFriction {
   int condim = 3;
   Scalar mu = 0, torsion = 0, rolling = 0;
 };
-inline ContactFriction contact_friction_of(const Model& model, int a, int b) {
+inline ContactFriction contact_friction_of(FrictionRule rule, const ContactMaterial& a, const ContactMaterial& b) {
   ContactFriction f;
-  f.condim = std::max(model.shape_condim[a], model.shape_condim[b]);
-  if (model.friction_rule == FrictionRule::GeometricMean) {
-    f.mu = std::sqrt(model.shape_mu[a] * model.shape_mu[b]);
-    f.torsion = std::sqrt(model.shape_mu_torsion[a] * model.shape_mu_torsion[b]);
-    f.rolling = std::sqrt(model.shape_mu_rolling[a] * model.shape_mu_rolling[b]);
+  f.condim = std::max(a.condim, b.condim);
+  if (rule == FrictionRule::GeometricMean) {
+    f.mu = std::sqrt(a.mu * b.mu);
+    f.torsion = std::sqrt(a.torsion * b.torsion);
+    f.rolling = std::sqrt(a.rolling * b.rolling);
     return f;
   }
-  const int pa = model.shape_priority[a], pb = model.shape_priority[b];
-  const int decides = pa > pb ? a : pb > pa ? b : -1;
-  auto pick = [&](const std::vector<Scalar>& x) { return decides >= 0 ? x[decides] : std::max(x[a], x[b]); };
-  if (decides >= 0) f.condim = model.shape_condim[decides];
+  const ContactMaterial* decides = a.priority > b.priority ? &a : b.priority > a.priority ? &b : nullptr;
+  if (decides) f.condim = decides->condim;
   if (f.condim == 1) return f;
-  f.mu = pick(model.shape_mu);
-  f.torsion = pick(model.shape_mu_torsion);
-  f.rolling = pick(model.shape_mu_rolling);
+  auto pick = [&](Scalar ContactMaterial::*x) { return decides ? decides->*x : std::max(a.*x, b.*x); };
+  f.mu = pick(&ContactMaterial::mu);
+  f.torsion = pick(&ContactMaterial::torsion);
+  f.rolling = pick(&ContactMaterial::rolling);
   return f;
+}
+inline ContactFriction contact_friction_of(const Model& model, int a, int b) {
+  return contact_friction_of(model.friction_rule, contact_material(model, a), contact_material(model, b));
 }
 // the rows of a contact of that condim, or of at most that many friction dimensions: 3 (a normal row and two
 // sliding rows; condim 1 has them with no friction), 4 (and a torsional row) or 6 (and two rolling rows)
@@ -104,8 +129,11 @@ inline int contact_row_count(int condim) { return condim >= 6 ? 6 : condim >= 4 
 
 // the sliding friction coefficient alone
 inline Scalar contact_friction(const Model& model, int a, int b) { return contact_friction_of(model, a, b).mu; }
+inline Scalar contact_restitution(const ContactMaterial& a, const ContactMaterial& b) {
+  return std::max(a.restitution, b.restitution);
+}
 inline Scalar contact_restitution(const Model& model, int a, int b) {
-  return std::max(model.shape_restitution[a], model.shape_restitution[b]);
+  return contact_restitution(contact_material(model, a), contact_material(model, b));
 }
 
 // ---- soft contacts: MuJoCo's soft constraint (solref, solimp) over one step of the rows' sweeps. MuJoCo's rows
@@ -140,27 +168,27 @@ inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
   return dmin + y * (dmax - dmin);
 }
 
-inline ContactSoftness contact_softness(const Model& model, int a, int b, Scalar depth, Scalar dt) {
+// weight_a, weight_b: the shapes' bodies' invweight0 (translational; 0 for a static body), impratio the model's
+inline ContactSoftness contact_softness(const ContactMaterial& a, const ContactMaterial& b, Scalar weight_a,
+                                        Scalar weight_b, Scalar impratio, Scalar depth, Scalar dt) {
   ContactSoftness s;
   // the shape of higher priority decides, else a mix weighted by solmix
-  const int pa = model.shape_priority[a], pb = model.shape_priority[b];
-  const Scalar wa = model.shape_solmix[a], wb = model.shape_solmix[b];
+  const int pa = a.priority, pb = b.priority;
+  const Scalar wa = a.solmix, wb = b.solmix;
   const Scalar mix = pa != pb                   ? (pa > pb ? 1 : 0)
                      : wa < 1e-15 && wb < 1e-15 ? 0.5
                      : wa < 1e-15               ? 0
                      : wb < 1e-15               ? 1
                                                 : wa / (wa + wb);
-  const Scalar* ra = &model.shape_solref[2 * a];
-  const Scalar* rb = &model.shape_solref[2 * b];
+  const Scalar* ra = a.solref;
+  const Scalar* rb = b.solref;
   Scalar solref[2], solimp[5];
   for (int k = 0; k < 2; ++k)
     solref[k] = (ra[0] > 0 && rb[0] > 0) || pa != pb ? mix * ra[k] + (1 - mix) * rb[k] : std::min(ra[k], rb[k]);
-  for (int k = 0; k < 5; ++k)
-    solimp[k] = mix * model.shape_solimp[5 * a + k] + (1 - mix) * model.shape_solimp[5 * b + k];
+  for (int k = 0; k < 5; ++k) solimp[k] = mix * a.solimp[k] + (1 - mix) * b.solimp[k];
   if (solref[0] == 0 && solref[1] == 0) return s;
   s.soft = true;
-  s.active_margin =
-      std::max(model.shape_margin[a], model.shape_margin[b]) - std::max(model.shape_gap[a], model.shape_gap[b]);
+  s.active_margin = std::max(a.margin, b.margin) - std::max(a.gap, b.gap);
   const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
   if (x >= 0) return s;
   const Scalar dmax = std::clamp(solimp[1], Scalar(1e-4), Scalar(0.9999));
@@ -174,15 +202,20 @@ inline ContactSoftness contact_softness(const Model& model, int a, int b, Scalar
     B = -solref[1] / std::max(Scalar(1e-15), dmax);
   }
   const Scalar imp = contact_impedance(solimp, x);
-  const auto body_weight = [&](int shape) {
-    const int body = model.shape_body[shape];
-    return body < 0 ? Scalar(0) : model.body_invweight0[2 * body];
-  };
-  s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (body_weight(a) + body_weight(b)));
-  s.cfm_friction = s.cfm_normal / model.impratio;
+  s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (weight_a + weight_b));
+  s.cfm_friction = s.cfm_normal / impratio;
   s.damping = B;
   s.spring = K * imp * x;
   return s;
+}
+// a shape's body's invweight0 (0: a static body), as contact_softness takes it
+inline Scalar contact_weight(const Model& model, int shape) {
+  const int body = model.shape_body[shape];
+  return body < 0 ? Scalar(0) : model.body_invweight0[2 * body];
+}
+inline ContactSoftness contact_softness(const Model& model, int a, int b, Scalar depth, Scalar dt) {
+  return contact_softness(contact_material(model, a), contact_material(model, b), contact_weight(model, a),
+                          contact_weight(model, b), model.impratio, depth, dt);
 }
 
 // the five numbers of a contact's softness as the blocks read them (ContactLists::softness): the normal row's cfm
