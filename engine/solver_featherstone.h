@@ -88,7 +88,8 @@ struct SolverData {
   std::size_t bytes() const;
 };
 
-// keeps a reference to the model, which must outlive it
+// keeps a reference to the model, which must outlive it and is read-only after finalize: the solver reads most of
+// its parameters once, when made, so a later edit of the model is not a supported way to change them
 class SolverFeatherstone {
  public:
   explicit SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings = {});
