@@ -1,5 +1,7 @@
 #include "kernels/batch/ltl.h"
 
+#include <algorithm>
+
 #include "kernels/batch/lane_math.h"
 
 namespace novaphy {
@@ -169,36 +171,56 @@ void batch_solve_unit(const BatchTopology<T>& topo, const V<T>* L, int unit, V<T
   batch_solve_lower(topo, L, x);
 }
 
-template <typename T>
-void batch_solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int count, int stride) {
-  // each entry of L loaded once for all right-hand sides, whose chains are independent
-  auto rhs = [&](int r) { return x + static_cast<size_t>(r) * stride; };
-  // L^T y = x: a dof past `end` has no descendant before it, so its entry stays zero
-  for (int k = end - 1; k >= 0; --k) {
-    const V<T>* Lk = L + topo.row_start[k];
-    const V<T> d = Lk[k];
-    for (int r = 0; r < count; ++r) rhs(r)[k] *= d;
-    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p) {
-      const int i = topo.ancestors[p];
-      const V<T> l = Lk[i];
-      for (int r = 0; r < count; ++r) {
-        V<T>* y = rhs(r);
-        y[i] -= l * y[k];
-      }
+namespace {
+
+// batch_solve_many for C right-hand sides: each entry of L loaded once for all of them, each one's sums kept in
+// registers (the same operations, in the same order, as subtracting each term from the entry in memory)
+template <int C, typename T>
+void solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int stride) {
+  auto y = [&](int r, int k) -> V<T>& { return x[static_cast<size_t>(r) * stride + k]; };
+  // L^T y = x, row j from its descendants k, descending (those from `end` on are zero: a dof past `end` has no
+  // descendant before it)
+  for (int j = end - 1; j >= 0; --j) {
+    V<T> sum[C];
+    for (int r = 0; r < C; ++r) sum[r] = y(r, j);
+    for (int p = topo.descendant_start[j]; p < topo.descendant_start[j + 1]; ++p) {
+      const int k = topo.descendants[p];
+      if (k >= end) continue;
+      const V<T> l = L[topo.row_start[k] + j];
+      for (int r = 0; r < C; ++r) sum[r] -= l * y(r, k);
     }
+    const V<T> d = L[topo.row_start[j] + j];
+    for (int r = 0; r < C; ++r) y(r, j) = sum[r] * d;
   }
+  // L y = x, row k from its ancestors, ascending
   for (int k = 0; k < topo.dof_count; ++k) {
     const V<T>* Lk = L + topo.row_start[k];
+    V<T> sum[C];
+    for (int r = 0; r < C; ++r) sum[r] = y(r, k);
     for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p) {
       const int i = topo.ancestors[p];
       const V<T> l = Lk[i];
-      for (int r = 0; r < count; ++r) {
-        V<T>* y = rhs(r);
-        y[k] -= l * y[i];
-      }
+      for (int r = 0; r < C; ++r) sum[r] -= l * y(r, i);
     }
-    const V<T> d = Lk[k];
-    for (int r = 0; r < count; ++r) rhs(r)[k] *= d;
+    for (int r = 0; r < C; ++r) y(r, k) = sum[r] * Lk[k];
+  }
+}
+
+}  // namespace
+
+template <typename T>
+void batch_solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int count, int stride) {
+  constexpr int kMost = 6;  // (a contact's rows)
+  for (int first = 0; first < count; first += kMost) {
+    V<T>* rhs = x + static_cast<size_t>(first) * stride;
+    switch (std::min(kMost, count - first)) {
+      case 1: solve_many<1>(topo, L, end, rhs, stride); break;
+      case 2: solve_many<2>(topo, L, end, rhs, stride); break;
+      case 3: solve_many<3>(topo, L, end, rhs, stride); break;
+      case 4: solve_many<4>(topo, L, end, rhs, stride); break;
+      case 5: solve_many<5>(topo, L, end, rhs, stride); break;
+      default: solve_many<kMost>(topo, L, end, rhs, stride); break;
+    }
   }
 }
 

@@ -60,7 +60,8 @@ void link_frames(const ArticulationView& art, int i, typename BatchTopology<T>::
   copy_n(ac.data(), 3, L.ac);
 }
 
-// each dof's ancestors ascending (ancestor_start, ancestors) and where its row starts in the packed triangle
+// each dof's ancestors ascending (ancestor_start, ancestors), where its row starts in the packed triangle, and
+// each dof's descendants descending (descendant_start, descendants)
 template <typename T>
 void list_ancestors(BatchTopology<T>& topo) {
   topo.ancestor_start.assign(1, 0);
@@ -71,6 +72,14 @@ void list_ancestors(BatchTopology<T>& topo) {
     std::reverse(topo.ancestors.begin() + first, topo.ancestors.end());
     topo.ancestor_start.push_back(static_cast<int>(topo.ancestors.size()));
     topo.row_start[k] = packed_index(k, 0);
+  }
+  std::vector<std::vector<int>> below(topo.dof_count);
+  for (int k = topo.dof_count - 1; k >= 0; --k)
+    for (int p = topo.ancestor_start[k]; p < topo.ancestor_start[k + 1]; ++p) below[topo.ancestors[p]].push_back(k);
+  topo.descendant_start.assign(1, 0);
+  for (const std::vector<int>& d : below) {
+    topo.descendants.insert(topo.descendants.end(), d.begin(), d.end());
+    topo.descendant_start.push_back(static_cast<int>(topo.descendants.size()));
   }
 }
 

@@ -43,6 +43,9 @@ struct BatchTopology {
   // per dof k: its ancestors ascending, ancestors[ancestor_start[k] .. ancestor_start[k + 1]) (H's
   // nonzeros left of the diagonal in row k), and where row k starts in the packed triangle
   std::vector<int> ancestor_start, ancestors, row_start;
+  // per dof j: the dofs it is an ancestor of, descending, descendants[descendant_start[j] .. descendant_start[j +
+  // 1]) (H's nonzeros below the diagonal in column j)
+  std::vector<int> descendant_start, descendants;
   // the same ancestors as runs of consecutive dofs (a chain's dofs are numbered in a row), per dof k
   // ancestor_runs[run_start[k] .. run_start[k + 1]): the factor and the solves walk a run of a row as
   // one dense stretch, without an index per entry
