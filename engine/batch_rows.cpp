@@ -239,7 +239,6 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     R.zero_begin[r] = span.skip_begin;
     R.zero_end[r] = span.skip_end;
   }
-  batch_solve_many(topo, kin.H, span.end, R.z_row(first), dims, nv);
   // the rows' velocities at the step's start; their targets and a soft contact's cfm
   V<T> v[6] = {};
   for (int e = 0; e < dims; ++e)
@@ -349,7 +348,12 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   add_friction_rows(G, b, kin.H, step, mine, R);
   if (phases) phases->limits += seconds_since(&mark);
   if (slots > 0) gather_lanes<T>(qd_off, step.in->joint_qd.data(), nv, R.qd_in.data());
+  const int contact_rows = R.rows;
   for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);
+  // their M^-1 J^T, all slots' rows together (their chains of operations side by side)
+  int end = 0;
+  for (int r = contact_rows; r < R.rows; ++r) end = std::max(end, R.nonzero_end[r]);
+  batch_solve_many(G.topo, kin.H, end, R.z_row(contact_rows), R.rows - contact_rows, nv);
   if (phases) phases->contacts += seconds_since(&mark);
   sweep(R, nv, step.rows.pgs, w.qd.data());
   keep_impulses(G, b, slots, mine, step, R);

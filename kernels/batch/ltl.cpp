@@ -210,7 +210,7 @@ void solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, i
 
 template <typename T>
 void batch_solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int count, int stride) {
-  constexpr int kMost = 6;  // (a contact's rows)
+  constexpr int kMost = 12;
   for (int first = 0; first < count; first += kMost) {
     V<T>* rhs = x + static_cast<size_t>(first) * stride;
     switch (std::min(kMost, count - first)) {
@@ -219,6 +219,12 @@ void batch_solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>
       case 3: solve_many<3>(topo, L, end, rhs, stride); break;
       case 4: solve_many<4>(topo, L, end, rhs, stride); break;
       case 5: solve_many<5>(topo, L, end, rhs, stride); break;
+      case 6: solve_many<6>(topo, L, end, rhs, stride); break;
+      case 7: solve_many<7>(topo, L, end, rhs, stride); break;
+      case 8: solve_many<8>(topo, L, end, rhs, stride); break;
+      case 9: solve_many<9>(topo, L, end, rhs, stride); break;
+      case 10: solve_many<10>(topo, L, end, rhs, stride); break;
+      case 11: solve_many<11>(topo, L, end, rhs, stride); break;
       default: solve_many<kMost>(topo, L, end, rhs, stride); break;
     }
   }

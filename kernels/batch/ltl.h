@@ -19,7 +19,7 @@ void batch_solve_lower(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>
 // x = H^-1 e_unit (a column of the inverse), the first half only along unit's ancestors
 template <typename T>
 void batch_solve_unit(const BatchTopology<T>& topo, const Lanes<T>* L, int unit, Lanes<T>* x);
-// x_r = H^-1 x_r for `count` right-hand sides x + r stride (a contact's normal and tangent rows),
+// x_r = H^-1 x_r for `count` right-hand sides x + r stride (a block's contact rows, up to 12 at a time),
 // every lane of each zero at the dofs from `end` on: batch_solve's arithmetic on each (the same values
 // for a finite factor), the right-hand sides' independent chains side by side, the zero tail skipped
 template <typename T>
