@@ -42,25 +42,29 @@ int add_row(RowWork<T>& R, RowKind kind, const IntLanes<T>& on, const V<T>& targ
   return r;
 }
 
-// row r's J = sign e_k in the lanes `on` (0 in the others) and its M^-1 J^T, from the block's factor H
+// row r's J = sign e_k in the lanes `on` (0 in the others), copied into M^-1 J^T for solve_rows
 template <typename T>
-void unit_row(const BatchTopology<T>& topo, const Lanes<T>* H, int k, T sign, const IntLanes<T>& on, int r,
-              RowWork<T>& R) {
-  const int nv = topo.dof_count;
+void unit_row(int nv, int k, T sign, const IntLanes<T>& on, int r, RowWork<T>& R) {
   V<T>* J = R.J_row(r);
-  V<T>* z = R.z_row(r);
   std::fill(J, J + nv, V<T>{});
   J[k] = on ? V<T>{} + sign : V<T>{};
+  std::copy(J, J + nv, R.z_row(r));
   R.nonzero_begin[r] = k;
   R.nonzero_end[r] = k + 1;
-  batch_solve_unit(topo, H, k, z);
-  if (sign != 1)
-    for (int j = 0; j < nv; ++j) z[j] *= sign;
+}
+
+// M^-1 J^T of the rows from `first` on, from J^T written in place and the block's factor H: all of them together
+// (their chains of operations side by side)
+template <typename T>
+void solve_rows(const BatchTopology<T>& topo, const Lanes<T>* H, int first, RowWork<T>& R) {
+  int end = 0;
+  for (int r = first; r < R.rows; ++r) end = std::max(end, R.nonzero_end[r]);
+  batch_solve_many(topo, H, end, R.z_row(first), R.rows - first, topo.dof_count);
 }
 
 // the rows of the limited dofs in dof order, J = +-e_k, in the lanes `mine` whose joint would cross a limit
 template <typename T>
-void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const StepContext& step, const BatchWork<T>& w,
+void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, const BatchWork<T>& w,
                     const IntLanes<T>& mine, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
   const int nl = static_cast<int>(G.limited.size());
@@ -79,7 +83,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const Step
       const V<T> warm = row_warm_start(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), step.rows);
       const int r = add_row(R, RowKind::Unilateral, on, limit_row_target(gap, step.rows, dt), warm);
       R.limit_row[2 * m + side] = r;
-      unit_row(topo, H, k, sign, on, r, R);
+      unit_row(topo.dof_count, k, sign, on, r, R);
     }
   }
 }
@@ -87,8 +91,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const Step
 // a row per dof with dry friction, J = e_k, in the lanes `mine` whose world has it: its velocity driven to
 // zero with at most frictionloss dt of impulse either way
 template <typename T>
-void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const StepContext& step,
-                       const IntLanes<T>& mine, RowWork<T>& R) {
+void add_friction_rows(const BatchGroup<T>& G, int b, const StepContext& step, const IntLanes<T>& mine, RowWork<T>& R) {
   const int nf = static_cast<int>(G.frictional.size());
   const V<T>* loss = G.frictionloss.data() + static_cast<size_t>(b) * nf;
   const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
@@ -102,7 +105,7 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const Lanes<T>* H, const S
     const int r = add_row(R, RowKind::Bounded, on, V<T>{}, row_warm_start(kept, step.rows));
     R.bound[r] = friction_loss_bound(loss[m], dt);
     R.friction_row[m] = r;
-    unit_row(G.topo, H, k, T(1), on, r, R);
+    unit_row(G.topo.dof_count, k, T(1), on, r, R);
   }
 }
 
@@ -344,16 +347,14 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   Clock::time_point mark = phases ? Clock::now() : Clock::time_point{};
   R.resize(2 * nl + nf + step.lists.dims * slots, nv, slots);
   R.rows = 0;
-  add_limit_rows(G, b, kin.H, step, w, mine, R);
-  add_friction_rows(G, b, kin.H, step, mine, R);
+  add_limit_rows(G, b, step, w, mine, R);
+  add_friction_rows(G, b, step, mine, R);
+  solve_rows(G.topo, kin.H, 0, R);
   if (phases) phases->limits += seconds_since(&mark);
   if (slots > 0) gather_lanes<T>(qd_off, step.in->joint_qd.data(), nv, R.qd_in.data());
   const int contact_rows = R.rows;
   for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);
-  // their M^-1 J^T, all slots' rows together (their chains of operations side by side)
-  int end = 0;
-  for (int r = contact_rows; r < R.rows; ++r) end = std::max(end, R.nonzero_end[r]);
-  batch_solve_many(G.topo, kin.H, end, R.z_row(contact_rows), R.rows - contact_rows, nv);
+  solve_rows(G.topo, kin.H, contact_rows, R);
   if (phases) phases->contacts += seconds_since(&mark);
   sweep(R, nv, step.rows.pgs, w.qd.data());
   keep_impulses(G, b, slots, mine, step, R);

@@ -153,24 +153,6 @@ void batch_solve(const BatchTopology<T>& topo, const V<T>* L, V<T>* x) {
   batch_solve_lower(topo, L, x);
 }
 
-template <typename T>
-void batch_solve_unit(const BatchTopology<T>& topo, const V<T>* L, int unit, V<T>* x) {
-  // L^T y = e_unit is nonzero only on unit and its ancestors
-  for (int k = 0; k < topo.dof_count; ++k) x[k] = V<T>{};
-  x[unit] = L[topo.row_start[unit] + unit];
-  const int* a = topo.ancestors.data() + topo.ancestor_start[unit];
-  const int m = topo.ancestor_start[unit + 1] - topo.ancestor_start[unit];
-  for (int p = 0; p < m; ++p) x[a[p]] = -L[topo.row_start[unit] + a[p]] * x[unit];
-  for (int p = m - 1; p >= 0; --p) {
-    const int k = a[p];
-    const V<T>* Lk = L + topo.row_start[k];
-    const V<T> y = x[k] * Lk[k];
-    x[k] = y;
-    for (int r = 0; r < p; ++r) x[a[r]] -= Lk[a[r]] * y;
-  }
-  batch_solve_lower(topo, L, x);
-}
-
 namespace {
 
 // batch_solve_many for C right-hand sides: each entry of L loaded once for all of them, each one's sums kept in
@@ -260,7 +242,6 @@ void batch_solve_packed(const BatchTopology<T>& topo, const double* L, double* x
   template IntLanes<T> batch_factor(const BatchTopology<T>&, Lanes<T>*, Lanes<T>*);                   \
   template void batch_solve(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);                     \
   template void batch_solve_lower(const BatchTopology<T>&, const Lanes<T>*, Lanes<T>*);               \
-  template void batch_solve_unit(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*);           \
   template void batch_solve_many(const BatchTopology<T>&, const Lanes<T>*, int, Lanes<T>*, int, int); \
   template void batch_lane_factor(const BatchTopology<T>&, const Lanes<T>*, int, double*);            \
   template void batch_solve_packed(const BatchTopology<T>&, const double*, double*);

@@ -16,10 +16,7 @@ template <typename T>
 void batch_solve(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>* x);
 template <typename T>
 void batch_solve_lower(const BatchTopology<T>& topo, const Lanes<T>* L, Lanes<T>* x);
-// x = H^-1 e_unit (a column of the inverse), the first half only along unit's ancestors
-template <typename T>
-void batch_solve_unit(const BatchTopology<T>& topo, const Lanes<T>* L, int unit, Lanes<T>* x);
-// x_r = H^-1 x_r for `count` right-hand sides x + r stride (a block's contact rows, up to 12 at a time),
+// x_r = H^-1 x_r for `count` right-hand sides x + r stride (a block's rows, up to 12 at a time),
 // every lane of each zero at the dofs from `end` on: batch_solve's arithmetic on each (the same values
 // for a finite factor), the right-hand sides' independent chains side by side, the zero tail skipped
 template <typename T>
