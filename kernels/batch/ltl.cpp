@@ -192,7 +192,7 @@ void solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, i
 
 template <typename T>
 void batch_solve_many(const BatchTopology<T>& topo, const V<T>* L, int end, V<T>* x, int count, int stride) {
-  constexpr int kMost = 12;
+  constexpr int kMost = 12;  // right-hand sides side by side, their sums in registers
   for (int first = 0; first < count; first += kMost) {
     V<T>* rhs = x + static_cast<size_t>(first) * stride;
     switch (std::min(kMost, count - first)) {
