@@ -132,9 +132,6 @@ inline Scalar contact_friction(const Model& model, int a, int b) { return contac
 inline Scalar contact_restitution(const ContactMaterial& a, const ContactMaterial& b) {
   return std::max(a.restitution, b.restitution);
 }
-inline Scalar contact_restitution(const Model& model, int a, int b) {
-  return contact_restitution(contact_material(model, a), contact_material(model, b));
-}
 
 // ---- soft contacts: MuJoCo's soft constraint (solref, solimp) over one step of the rows' sweeps. MuJoCo's rows
 // satisfy J a + R f = aref with aref = -B v - K imp (pos - margin); times dt, with the impulse p = f dt, the
@@ -212,10 +209,6 @@ inline ContactSoftness contact_softness(const ContactMaterial& a, const ContactM
 inline Scalar contact_weight(const Model& model, int shape) {
   const int body = model.shape_body[shape];
   return body < 0 ? Scalar(0) : model.body_invweight0[2 * body];
-}
-inline ContactSoftness contact_softness(const Model& model, int a, int b, Scalar depth, Scalar dt) {
-  return contact_softness(contact_material(model, a), contact_material(model, b), contact_weight(model, a),
-                          contact_weight(model, b), model.impratio, depth, dt);
 }
 
 // the five numbers of a contact's softness as the blocks read them (ContactLists::softness): the normal row's cfm
