@@ -2,8 +2,8 @@
 // stepping one mjData per world in the same OpenMP loop, same MJCF, same dt, same process.
 //   novaphy_bench_step --benchmark_format=json
 // Arguments: scene (0 chain15, 1 quadruped without a floor, 2 quadruped standing, 3 MuJoCo's
-// humanoid.xml without contacts, 4 the standing quadruped with settings.pgs_tolerance = 1e-5 m/s,
-// NovaPhy only: MuJoCo's reference is scene 2, which already stops its solver at its own tolerance),
+// humanoid.xml without contacts, 4 the standing quadruped with settings.pgs_tolerance = 0, the sweeps run to a
+// fixed point or num_iterations, NovaPhy only: MuJoCo's reference is scene 2),
 // worlds, threads, precision (NovaPhy: 0 float64, 1 float32; MuJoCo is double). items_per_second is
 // robot-steps per second. BM_PairedStep (scene, precision) times both engines in alternation at 4096
 // worlds, for the targets (below). tools/bench_report.py turns the JSON into the README's tables.
@@ -35,13 +35,13 @@ namespace {
 struct SceneSpec {
   const char* path;
   bool floor;
-  Scalar pgs_tolerance = 0;
+  Scalar pgs_tolerance = SolverFeatherstoneSettings{}.pgs_tolerance;
 };
 const SceneSpec kScenes[] = {{NOVAPHY_SCENE_DIR "/chain15.xml", false},
                              {NOVAPHY_SCENE_DIR "/quadruped.xml", false},
                              {NOVAPHY_SCENE_DIR "/quadruped.xml", true},
                              {NOVAPHY_HUMANOID_XML, false},
-                             {NOVAPHY_SCENE_DIR "/quadruped.xml", true, 1e-5}};
+                             {NOVAPHY_SCENE_DIR "/quadruped.xml", true, 0}};
 // the scene MuJoCo steps beside each: the tolerance changes only NovaPhy's settings
 constexpr int kMujocoScene[] = {0, 1, 2, 3, 2};
 

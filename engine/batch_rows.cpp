@@ -80,7 +80,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, cons
       const IntLanes<T> on = mine & finite(limit[2 * m + side]) & limit_row_on(gap, sign * w.qd[k], dt);
       R.limit_row[2 * m + side] = -1;
       if (!any_lane<T>(on)) continue;
-      const V<T> warm = row_warm_start(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), step.rows);
+      const V<T> warm = R.warm_share * lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>);
       const int r = add_row(R, RowKind::Unilateral, on, limit_row_target(gap, step.rows, dt), warm);
       R.limit_row[2 * m + side] = r;
       unit_row(topo.dof_count, k, sign, on, r, R);
@@ -102,7 +102,7 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const StepContext& step, c
     if (!any_lane<T>(on)) continue;
     V<T> kept;
     gather_lanes<T>(&G.qd_off[b * kLanes<T>], step.friction_impulse + k, 1, &kept);
-    const int r = add_row(R, RowKind::Bounded, on, V<T>{}, row_warm_start(kept, step.rows));
+    const int r = add_row(R, RowKind::Bounded, on, V<T>{}, R.warm_share * kept);
     R.bound[r] = friction_loss_bound(loss[m], dt);
     R.friction_row[m] = r;
     unit_row(G.topo.dof_count, k, T(1), on, r, R);
@@ -143,7 +143,10 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     in[1][l] = static_cast<T>(f.mu);
     in[2][l] = static_cast<T>(contact_restitution(ma, mb));
     if (const Scalar* P = C.previous(c))
-      for (int m = 0; m < 3; ++m) in[3 + m][l] = static_cast<T>(P[m]);
+      for (int m = 0; m < 3; ++m) {
+        in[3 + m][l] = static_cast<T>(P[m]);
+        in[14 + m][l] = static_cast<T>(P[3 + m]);
+      }
     for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(softness[m]);
     in[11][l] = static_cast<T>(f.condim);
     in[12][l] = static_cast<T>(f.torsion);
@@ -205,16 +208,18 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
                       const StepContext& step, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
   const int nv = topo.dof_count;
-  // depth, mu, restitution, previous impulse [3], softness [5], condim, torsional and rolling friction
-  V<T> n[3] = {}, p[3] = {}, in[14] = {};
+  // depth, mu, restitution, previous impulse [3], softness [5], condim, torsional and rolling friction, previous
+  // spin impulse [3]
+  V<T> n[3] = {}, p[3] = {}, in[17] = {};
   int link[kLanes<T>][2];
   int uniform;
   const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
   const RowSpan span = contact_paths(topo, on, link, uniform, R);
   V<T>* d = &R.frame[9 * t];
   contact_frame<T>(n, d);
-  V<T> warm[3];
-  contact_warm_start(in + 3, d, step.rows, warm);
+  const V<T> previous[6] = {in[3], in[4], in[5], in[14], in[15], in[16]};
+  V<T> warm[6];
+  contact_warm_start(previous, d, R.warm_share, warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
   for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);
@@ -223,7 +228,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     // the normal and sliding rows in every lane of `on`; the torsional and rolling ones where its condim has them
     const IntLanes<T> has = e < 3 ? on : on & (in[11] >= T(e == 3 ? 4 : 6));
     const RowKind kind = e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
-    const int r = add_row(R, kind, has, V<T>{}, e < 3 ? warm[e] : V<T>{});
+    const int r = add_row(R, kind, has, V<T>{}, warm[e]);
     V<T>* J = R.J_row(r);
     if (e < 3) {  // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
       const V<T>* de = d + 3 * e;
@@ -259,9 +264,9 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   }
 }
 
-// the sweeps over the block's rows
+// the sweeps over the block's rows; returns the lanes whose sweeps converged
 template <typename T>
-void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
+IntLanes<T> sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
   const BatchRows<T> rows{R.rows,
                           nv,
                           R.kind.data(),
@@ -279,7 +284,9 @@ void sweep(RowWork<T>& R, int nv, const PgsSettings& pgs, V<T>* qd) {
                           R.active.data(),
                           R.inv_mass.data(),
                           R.lambda.data()};
-  batch_pgs_solve(rows, pgs, qd);
+  IntLanes<T> converged;
+  batch_pgs_solve(rows, pgs, qd, &converged);
+  return converged;
 }
 
 // the impulses kept for warm starting: limits per dof and side, contacts as world vectors on body b
@@ -298,13 +305,20 @@ void keep_impulses(const BatchGroup<T>& G, int b, int slots, const IntLanes<T>& 
     const V<T> x = r >= 0 ? impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
     scatter_lanes<T>(&G.qd_off[b * kLanes<T>], &x, 1, mine, step.friction_impulse + G.frictional[m]);
   }
+  const int dims = step.lists.dims;
   for (int t = 0; t < slots; ++t) {
-    V<T> P[3];
-    contact_impulse_kept(&R.lambda[R.rows - step.lists.dims * (slots - t)], &R.frame[9 * t], P);
+    const V<T>* lambda = &R.lambda[R.rows - dims * (slots - t)];
+    const V<T> spin[3] = {dims > 3 ? lambda[3] : V<T>{}, dims > 4 ? lambda[4] : V<T>{}, dims > 5 ? lambda[5] : V<T>{}};
+    V<T> P[6];
+    contact_impulse_kept(lambda, &R.frame[9 * t], P);
+    contact_impulse_kept(spin, &R.frame[9 * t], P + 3);
     for (int l = 0; l < kLanes<T>; ++l) {
       const int c = R.contact[t * kLanes<T> + l];
       if (c < 0) continue;
-      for (int m = 0; m < 3; ++m) step.contacts->contact_impulse[3 * c + m] = P[m][l];
+      for (int m = 0; m < 3; ++m) {
+        step.contacts->contact_impulse[3 * c + m] = P[m][l];
+        step.contacts->contact_spin_impulse[3 * c + m] = P[3 + m][l];
+      }
     }
   }
 }
@@ -327,12 +341,13 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   const int nv = G.topo.dof_count, lanes = G.lanes_in(b);
   const int* qd_off = &G.qd_off[b * W];
   // the lanes whose rows are solved here (the others' are the islands'), each one's contacts, their most
-  IntLanes<T> mine{};
+  IntLanes<T> mine{}, converged{};
   int listed[W] = {}, slots = 0;
   for (int l = 0; l < lanes; ++l) {
     const int a = G.arts[b * W + l];
     if (step.touched && step.touched[a]) continue;
     mine[l] = -1;
+    converged[l] = step.pgs_converged[a] ? -1 : 0;
     listed[l] = step.lists.start[a + 1] - step.lists.start[a];
     slots = std::max(slots, listed[l]);
   }
@@ -347,6 +362,7 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   Clock::time_point mark = phases ? Clock::now() : Clock::time_point{};
   R.resize(2 * nl + nf + step.lists.dims * slots, nv, slots);
   R.rows = 0;
+  R.warm_share = warm_share<V<T>>(converged, step.rows);
   add_limit_rows(G, b, step, w, mine, R);
   add_friction_rows(G, b, step, mine, R);
   solve_rows(G.topo, kin.H, 0, R);
@@ -356,7 +372,9 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);
   solve_rows(G.topo, kin.H, contact_rows, R);
   if (phases) phases->contacts += seconds_since(&mark);
-  sweep(R, nv, step.rows.pgs, w.qd.data());
+  converged = sweep(R, nv, step.rows.pgs, w.qd.data());
+  for (int l = 0; l < lanes; ++l)
+    if (mine[l]) step.pgs_converged[G.arts[b * W + l]] = converged[l] != 0;
   keep_impulses(G, b, slots, mine, step, R);
   if (phases) phases->sweeps += seconds_since(&mark);
   if (!carry_on) scatter_lanes<T>(qd_off, w.qd.data(), nv, carried ? real_lanes(G, b) : mine, step.qd);

@@ -17,7 +17,7 @@ namespace {
 // the warm-start bookkeeping of a buffer of contact_capacity contacts
 void size_previous(Contacts& c) {
   c.previous_key.resize(c.contact_capacity);
-  c.previous_impulse.resize(3 * static_cast<size_t>(c.contact_capacity));
+  c.previous_impulse.resize(6 * static_cast<size_t>(c.contact_capacity));
   c.previous_match.assign(c.contact_capacity, -1);
 }
 
@@ -210,7 +210,10 @@ void CollisionPipeline::keep_previous(Contacts& contacts) const {
   if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
   auto keep = [&contacts](int c) {
     contacts.previous_key[c] = contacts.key_of(c);
-    for (int i = 0; i < 3; ++i) contacts.previous_impulse[3 * c + i] = contacts.contact_impulse[3 * c + i];
+    for (int i = 0; i < 3; ++i) {
+      contacts.previous_impulse[6 * c + i] = contacts.contact_impulse[3 * c + i];
+      contacts.previous_impulse[6 * c + 3 + i] = contacts.contact_spin_impulse[3 * c + i];
+    }
   };
   parallel_for(team(contacts.contact_count, 1024), contacts.contact_count, keep);
   contacts.previous_count = contacts.contact_count;
@@ -368,6 +371,7 @@ void CollisionPipeline::find_contacts(int count, Contacts& contacts, int grain, 
       contacts.contact_depth[c] = found.point.depth;
       contacts.contact_feature[c] = found.point.feature;
       Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]).setZero();
+      Eigen::Map<Vec3>(&contacts.contact_spin_impulse[3 * c]).setZero();
       ++c;
     }
   };

@@ -13,20 +13,22 @@
 namespace novaphy {
 
 // X(type, name, count, width); count is contact_capacity
-#define NOVAPHY_CONTACT_FIELDS(X)                \
-  X(int, contact_shape_a, contact_capacity, 1)   \
-  X(int, contact_shape_b, contact_capacity, 1)   \
-  X(int, contact_body_a, contact_capacity, 1)    \
-  X(int, contact_body_b, contact_capacity, 1)    \
-  X(Scalar, contact_point, contact_capacity, 3)  \
-  X(Scalar, contact_normal, contact_capacity, 3) \
-  X(Scalar, contact_depth, contact_capacity, 1)  \
-  X(int, contact_feature, contact_capacity, 1)   \
-  X(Scalar, contact_impulse, contact_capacity, 3)
+#define NOVAPHY_CONTACT_FIELDS(X)                 \
+  X(int, contact_shape_a, contact_capacity, 1)    \
+  X(int, contact_shape_b, contact_capacity, 1)    \
+  X(int, contact_body_a, contact_capacity, 1)     \
+  X(int, contact_body_b, contact_capacity, 1)     \
+  X(Scalar, contact_point, contact_capacity, 3)   \
+  X(Scalar, contact_normal, contact_capacity, 3)  \
+  X(Scalar, contact_depth, contact_capacity, 1)   \
+  X(int, contact_feature, contact_capacity, 1)    \
+  X(Scalar, contact_impulse, contact_capacity, 3) \
+  X(Scalar, contact_spin_impulse, contact_capacity, 3)
 
 // contacts of one collide(): the first contact_count entries of each array are valid.
 // normal points from shape a to shape b; depth > 0 is penetration; contact_impulse is the
-// impulse (world frame, on b) the solver applied, kept for warm starting the next step
+// impulse (world frame, on b) the solver applied, contact_spin_impulse the angular impulse of its torsional and
+// rolling rows (world frame, on b; 0 below condim 4), both kept for warm starting the next step
 struct Contacts : ModelCounts {
   int contact_capacity = 0;
   int contact_count = 0;
@@ -38,7 +40,7 @@ struct Contacts : ModelCounts {
   // the previous collide()'s contacts in their order, with the impulses the solver applied to them, and
   // where each of this collide()'s contacts was among them (-1: a new contact)
   std::vector<std::uint64_t> previous_key;
-  std::vector<Scalar> previous_impulse;  // [previous][3]
+  std::vector<Scalar> previous_impulse;  // [previous][6]: contact_impulse, then contact_spin_impulse
   int previous_count = 0;
   std::vector<int> previous_match;  // [contact]
 
@@ -49,12 +51,12 @@ struct Contacts : ModelCounts {
   std::uint64_t key_of(int contact) const {
     return key(contact_shape_a[contact], contact_shape_b[contact], contact_feature[contact]);
   }
-  // impulse applied to the same contact (same shapes and feature) at the previous step, or nullptr.
-  // collide() matched each contact; a buffer edited since then finds nothing where the keys differ
+  // impulse and spin impulse [6] applied to the same contact (same shapes and feature) at the previous step, or
+  // nullptr. collide() matched each contact; a buffer edited since then finds nothing where the keys differ
   const Scalar* previous(int contact) const {
     const int m = contact < static_cast<int>(previous_match.size()) ? previous_match[contact] : -1;
     if (m < 0 || m >= previous_count || previous_key[m] != key_of(contact)) return nullptr;
-    return &previous_impulse[3 * static_cast<size_t>(m)];
+    return &previous_impulse[6 * static_cast<size_t>(m)];
   }
 };
 

@@ -70,6 +70,13 @@ int IslandRows::add_row(int body_a, int body_b, const Vec3* p, const Vec3& d, Ro
   return r;
 }
 
+Scalar IslandRows::warm_share_of(int r, const StepContext& step) const {
+  bool converged = true;
+  for (int s = 0; s < rows_[r].side_count; ++s)
+    converged = converged && step.pgs_converged[index_.dof_articulation[rows_[r].dof_begin[s]]] != 0;
+  return warm_share<Scalar>(converged, step.rows);
+}
+
 void IslandRows::finish_row(int r, Scalar cfm) {
   PgsRow& row = rows_[r];
   Scalar W = 0;
@@ -103,7 +110,7 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
         if (!std::isfinite(limit) || !limit_row_on(gap, sign * step.qd[g], dt)) continue;
         const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, dt));
         row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
-        rows_[r].lambda = row_warm_start(step.limit_impulse[limit_cell_[2 * m + side]], step.rows);
+        rows_[r].lambda = warm_share_of(r, step) * step.limit_impulse[limit_cell_[2 * m + side]];
         limit_row_[2 * g + side] = r;
       }
     }
@@ -118,15 +125,18 @@ void IslandRows::add_friction_rows(const StepContext& step, const std::vector<in
       const int r = begin_row(a, -1, RowKind::Bounded, 0);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = 1;
       rows_[r].bound = friction_loss_bound(loss, step.dt);
-      rows_[r].lambda = row_warm_start(step.friction_impulse[g], step.rows);
+      rows_[r].lambda = warm_share_of(r, step) * step.friction_impulse[g];
       friction_row_[g] = r;
     }
 }
 
 void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int>& contacts) {
   const Contacts& C = *step.contacts;
-  if (static_cast<int>(contact_row_.size()) < C.contact_count) contact_row_.resize(C.contact_count);
-  const Scalar zero[3] = {0, 0, 0};
+  if (static_cast<int>(contact_row_.size()) < C.contact_count) {
+    contact_row_.resize(C.contact_count);
+    contact_dims_.resize(C.contact_count);
+  }
+  const Scalar zero[6] = {};
   for (const int c : contacts) {
     const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
     const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
@@ -157,13 +167,14 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     } else {
       rows_[rn].target = contact_normal_target(depth, v[0], contact_restitution(ma, mb), step.rows, step.dt);
     }
-    Scalar warm[3];
+    Scalar warm[6];
     const Scalar* previous = C.previous(c);
-    contact_warm_start(previous ? previous : zero, d, step.rows, warm);
+    contact_warm_start(previous ? previous : zero, d, warm_share_of(rn, step), warm);
     for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
     contact_row_[c] = rn;
-    // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents (no warm start)
+    // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents
     const int dims = std::min(step.lists.dims, contact_row_count(f.condim));
+    contact_dims_[c] = dims;
     for (int e = 3; e < dims; ++e) {
       const Scalar* axis = d + 3 * (e == 3 ? 0 : e - 3);
       const int r = add_row(ba, bb, nullptr, Vec3(axis[0], axis[1], axis[2]),
@@ -171,6 +182,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
       const Scalar mu = e == 3 ? f.torsion : f.rolling;
       rows_[r].normal = rn;
       rows_[r].mu = mu;
+      rows_[r].lambda = warm[e];
       if (!soft.soft) continue;
       rows_[r].target =
           soft_friction_target(row_velocity(rows_[r], J_, step.in->joint_qd.data()), soft.damping, step.dt);
@@ -209,7 +221,7 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
     const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), RowKind::Bounded);
     rows_[r].bound = std::numeric_limits<Scalar>::infinity();
     rows_[r].target = equality_row_target(error[k / 3][k % 3], step.rows, step.dt);
-    rows_[r].lambda = row_warm_start(step.equality_impulse[6 * e + k], step.rows);
+    rows_[r].lambda = warm_share_of(r, step) * step.equality_impulse[6 * e + k];
   }
 }
 
@@ -226,7 +238,7 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   row_jacobian(r, a1)[d1 - art_[a1].qd_begin()] += 1;
   if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
   rows_[r].bound = std::numeric_limits<Scalar>::infinity();
-  rows_[r].lambda = row_warm_start(step.equality_impulse[6 * e], step.rows);
+  rows_[r].lambda = warm_share_of(r, step) * step.equality_impulse[6 * e];
   equality_row_[e] = r;
 }
 
@@ -245,7 +257,7 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
     Scalar* J = row_jacobian(r, a);
     for (int e = first; e < model_.tendon_start[t + 1]; ++e)
       J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
-    rows_[r].lambda = row_warm_start(step.tendon_impulse[2 * t + side], step.rows);
+    rows_[r].lambda = warm_share_of(r, step) * step.tendon_impulse[2 * t + side];
     tendon_row_[2 * t + side] = r;
   }
 }
@@ -299,16 +311,22 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
       const int* order = island_rows_.data() + begin;
       for (int k = 0; k < count; ++k) finish_row(order[k], step.rows.pgs.cfm);
       for (int k = 0; k < count; ++k) apply_impulse(rows_[order[k]], MinvJT_, rows_[order[k]].lambda, step.qd);
-      pgs_solve(rows_, order, count, J_, MinvJT_, step.rows.pgs, step.qd);
+      bool converged = false;
+      pgs_solve(rows_, order, count, J_, MinvJT_, step.rows.pgs, step.qd, &converged);
+      for (int k = 0; k < count; ++k)
+        for (int s = 0; s < rows_[order[k]].side_count; ++s)
+          step.pgs_converged[index_.dof_articulation[rows_[order[k]].dof_begin[s]]] = converged;
     });
   }
   // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
   for (const int c : contacts) {
-    Scalar d[9], lambda[3], P[3];
+    Scalar d[9], lambda[6] = {}, P[6];
     contact_frame(&step.contacts->contact_normal[3 * c], d);
-    for (int e = 0; e < 3; ++e) lambda[e] = rows_[contact_row_[c] + e].lambda;
+    for (int e = 0; e < contact_dims_[c]; ++e) lambda[e] = rows_[contact_row_[c] + e].lambda;
     contact_impulse_kept(lambda, d, P);
+    contact_impulse_kept(lambda + 3, d, P + 3);
     std::copy_n(P, 3, &step.contacts->contact_impulse[3 * c]);
+    std::copy_n(P + 3, 3, &step.contacts->contact_spin_impulse[3 * c]);
   }
   keep_constraint_impulses(step);
   for (const int a : articulations)

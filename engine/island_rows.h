@@ -42,6 +42,9 @@ class IslandRows {
   // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world), or with
   // p null their relative angular velocity
   int add_row(int body_a, int body_b, const Vec3* p, const Vec3& d, RowKind kind);
+  // the share of the last step's impulses row r starts from: warm_share over the articulations it acts on (all
+  // of them converged, or not)
+  Scalar warm_share_of(int row, const StepContext& step) const;
   // M^-1 J^T and the effective mass, once J is filled in
   void finish_row(int row, Scalar cfm);
   void group_islands();
@@ -60,6 +63,7 @@ class IslandRows {
   std::vector<int> limit_row_;     // [dof][2] the row of each active limit, -1
   std::vector<int> friction_row_;  // [dof] its friction-loss row, -1
   std::vector<int> contact_row_;   // [contact] the first row of each contact added
+  std::vector<int> contact_dims_;  // [contact] its rows: 3, or 4 or 6 with the torsional and rolling ones
   std::vector<int> equality_row_;  // [equality] its first row, -1
   std::vector<int> tendon_row_;    // [tendon][2] the row of each active limit, -1
   // the rows of equality e (connect or weld, joint coupling), of a tendon's limit, and their impulses kept

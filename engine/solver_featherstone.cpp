@@ -498,6 +498,7 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.qd = data_.qd.data();
   step.q_next = data_.q_next.data();
   step.limit_impulse = data_.limit_impulse.data();
+  step.pgs_converged = data_.pgs_converged.data();
   step.friction_impulse = data_.friction_impulse.data();
   step.equality_impulse = data_.equality_impulse.data();
   step.tendon_impulse = data_.tendon_impulse.data();

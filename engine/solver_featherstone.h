@@ -72,6 +72,7 @@ struct SolverCounts {
   X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")      \
   X(Scalar, equality_impulse, 6 * n.equalities, "the last step's equality impulses, the warm starts of their rows") \
   X(Scalar, tendon_impulse, 2 * n.tendons, "the last step's tendon-limit impulses, the warm starts of their rows")  \
+  X(std::uint8_t, pgs_converged, n.articulations, "1 where the last sweeps over its rows stopped at the tolerance") \
   X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                      \
   X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                          \
   X(std::uint8_t, touched, n.articulations, "1 where a contact joins it to another moving articulation this step")  \

@@ -20,13 +20,15 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
 // X(type, name, default, lowest, highest, unit, doc); a bool or an enum has no range (0, 0)
 #define NOVAPHY_SOLVER_SETTINGS(X)                                                                                    \
   X(int, num_iterations, 20, 0, kIntUnbounded, "", "PGS sweeps per step, at most.")                                   \
-  X(Scalar, pgs_tolerance, 0, 0, 1e6, "m/s, rad/s",                                                                   \
+  X(Scalar, pgs_tolerance, 3e-5, 0, 1e6, "m/s, rad/s",                                                                \
     "Stop the PGS sweeps of a world once one sweep changed no row's velocity by more than this; 0: once one sweep "   \
     "changed no impulse at all (a fixed point).")                                                                     \
   X(Scalar, linear_slop, 0.001, 0, 1e3, "m", "Penetration the position correction leaves alone.")                     \
   X(Scalar, erp, 0.2, 0, 1, "", "Share of the penetration beyond the slop removed per step.")                         \
   X(Scalar, cfm, 1e-6, 0, 1e6, "", "Constraint force mixing: softens every constraint row.")                          \
-  X(Scalar, warmstarting_factor, 0.85, 0, 1, "", "Share of the last step's impulses a row starts from.")              \
+  X(Scalar, warmstarting_factor, 0.85, 0, 1, "",                                                                      \
+    "Share of the last step's impulses a world's rows start from where its last sweeps ran out (num_iterations) "     \
+    "before converging to pgs_tolerance; where they converged, they start from all of them.")                         \
   X(Scalar, restitution_threshold, 0.2, 0, 1e6, "m/s", "Approach speed below which contacts do not bounce.")          \
   X(bool, use_warmstarting, true, 0, 0, "", "Rows start from a share of the last step's impulses.")                   \
   X(Scalar, angular_damping, 0.05, 0, kUnbounded, "1/s",                                                              \

@@ -73,14 +73,15 @@ struct StepContext {
   bool profile = false;  // the rows stage times its phases (stage_seconds)
 
   // the step's vectors, in the model's numbering
-  Scalar* qd = nullptr;                // [dof] velocities between the stages of split passes
-  Scalar* q_next = nullptr;            // [coord] coordinates after the step, likewise
-  Scalar* limit_impulse = nullptr;     // [limit cell] warm starts of limit rows
-  Scalar* friction_impulse = nullptr;  // [dof] warm starts of friction-loss rows
-  Scalar* equality_impulse = nullptr;  // [equality][6] warm starts of equality rows
-  Scalar* tendon_impulse = nullptr;    // [tendon][2] warm starts of tendon-limit rows
-  std::uint8_t* diverged = nullptr;    // [articulation]
-  int* factor_failure = nullptr;       // [articulation] dof whose pivot failed, else -1
+  Scalar* qd = nullptr;                   // [dof] velocities between the stages of split passes
+  Scalar* q_next = nullptr;               // [coord] coordinates after the step, likewise
+  Scalar* limit_impulse = nullptr;        // [limit cell] warm starts of limit rows
+  Scalar* friction_impulse = nullptr;     // [dof] warm starts of friction-loss rows
+  Scalar* equality_impulse = nullptr;     // [equality][6] warm starts of equality rows
+  Scalar* tendon_impulse = nullptr;       // [tendon][2] warm starts of tendon-limit rows
+  std::uint8_t* pgs_converged = nullptr;  // [articulation] 1: its last sweeps converged (warm_share)
+  std::uint8_t* diverged = nullptr;       // [articulation]
+  int* factor_failure = nullptr;          // [articulation] dof whose pivot failed, else -1
 };
 
 // where each body and dof sits among the articulations the kernels see

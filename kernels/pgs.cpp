@@ -35,7 +35,7 @@ void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar 
 }
 
 int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
-              const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd) {
+              const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd, bool* converged) {
   // unconstrained step of one row: the impulse that would bring J qd to its target
   auto step = [&](const PgsRow& row) {
     return -(row_velocity(row, J, qd) - row.target + (settings.cfm + row.cfm) * row.lambda) * row.inv_mass;
@@ -82,6 +82,7 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
       second.lambda = new2;
     }
   }
+  if (converged) *converged = !moving;
   return it;
 }
 

@@ -50,8 +50,9 @@ void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar 
 
 // sweeps the rows order[0 .. count) in that order (a friction pair's second row follows its first)
 // inputs:  rows with lambda as the warm start (already applied to qd), the pools
-// outputs: rows[].lambda, qd; returns the sweeps run
+// outputs: rows[].lambda, qd; *converged (if given): whether the sweeps stopped at one that moved no row beyond
+//          the tolerance (false where they ran out); returns the sweeps run
 int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std::vector<Scalar>& J,
-              const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd);
+              const std::vector<Scalar>& MinvJT, const PgsSettings& settings, Scalar* qd, bool* converged = nullptr);
 
 }  // namespace novaphy

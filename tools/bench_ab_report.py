@@ -12,7 +12,7 @@ import statistics
 import sys
 
 SCENES = {0: "chain15", 1: "quadruped, no floor", 2: "quadruped standing", 3: "humanoid.xml, no floor",
-          4: "quadruped standing, pgs_tolerance 1e-5"}
+          4: "quadruped standing, pgs_tolerance 0"}
 
 
 def main(folder):

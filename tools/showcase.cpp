@@ -4,7 +4,8 @@
 // ended in each, the largest difference of NovaPhy's forward dynamics from MuJoCo's at random states (the
 // check of novaphy_validate), and draws a few worlds at a few times into a PNG.
 //   novaphy_showcase [scene.xml] [--worlds N] [--seconds S | --steps N] [--mujoco-worlds N] [--threads N]
-//                    [--float32] [--max-condim N] [--kick A] [--states N] [--picture file.png] [--frames N]
+//                    [--float32] [--max-condim N] [--pgs-tolerance V] [--kick A] [--states N] [--picture file.png]
+//                    [--frames N]
 //                    [--no-progress] [--profile]
 // Each world is the whole file (its floor too), contacts made where shapes touch (margin 0, MuJoCo's
 // default), stepped at the file's timestep from the file's pose with random joint velocities of its own
@@ -60,7 +61,8 @@ struct Options {
   std::string picture = "novaphy_showcase.png";
   int frames = 5;
   bool progress = true;
-  int max_condim = 6;  // the solver's setting of that name
+  int max_condim = 6;                                                 // the solver's setting of that name
+  double pgs_tolerance = SolverFeatherstoneSettings{}.pgs_tolerance;  // the solver's setting of that name
   bool profile = false;
 };
 
@@ -90,6 +92,8 @@ Options parse(int argc, char** argv) {
       o.frames = std::atoi(argv[++k]);
     } else if (arg == "--max-condim" && has_value) {
       o.max_condim = std::atoi(argv[++k]);
+    } else if (arg == "--pgs-tolerance" && has_value) {
+      o.pgs_tolerance = std::atof(argv[++k]);
     } else if (arg == "--float32") {
       o.float32 = true;
     } else if (arg == "--profile") {
@@ -259,6 +263,7 @@ NovaPhyRun run_novaphy(const Model& model, const Robot& robot, const std::vector
   SolverFeatherstoneSettings settings;
   settings.num_threads = o.threads;
   settings.max_condim = o.max_condim;
+  settings.pgs_tolerance = o.pgs_tolerance;
   settings.profile_stages = o.profile;
   SolverFeatherstone solver(model, settings);
   // from the file's first keyframe (its commands held) where it has one, else its pose at rest; the kick on top

@@ -33,10 +33,14 @@ inline V limit_row_target(const V& gap, const RowParams& p, const V& dt) {
   return select<V>(gap >= 0, -gap / dt, static_cast<Element<V>>(p.erp) * select<V>(depth > 0, depth, zero) / dt);
 }
 
-// the impulse a limit or friction-loss row starts from: a share of the last step's
+// the share of its last step's impulses a world's rows start from: all of them where its last sweeps converged
+// (stopped at one that moved no row beyond pgs_tolerance), warmstarting_factor of them where they ran out (an
+// error left by sweeps that ran out, carried whole from step to step, can build up), none without warm starting
 template <typename V>
-inline V row_warm_start(const V& kept, const RowParams& p) {
-  return p.use_warmstarting ? static_cast<Element<V>>(p.warmstarting_factor) * kept : V{};
+inline V warm_share(const Mask<V>& converged, const RowParams& p) {
+  using E = Element<V>;
+  if (!p.use_warmstarting) return V{};
+  return select<V>(converged, splat<V>(E(1)), splat<V>(static_cast<E>(p.warmstarting_factor)));
 }
 
 // the impulse a limit or friction-loss row keeps for the next step: 0 where it was off or is not finite
@@ -287,18 +291,22 @@ inline V contact_normal_target(const V& depth, const V& v_approach, const V& res
   return select<V>(both<Mask<V>>(closing, bounce > target), bounce, target);
 }
 
-// the rows' starting impulses warm [3] (normal, t1, t2): the last step's impulse `previous` [3] (a world
-// vector; 0 for a new contact) along this step's frame d [9], a share of it, never pulling along the normal
+// the rows' starting impulses warm [6] (normal, t1, t2, then torsion about the normal and rolling about t1 and
+// t2): the last step's impulse and spin impulse `previous` [6] (world vectors; 0 for a new contact) along this
+// step's frame d [9], their share (warm_share), never pulling along the normal
 template <typename V>
-inline void contact_warm_start(const V* previous, const V* d, const RowParams& p, V* warm) {
-  const V share = splat<V>(p.use_warmstarting ? static_cast<Element<V>>(p.warmstarting_factor) : 0);
-  for (int e = 0; e < 3; ++e)
-    warm[e] = share * (previous[0] * d[3 * e] + previous[1] * d[3 * e + 1] + previous[2] * d[3 * e + 2]);
+inline void contact_warm_start(const V* previous, const V* d, const V& share, V* warm) {
+  for (int e = 0; e < 6; ++e) {
+    const V* P = previous + (e < 3 ? 0 : 3);
+    const V* axis = d + 3 * (e % 3);
+    warm[e] = share * (P[0] * axis[0] + P[1] * axis[1] + P[2] * axis[2]);
+  }
   warm[0] = select<V>(warm[0] > 0, warm[0], V{});
 }
 
 // the impulse kept for the next step, a world vector P [3] on body b from the rows' impulses lambda [3]
-// and the frame d [9]; 0 where it is not finite
+// and the frame d [9] (the normal and tangent rows' impulse, or the torsional and rolling rows' angular
+// impulse); 0 where it is not finite
 template <typename V>
 inline void contact_impulse_kept(const V* lambda, const V* d, V* P) {
   for (int m = 0; m < 3; ++m) P[m] = lambda[0] * d[m] + lambda[1] * d[3 + m] + lambda[2] * d[6 + m];

@@ -65,7 +65,7 @@ void apply_pair(const V<T>* z1, const V<T>& i1, const M<T>& on1, const V<T>* z2,
 }  // namespace
 
 template <typename T>
-int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>* qd) {
+int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>* qd, M<T>* converged) {
   const int n = rows.dofs;
   const T cfm = static_cast<T>(settings.cfm), s = static_cast<T>(settings.friction_smoothing);
   auto J = [&](int r) { return rows.J + static_cast<size_t>(r) * n; };
@@ -138,10 +138,11 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
     }
     live = moving;
   }
+  if (converged) *converged = ~live;
   return it;
 }
 
-template int batch_pgs_solve(const BatchRows<float>&, const PgsSettings&, Lanes<float>*);
-template int batch_pgs_solve(const BatchRows<double>&, const PgsSettings&, Lanes<double>*);
+template int batch_pgs_solve(const BatchRows<float>&, const PgsSettings&, Lanes<float>*, IntLanes<float>*);
+template int batch_pgs_solve(const BatchRows<double>&, const PgsSettings&, Lanes<double>*, IntLanes<double>*);
 
 }  // namespace novaphy

@@ -53,8 +53,11 @@ inline void lane_tangents(const Lanes<T>* n, Lanes<T>* d) {
 
 // the rows' effective masses, the warm start applied to qd [dof], then the sweeps in row order:
 // the same steps, per lane, as the solver's scalar path (finish_row, apply_impulse, pgs_solve); with a
-// tolerance, each lane stops where pgs_solve would stop it. Returns the sweeps run (the most of any lane)
+// tolerance, each lane stops where pgs_solve would stop it; *converged (if given): -1 in the lanes whose sweeps
+// stopped at one that moved no row beyond the tolerance, 0 where they ran out. Returns the sweeps run (the most
+// of any lane)
 template <typename T>
-int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, Lanes<T>* qd);
+int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, Lanes<T>* qd,
+                    IntLanes<T>* converged = nullptr);
 
 }  // namespace novaphy

@@ -105,10 +105,8 @@ TEST(SoftContacts, BodiesRestAtMujocosDepth) {
   std::filesystem::remove(path);
 }
 
-// torsional (condim 4) and rolling (condim 6) friction as MuJoCo's: a ball spinning on the spot slows as in
-// MuJoCo; a ball rolling with condim 6 slows as in MuJoCo, one of condim 3 rolls on (both on elliptic cones)
-TEST(SoftContacts, TorsionalAndRollingFrictionSlowAsInMujoco) {
-  const std::string path = test::write_temp_file("spin_roll.xml", R"(
+// a ball spinning on the spot (condim 4), one rolling with condim 6 and one with condim 3
+constexpr const char* kSpinAndRoll = R"(
 <mujoco>
   <option timestep="0.002" cone="elliptic"/>
   <worldbody>
@@ -122,7 +120,12 @@ TEST(SoftContacts, TorsionalAndRollingFrictionSlowAsInMujoco) {
   </worldbody>
   <keyframe><key name="go" qpos="0 0 0.1 1 0 0 0  0 1 0.1 1 0 0 0  0 2 0.1 1 0 0 0"
                  qvel="0 0 0 0 0 10  1 0 0 0 10 0  1 0 0 0 10 0"/></keyframe>
-</mujoco>)");
+</mujoco>)";
+
+// torsional (condim 4) and rolling (condim 6) friction as MuJoCo's: a ball spinning on the spot slows as in
+// MuJoCo; a ball rolling with condim 6 slows as in MuJoCo, one of condim 3 rolls on (both on elliptic cones)
+TEST(SoftContacts, TorsionalAndRollingFrictionSlowAsInMujoco) {
+  const std::string path = test::write_temp_file("spin_roll.xml", kSpinAndRoll);
   const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
   const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
   mj_resetDataKeyframe(m.get(), d.get(), 0);
@@ -156,6 +159,55 @@ TEST(SoftContacts, TorsionalAndRollingFrictionSlowAsInMujoco) {
   const int roll6 = import.body_map[mj_name2id(m.get(), mjOBJ_BODY, "roll6")];
   const int roll3 = import.body_map[mj_name2id(m.get(), mjOBJ_BODY, "roll3")];
   EXPECT_NEAR(plain.position(roll6).x(), plain.position(roll3).x(), 1e-9);
+  std::filesystem::remove(path);
+}
+
+// the torsional and rolling rows keep their impulse (contact_spin_impulse: an angular impulse along the rows'
+// axes, none for condim 3) and the next step's rows start from it, spin included, on both routes: a step of no
+// sweeps leaves each contact its warm start, all of the last impulses where the last sweeps converged and
+// warmstarting_factor of them where they ran out
+TEST(SoftContacts, SpinImpulsesAreKeptAndWarmStartTheirRows) {
+  const std::string path = test::write_temp_file("spin_roll_warm.xml", kSpinAndRoll);
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  for (const bool blocks : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.use_batch_kernels = blocks;
+    solver_test::Scene scene(builder, settings);
+    scene.state = scene.model.state("go");
+    scene.run(0.1, 0.002);
+    const Contacts& C = scene.contacts;
+    ASSERT_EQ(C.contact_count, 3);
+    auto spin_of = [&](int c) { return Vec3(Eigen::Map<const Vec3>(&C.contact_spin_impulse[3 * c])); };
+    for (int c = 0; c < C.contact_count; ++c) {
+      const int ball = std::max(C.contact_body_a[c], C.contact_body_b[c]);
+      const Vec3 spin = spin_of(c);
+      if (ball == import.body_map[1]) {  // spinning about the normal (Z): torsion only
+        EXPECT_GT(std::abs(spin.z()), 1e-6);
+        EXPECT_LT(spin.head<2>().norm(), 1e-12 * std::abs(spin.z()));
+      } else if (ball == import.body_map[2]) {  // rolling about Y: a rolling impulse about Y
+        EXPECT_GT(std::abs(spin.y()), 1e-6);
+      } else {
+        EXPECT_EQ(spin, Vec3::Zero()) << "condim 3";
+      }
+    }
+    // the last step's sweeps converged (to pgs_tolerance): a step of none starts from all of its impulses; that
+    // step ran out of sweeps, so the next starts from warmstarting_factor of them
+    scene.solver.settings.num_iterations = 0;
+    for (const Scalar share : {Scalar(1), settings.warmstarting_factor}) {
+      const std::vector<Scalar> impulse = C.contact_impulse, spin = C.contact_spin_impulse;
+      scene.run(0.002, 0.002);
+      // (to rounding: each vector is taken apart along the contact's frame and put together again)
+      auto expect_share = [&](const std::vector<Scalar>& now, const std::vector<Scalar>& last, int c) {
+        const Vec3 a = Eigen::Map<const Vec3>(&now[3 * c]), b = Eigen::Map<const Vec3>(&last[3 * c]);
+        EXPECT_LE((a - share * b).norm(), 1e-12 * b.norm()) << (blocks ? "blocks" : "dense") << ", share " << share;
+      };
+      for (int c = 0; c < C.contact_count; ++c) {
+        expect_share(C.contact_impulse, impulse, c);
+        expect_share(C.contact_spin_impulse, spin, c);
+      }
+    }
+  }
   std::filesystem::remove(path);
 }
 

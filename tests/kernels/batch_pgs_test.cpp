@@ -111,7 +111,8 @@ bool some_absent(int lane, int row) {
   return lane > 2 && lane % 2 == 1 && row == 1;
 }
 
-// with a tolerance, each lane stops after the sweep where the scalar solve of its rows stops
+// with a tolerance, each lane stops after the sweep where the scalar solve of its rows stops, converged where that
+// converged
 template <typename T>
 void expect_lanes_match_the_scalar_solve(double friction_smoothing, double tolerance = 0) {
   std::mt19937 rng(11);
@@ -123,7 +124,8 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
   settings.tolerance = tolerance;
   std::vector<Lanes<T>> qd = p.qd, lambda = p.lambda;
   p.lambda = lambda;
-  const int sweeps = batch_pgs_solve(p.rows(kRows), settings, qd.data());
+  IntLanes<T> converged;
+  const int sweeps = batch_pgs_solve(p.rows(kRows), settings, qd.data(), &converged);
   int most = 0, fewest = settings.iterations;
 
   for (int l = 0; l < kLanes<T>; ++l) {
@@ -160,7 +162,11 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
       order[k] = static_cast<int>(k);
       apply_impulse(rows[k], zp, rows[k].lambda, v.data());
     }
-    const int lane_sweeps = pgs_solve(rows, order.data(), static_cast<int>(rows.size()), Jp, zp, settings, v.data());
+    bool lane_converged = false;
+    const int lane_sweeps =
+        pgs_solve(rows, order.data(), static_cast<int>(rows.size()), Jp, zp, settings, v.data(), &lane_converged);
+    // (with tolerance 0 a sweep's last bits decide it, and the two sum J qd in different orders)
+    if (tolerance > 0) EXPECT_EQ(converged[l] != 0, lane_converged) << "lane " << l;
     most = std::max(most, lane_sweeps);
     fewest = std::min(fewest, lane_sweeps);
 
@@ -225,9 +231,12 @@ void expect_a_fixed_point_ends_the_sweeps() {
   settings.cfm = 1e-6;
   Problem<T> a = start, b = start;
   std::vector<Lanes<T>> qd_a = start.qd, qd_b = start.qd;
-  EXPECT_EQ(batch_pgs_solve(a.rows(kRows), settings, qd_a.data()), 2);
+  IntLanes<T> converged_a, converged_b;
+  EXPECT_EQ(batch_pgs_solve(a.rows(kRows), settings, qd_a.data(), &converged_a), 2);
   settings.iterations = 1;
-  batch_pgs_solve(b.rows(kRows), settings, qd_b.data());
+  batch_pgs_solve(b.rows(kRows), settings, qd_b.data(), &converged_b);
+  EXPECT_FALSE(any_lane<T>(~converged_a));  // the second sweep moved nothing
+  EXPECT_FALSE(any_lane<T>(converged_b));   // the one sweep allowed moved the rows: ran out
   EXPECT_EQ(std::memcmp(qd_a.data(), qd_b.data(), kDofs * sizeof(Lanes<T>)), 0);
   EXPECT_EQ(std::memcmp(a.lambda.data(), b.lambda.data(), kRows * sizeof(Lanes<T>)), 0);
   EXPECT_NE(std::memcmp(qd_a.data(), start.qd.data(), kDofs * sizeof(Lanes<T>)), 0);  // the first sweep did act
@@ -253,9 +262,12 @@ TEST(Pgs, AFixedPointEndsTheSweeps) {
   std::vector<PgsRow> a = start, b = start;
   const std::vector<Scalar> qd = {0.1, -0.2, 0.3};
   std::vector<Scalar> qd_a = qd, qd_b = qd;
-  EXPECT_EQ(pgs_solve(a, order, 2, J, z, settings, qd_a.data()), 2);
+  bool converged_a = false, converged_b = true;
+  EXPECT_EQ(pgs_solve(a, order, 2, J, z, settings, qd_a.data(), &converged_a), 2);
   settings.iterations = 1;
-  pgs_solve(b, order, 2, J, z, settings, qd_b.data());
+  pgs_solve(b, order, 2, J, z, settings, qd_b.data(), &converged_b);
+  EXPECT_TRUE(converged_a);
+  EXPECT_FALSE(converged_b);
   EXPECT_EQ(std::memcmp(qd_a.data(), qd_b.data(), 3 * sizeof(Scalar)), 0);
   for (int r = 0; r < 2; ++r) EXPECT_EQ(a[r].lambda, 0);
   EXPECT_NE(qd_a, qd);

