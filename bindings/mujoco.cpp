@@ -148,6 +148,20 @@ class MjModelFields {
     f_.mesh_vertnum = field<int>("mesh_vertnum", nmesh);
     f_.mesh_vert = field<float>("mesh_vert", attr("nmeshvert").cast<int>(), 3);
     f_.exclude_signature = field<int>("exclude_signature", f_.nexclude);
+    if (f_.nexclude > 0) f_.exclude_body_offset = exclude_body_offset();
+  }
+
+  // how the user's MuJoCo writes an exclusion's bodies into exclude_signature (2.2.2 added 1 to each id, 4.0 does
+  // not): asked of that MuJoCo, which compiles a model excluding bodies 1 and 2
+  static int exclude_body_offset() {
+    const py::object probe = py::module_::import("mujoco").attr("MjModel").attr("from_xml_string")(
+        "<mujoco><worldbody><body name='a'><geom size='1'/></body><body name='b'><geom size='1'/></body>"
+        "</worldbody><contact><exclude body1='a' body2='b'/></contact></mujoco>");
+    const int signature = probe.attr("exclude_signature").cast<py::array_t<int>>().at(0);
+    if (signature != (1 << 16 | 2) && signature != (2 << 16 | 3))
+      fail("this MuJoCo writes the exclusion of bodies 1 and 2 as exclude_signature ", signature,
+           ", which NovaPhy does not read");
+    return (signature >> 16) - 1;
   }
 
   void read_tendons_and_actuators() {

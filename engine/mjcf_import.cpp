@@ -250,7 +250,8 @@ class MjcfImporter {
   // MuJoCo's <exclude> body pairs as pairs of their geoms' shapes
   void add_exclusions() {
     for (int e = 0; e < m_.nexclude; ++e) {
-      const int body1 = (m_.exclude_signature[e] >> 16) - 1, body2 = (m_.exclude_signature[e] & 0xffff) - 1;
+      const int body1 = (m_.exclude_signature[e] >> 16) - m_.exclude_body_offset;
+      const int body2 = (m_.exclude_signature[e] & 0xffff) - m_.exclude_body_offset;
       for (int a = 0; a < m_.ngeom; ++a)
         for (int b = 0; b < m_.ngeom; ++b)
           if (m_.geom_bodyid[a] == body1 && m_.geom_bodyid[b] == body2 && geom_shape_[a] >= 0 && geom_shape_[b] >= 0)

@@ -43,6 +43,8 @@ struct MujocoFields {
   const int *mesh_vertadr = nullptr, *mesh_vertnum = nullptr;
   const float *mesh_vert = nullptr;
   const int *exclude_signature = nullptr;
+  // exclude_signature holds (body1 + offset) << 16 | (body2 + offset): 1 in 2.2.2, 0 in today's MuJoCo
+  int exclude_body_offset = 1;
   const int *tendon_adr = nullptr, *tendon_num = nullptr;
   const MjByte *tendon_limited = nullptr;
   const double *tendon_range = nullptr, *tendon_stiffness = nullptr, *tendon_damping = nullptr,

@@ -1,8 +1,8 @@
 """Every robot of the installed mujoco-menagerie that is on disk (MENAGERIE_ROOT, or the package's cache): its scene
 loads through both routes (today's MuJoCo's compile with add_mujoco_model, the file with add_mjcf), its contact-free
 dynamics match today's MuJoCo to 1e-9 with actuators on, and NovaPhy steps it 1 s from its keyframe without
-diverging; Go1's two routes step bit for bit alike (the Panda's do not: the two MuJoCo compilers differ in the last
-digits of its inertias, docs/mjcf.md). A robot not on disk is skipped, never fetched; without the PyPI packages the module is skipped."""
+diverging; Go1's two routes step bit for bit alike (the Panda's do not: the two MuJoCo compilers differ in its
+inertias, mesh frames and mesh vertices, docs/mjcf.md). A robot not on disk is skipped, never fetched; without the PyPI packages the module is skipped."""
 
 import pytest
 

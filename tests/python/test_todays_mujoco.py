@@ -103,3 +103,23 @@ def test_a_joint_force_range_narrows_its_actuators_force_as_add_mjcf_does(tmp_pa
     for model in (imported.finalize(), read.finalize()):
         # [-3, 2] over gear 2 within the actuator's own [-1, 5]
         assert (model.actuator_force_lower[0], model.actuator_force_upper[0]) == (-1.0, 1.0)
+
+
+def test_an_exclusion_keeps_the_same_bodies_apart_on_both_routes(tmp_path):
+    # today's MuJoCo writes an exclusion's body ids into exclude_signature as they are, 2.2.2 one higher: both
+    # routes exclude the shapes of the second and third bodies (not the first's), and those two never touch
+    xml = """<mujoco><worldbody>
+        <body name="first" pos="3 0 0"><freejoint/><geom size="0.1"/></body>
+        <body name="second"><freejoint/><geom size="0.1"/></body>
+        <body name="third" pos="0.15 0 0"><freejoint/><geom size="0.1"/></body>
+        </worldbody><contact><exclude body1="second" body2="third"/></contact></mujoco>"""
+    (tmp_path / "excluded.xml").write_text(xml)
+    imported, read = novaphy.ModelBuilder(), novaphy.ModelBuilder()
+    imported.add_mujoco_model(mujoco.MjModel.from_xml_string(xml))
+    read.add_mjcf(str(tmp_path / "excluded.xml"))
+    for model in (imported.finalize(), read.finalize()):
+        assert [list(pair) for pair in model.exclude_shape] == [[1, 2]]
+        pipeline = novaphy.CollisionPipeline(model)
+        contacts = pipeline.contacts()
+        pipeline.collide(model.state(), contacts)
+        assert contacts.contact_count == 0
