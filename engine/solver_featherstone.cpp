@@ -751,6 +751,7 @@ void SolverFeatherstone::guard(const StepContext& step) {
       data_.q_next[k] = keep ? step.in->joint_q[k] : model_.joint_q0[k];
     for (int k = art.qd_begin(); k < art.qd_begin() + art.dof_count(); ++k)
       data_.qd[k] = keep ? step.in->joint_qd[k] : 0;
+    data_.pgs_converged[a] = 0;  // its next rows start from warmstarting_factor of the impulses this step left
     dense_->store(a, step);
   }
   if (bad_input) raise_bad_input(step);
