@@ -8,8 +8,9 @@ alternate the engines and the table gives medians of robot-steps/s (worlds x ste
 - today's MuJoCo: one MjData per world, mj_step over them in a pool of one thread a core (mj_step releases the
   GIL; as fast here as mujoco.rollout, measured side by side);
 - MuJoCo 2.2.2: novaphy_showcase's own MuJoCo loop (one mjData per world in an OpenMP loop), on the same file.
-What differs: each MuJoCo uses its own solver (today's: Newton, 2.2.2: its default), NovaPhy its PGS; margins,
-solref/solimp, condim, timestep and iterations are the file's in all three.
+What differs: each MuJoCo uses its own solver (today's: Newton, 2.2.2: its default) with the file's iterations and
+tolerance, NovaPhy its PGS with its defaults (at most 20 sweeps, stopping at pgs_tolerance 3e-5 m/s); margins,
+solref/solimp, condim and timestep are the file's in all three.
 
     PYTHONPATH=build/python build/venv/bin/python bench/todays_mujoco.py [--worlds 1024] [--seconds 1] \
         [--rounds 3] [--out bench/results/todays_mujoco.md] [scene.xml ...]
