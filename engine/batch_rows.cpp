@@ -109,10 +109,10 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const StepContext& step, c
   }
 }
 
-// slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, depth,
-// mu, restitution, the previous impulse, its softness, its condim and torsional and rolling friction), its links (b, a)
-// per lane; returns the lanes that have one, and in `uniform` the lane whose links every other such lane shares (-2:
-// none does)
+// slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, depth, mu,
+// restitution, the previous impulse and spin impulse, its softness, its condim and torsional and rolling friction),
+// its links (b, a) per lane; returns the lanes that have one, and in `uniform` the lane whose links every other such
+// lane shares (-2: none does)
 template <typename T>
 IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* listed, const Lanes<T>* o,
                           const StepContext& step, RowWork<T>& R, V<T>* n, V<T>* p, V<T>* in, int (*link)[2],
@@ -143,14 +143,11 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     in[1][l] = static_cast<T>(f.mu);
     in[2][l] = static_cast<T>(contact_restitution(ma, mb));
     if (const Scalar* P = C.previous(c))
-      for (int m = 0; m < 3; ++m) {
-        in[3 + m][l] = static_cast<T>(P[m]);
-        in[14 + m][l] = static_cast<T>(P[3 + m]);
-      }
-    for (int m = 0; m < 5; ++m) in[6 + m][l] = static_cast<T>(softness[m]);
-    in[11][l] = static_cast<T>(f.condim);
-    in[12][l] = static_cast<T>(f.torsion);
-    in[13][l] = static_cast<T>(f.rolling);
+      for (int m = 0; m < 6; ++m) in[3 + m][l] = static_cast<T>(P[m]);
+    for (int m = 0; m < 5; ++m) in[9 + m][l] = static_cast<T>(softness[m]);
+    in[14][l] = static_cast<T>(f.condim);
+    in[15][l] = static_cast<T>(f.torsion);
+    in[16][l] = static_cast<T>(f.rolling);
     // the links holding the bodies in this articulation (-1: a static body)
     const ArticulationIndex& index = *lists.index;
     const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
@@ -208,8 +205,8 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
                       const StepContext& step, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
   const int nv = topo.dof_count;
-  // depth, mu, restitution, previous impulse [3], softness [5], condim, torsional and rolling friction, previous
-  // spin impulse [3]
+  // depth, mu, restitution, previous impulse and spin impulse [6], softness [5], condim, torsional and rolling
+  // friction
   V<T> n[3] = {}, p[3] = {}, in[17] = {};
   int link[kLanes<T>][2];
   int uniform;
@@ -217,16 +214,15 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   const RowSpan span = contact_paths(topo, on, link, uniform, R);
   V<T>* d = &R.frame[9 * t];
   contact_frame<T>(n, d);
-  const V<T> previous[6] = {in[3], in[4], in[5], in[14], in[15], in[16]};
   V<T> warm[6];
-  contact_warm_start(previous, d, R.warm_share, warm);
+  contact_warm_start(in + 3, d, R.warm_share, warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
   for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);
   const int first = R.rows, dims = step.lists.dims;
   for (int e = 0; e < dims; ++e) {
     // the normal and sliding rows in every lane of `on`; the torsional and rolling ones where its condim has them
-    const IntLanes<T> has = e < 3 ? on : on & (in[11] >= T(e == 3 ? 4 : 6));
+    const IntLanes<T> has = e < 3 ? on : on & (in[14] >= T(e == 3 ? 4 : 6));
     const RowKind kind = e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
     const int r = add_row(R, kind, has, V<T>{}, warm[e]);
     V<T>* J = R.J_row(r);
@@ -252,14 +248,14 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   for (int e = 0; e < dims; ++e)
     for (int j = 0; j < nv; ++j) v[e] += R.J_row(first + e)[j] * R.qd_in[j];
   const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
-  const auto soft = in[6] >= 0;
-  R.target[first] = select<V<T>>(soft, soft_normal_target(in[0], v[0], in[8], in[9], in[10], dt),
+  const auto soft = in[9] >= 0;
+  R.target[first] = select<V<T>>(soft, soft_normal_target(in[0], v[0], in[11], in[12], in[13], dt),
                                  contact_normal_target(in[0], v[0], in[2], step.rows, dt));
-  R.cfm[first] = select<V<T>>(soft, in[6], V<T>{});
+  R.cfm[first] = select<V<T>>(soft, in[9], V<T>{});
   for (int e = 1; e < dims; ++e) {
-    const V<T> mu = in[e < 3 ? 1 : e == 3 ? 12 : 13];
-    R.target[first + e] = select<V<T>>(soft, soft_friction_target(v[e], in[8], dt), V<T>{});
-    R.cfm[first + e] = select<V<T>>(soft, e < 3 ? in[7] : soft_spin_cfm(in[7], in[1], mu), V<T>{});
+    const V<T> mu = in[e < 3 ? 1 : e == 3 ? 15 : 16];
+    R.target[first + e] = select<V<T>>(soft, soft_friction_target(v[e], in[11], dt), V<T>{});
+    R.cfm[first + e] = select<V<T>>(soft, e < 3 ? in[10] : soft_spin_cfm(in[10], in[1], mu), V<T>{});
     R.mu[first + e] = mu;
   }
 }
