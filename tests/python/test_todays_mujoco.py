@@ -123,3 +123,22 @@ def test_an_exclusion_keeps_the_same_bodies_apart_on_both_routes(tmp_path):
         contacts = pipeline.contacts()
         pipeline.collide(model.state(), contacts)
         assert contacts.contact_count == 0
+
+
+def test_a_mujoco_that_writes_exclusions_another_way_is_named(monkeypatch):
+    m = mujoco.MjModel.from_xml_string(
+        """<mujoco><worldbody><body name="a"><freejoint/><geom size="0.1"/></body>
+        <body name="b" pos="1 0 0"><freejoint/><geom size="0.1"/></body></worldbody>
+        <contact><exclude body1="a" body2="b"/></contact></mujoco>"""
+    )
+
+    class Probe:  # what the binding's probe model reads as exclude_signature
+        exclude_signature = np.array([7], dtype=np.int32)
+
+        @staticmethod
+        def from_xml_string(xml):
+            return Probe
+
+    monkeypatch.setattr(mujoco, "MjModel", Probe)
+    with pytest.raises(ValueError, match="writes the exclusion of bodies 1 and 2 as exclude_signature 7"):
+        novaphy.ModelBuilder().add_mujoco_model(m)
