@@ -367,6 +367,7 @@ std::vector<ModelBuilder::JointRecord> ModelBuilder::articulated_joints(int& art
     if (joint.articulation >= 0) continue;
     joint.articulation = joint.parent < 0 ? articulation_count++ : joints[body_joint_[joint.parent]].articulation;
   }
+  join_tendon_articulations(joints, articulation_count);
   for (int b = 0; b < body_count(); ++b) {
     if (body_joint_[b] >= 0) continue;
     joints.push_back(free_joint(b));

@@ -155,8 +155,10 @@ class ModelBuilder {
                 Scalar force_lower = -std::numeric_limits<Scalar>::infinity(),
                 Scalar force_upper = std::numeric_limits<Scalar>::infinity(), const std::string& name = "");
 
-  // a fixed tendon (model.h): length = sum coefs[i] q(joints[i]) over Revolute or Prismatic joints of one
-  // articulation, with a spring, a damper (both taken explicitly) and limits (rows of the step, as a joint's)
+  // a fixed tendon (model.h): length = sum coefs[i] q(joints[i]) over Revolute or Prismatic joints, with a
+  // spring, a damper (both taken explicitly) and limits (rows of the step, as a joint's). Its joints' articulations
+  // become one at finalize where they are of fixed base and one after another (a gripper's fingers hanging from a
+  // static palm); articulations given by add_articulation and floating ones are not joined (an error)
   int add_tendon(const std::vector<int>& joints, const std::vector<Scalar>& coefs, const TendonOptions& options = {});
   // an actuator on tendon `tendon`: add_actuator's force with the tendon's length and velocity in place of a
   // joint's, pulling along the tendon; taken explicitly
@@ -249,6 +251,9 @@ class ModelBuilder {
   // finalize() in stages, in this order:
   // the joints with their articulations assigned, an implicit Free joint appended per unjointed body
   std::vector<JointRecord> articulated_joints(int& articulation_count) const;
+  // joins the implicit articulations of fixed base that a fixed tendon couples into one (a forest: a gripper's
+  // fingers hanging from a static palm); errors name the tendon where it couples others
+  void join_tendon_articulations(std::vector<JointRecord>& joints, int& articulation_count) const;
   // the Model's joint table, coordinate and dof starts and articulation starts
   void lay_out_joints(const std::vector<JointRecord>& joints, Model& model) const;
   // one joint's per-dof parameters and its q0 / q_ref coordinates (coordinates from q, dofs from qd)

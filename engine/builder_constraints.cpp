@@ -1,6 +1,7 @@
 // ModelBuilder's fixed tendons, the actuators on them and equality constraints (model.h).
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "engine/builder.h"
 #include "engine/builder_checks.h"
@@ -35,6 +36,58 @@ int ModelBuilder::add_tendon_actuator(int tendon, const ActuatorOptions& options
   return actuator_count() - 1;
 }
 
+void ModelBuilder::join_tendon_articulations(std::vector<JointRecord>& joints, int& articulation_count) const {
+  // union-find over articulations, each group named by its smallest articulation
+  std::vector<int> root(articulation_count);
+  std::iota(root.begin(), root.end(), 0);
+  const auto find = [&root](int a) {
+    while (root[a] != a) a = root[a] = root[root[a]];
+    return a;
+  };
+  std::vector<char> floating(articulation_count, 0);
+  for (const JointRecord& joint : joints) floating[joint.articulation] |= joint.type == JointType::Free;
+  std::vector<int> joined_by(articulation_count, -1);  // by a group's root: the last tendon that joined it
+  bool joined = false;
+  for (int t = 0; t < tendon_count(); ++t) {
+    const TendonRecord& tendon = tendons_[t];
+    const int j0 = tendon.joints[0];
+    for (const int j : tendon.joints) {
+      const int a = find(joints[j0].articulation), b = find(joints[j].articulation);
+      if (a == b) continue;
+      const auto refuse = [&](const char* why) {
+        fail(label("tendon", t, tendon.options.name), ": its joints ", j0, " and ", j,
+             " are in different articulations, ", why);
+      };
+      if (std::min(a, b) < articulation_count_) refuse("one given by add_articulation");
+      if (floating[a] || floating[b]) refuse("one of them floating (a tendon joins articulations of fixed base only)");
+      root[std::max(a, b)] = std::min(a, b);
+      joined_by[std::min(a, b)] = t;
+      joined = true;
+    }
+  }
+  if (!joined) return;
+  // number the groups in order; a joined group must be one run of joints
+  std::vector<int> id(articulation_count, -1);
+  int count = 0;
+  for (int a = 0; a < articulation_count; ++a)
+    if (find(a) == a) id[a] = count++;
+  std::vector<char> ended(count, 0);
+  int previous = -1;
+  for (JointRecord& joint : joints) {
+    const int group = find(joint.articulation);
+    joint.articulation = id[group];
+    if (joint.articulation == previous) continue;
+    if (previous >= 0) ended[previous] = 1;
+    if (ended[joint.articulation] && joined_by[group] >= 0) {
+      const int t = joined_by[group];
+      fail(label("tendon", t, tendons_[t].options.name),
+           ": joins articulations whose joints are not one after another (add each one's joints after the other's)");
+    }
+    previous = joint.articulation;
+  }
+  articulation_count = count;
+}
+
 void ModelBuilder::lay_out_tendons(Model& model) const {
   model.tendon_start.assign(1, 0);
   for (const TendonRecord& tendon : tendons_) {
@@ -43,8 +96,6 @@ void ModelBuilder::lay_out_tendons(Model& model) const {
     Scalar length = 0;
     for (size_t i = 0; i < tendon.joints.size(); ++i) {
       const int j = tendon.joints[i];
-      if (model.joint_articulation[j] != model.joint_articulation[tendon.joints[0]])
-        fail(item, ": its joints ", tendon.joints[0], " and ", j, " are in different articulations (one only)");
       model.tendon_coord.push_back(model.joint_q_start[j]);
       model.tendon_dof.push_back(model.joint_qd_start[j]);
       model.tendon_coef.push_back(tendon.coefs[i]);

@@ -13,21 +13,22 @@ import mujoco
 import mujoco_menagerie
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests", "python"))
-from mujoco_checks import menagerie_path, menagerie_status  # noqa: E402
+from mujoco_checks import menagerie_entries, menagerie_path, menagerie_status  # noqa: E402
 
 
-def row(name):
+def row(name, entry):
+    robot = mujoco_menagerie.get(name)
+    label = name if entry == robot.default_scene else f"{name} ({entry})"
     path = menagerie_path(name)
     if path is None:
-        return f"| {name} | not on disk here | | | | | |"
-    robot = mujoco_menagerie.get(name)
-    s = menagerie_status(name, path, robot.entry(robot.default_scene))
+        return f"| {label} | not on disk here | | | | | |"
+    s = menagerie_status(name, path, robot.entry(entry))
     mjcf = "loads" if s["mjcf"] == "loads" else s["mjcf"].replace("|", "/")
     steps = "finite" if s["finite"] else "diverges"
     notes = "; ".join(w.replace("novaphy: ", "") for w in s["warnings"]) or "nothing left out"
     bits = "yes" if s["same_bits"] else "no"
     return (
-        f"| {name} | loads | {mjcf} | {bits} | {s['dynamics']:.1e} | {steps}, {s['qpos_difference_1s']:.2g} | {notes} |"
+        f"| {label} | loads | {mjcf} | {bits} | {s['dynamics']:.1e} | {steps}, {s['qpos_difference_1s']:.2g} | {notes} |"
     )
 
 
@@ -43,12 +44,13 @@ def main():
     print("largest relative difference of contact-free forward dynamics")
     print("against today's MuJoCo at random states with actuators on, one second from the first keyframe (NovaPhy")
     print("finite or not, and the largest difference of its qpos from today's MuJoCo's after it, contacts on: the")
-    print("solvers differ, see docs/step.md), and what the import reports as not modelled.")
+    print("solvers differ, see docs/step.md), and what the import reports as not modelled. A robot's default scene is")
+    print("checked, and its hand on its own where Menagerie has one (rows named \"robot (hand)\").")
     print()
     print("| robot | from_mujoco | add_mjcf | same bits | dynamics | 1 s from keyframe | not modelled |")
     print("|---|---|---|---|---|---|---|")
-    for name in mujoco_menagerie.names():
-        print(row(name))
+    for name, entry in menagerie_entries():
+        print(row(name, entry))
 
 
 if __name__ == "__main__":

@@ -1,11 +1,12 @@
 // Fixed tendons (model.h, engine/parts/tendon.h): springs, dampers and actuators on tendons against MuJoCo on
-// the same MJCF, their limits as rows of the step, each world of a batch as it steps alone, and bad input.
+// the same MJCF, a tendon joining the articulations of a gripper's fingers, and the joins refused.
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <filesystem>
 #include <random>
 
+#include "engine/builder.h"
 #include "engine/dynamics.h"
 #include "engine/mjcf_import.h"
 #include "engine/solver_featherstone.h"
@@ -73,6 +74,127 @@ TEST(Tendons, SpringsDampersAndActuatorsMatchMujocosForwardDynamics) {
   EXPECT_LT(worst.qdd_aba, 1e-9);
   EXPECT_LT(worst.qdd_batched, 1e-9);
   std::filesystem::remove(path);
+}
+
+// a parallel gripper as Menagerie's Franka hand: a static palm, two fingers on slides (two articulations until
+// their tendon joins them), the second held to the first by a joint equality, a servo on the tendon whose
+// target (0.04) lies past the tendon's range (0.03)
+constexpr const char* kGripper = R"(
+<mujoco model="gripper">
+  <compiler autolimits="true"/>
+  <option gravity="0 0 -9.81" timestep="0.002"/>
+  <worldbody>
+    <body name="palm" pos="0 0 0.5">
+      <geom type="box" size="0.03 0.06 0.02" mass="0.7"/>
+      <body name="left" pos="0 0.01 -0.06">
+        <joint name="left" type="slide" axis="0 1 0" range="0 0.04" damping="1" armature="0.1"/>
+        <geom type="box" size="0.01 0.005 0.03" mass="0.02"/>
+      </body>
+      <body name="right" pos="0 -0.01 -0.06" quat="0 0 0 1">
+        <joint name="right" type="slide" axis="0 1 0" range="0 0.04" damping="1" armature="0.1"/>
+        <geom type="box" size="0.01 0.005 0.03" mass="0.03"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="split" range="0 0.03" stiffness="2" damping="0.3">
+      <joint joint="left" coef="0.5"/>
+      <joint joint="right" coef="0.5"/>
+    </fixed>
+  </tendon>
+  <equality><joint joint1="left" joint2="right" solref="0.005 1"/></equality>
+  <actuator>
+    <general name="grip" tendon="split" ctrlrange="0 255" gainprm="0.01568627451" biastype="affine"
+             biasprm="0 -100 -10" forcerange="-100 100"/>
+  </actuator>
+</mujoco>)";
+
+TEST(Tendons, ATendonJoinsAGrippersFingersIntoOneArticulationAndMovesThemAsMujoco) {
+  const std::string path = test::write_temp_file("gripper.xml", kGripper);
+  MujocoOracle oracle(path);
+  const Model& model = oracle.model();
+  ASSERT_EQ(model.articulation_count, 1);
+  EXPECT_TRUE(oracle.import().warnings.empty()) << oracle.import().warnings[0];
+  std::mt19937 rng(3);
+  OracleErrors worst;
+  for (int k = 0; k < 20; ++k) worst.accumulate(oracle.compare_random_state(rng));
+  EXPECT_LT(worst.max(), 1e-9);
+
+  // the servo opens the fingers against the tendon's range, on both routes, as MuJoCo 2.2.2 does
+  mjModel* m = load_mujoco_model(path);
+  mjData* d = mj_makeData(m);
+  d->ctrl[0] = 255;
+  for (int k = 0; k < 500; ++k) mj_step(m, d);
+  Control control = model.control();
+  control.actuator_ctrl[0] = 255;
+  for (const bool blocks : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.use_batch_kernels = blocks;
+    const State s = test::run_steps(model, control, 500, 0.002, settings);
+    const std::string route = blocks ? "blocks" : "dense";
+    EXPECT_NEAR(0.5 * (s.joint_q[0] + s.joint_q[1]), 0.03, 2e-3) << route;
+    for (int k = 0; k < 2; ++k) EXPECT_NEAR(s.joint_q[k], d->qpos[k], 1e-3) << route << " finger " << k;
+  }
+  mj_deleteData(d);
+  mj_deleteModel(m);
+  std::filesystem::remove(path);
+}
+
+TEST(Tendons, EachWorldOfABatchOfGrippersStepsAsItDoesAlone) {
+  // the joined articulation (two roots) in the SIMD blocks: 7 worlds, each with its own command
+  constexpr int kWorlds = 7;
+  const std::string path = test::write_temp_file("gripper.xml", kGripper);
+  ModelBuilder gripper;
+  gripper.add_mjcf(path);
+  ModelBuilder batch(gripper.gravity());
+  batch.replicate(gripper, kWorlds);
+  const Model many = batch.finalize(), alone = gripper.finalize();
+  ASSERT_EQ(many.articulation_count, kWorlds);
+  Control control = many.control();
+  for (int w = 0; w < kWorlds; ++w) control.actuator_ctrl[w] = 40 * w;
+  const State stepped = test::run_steps(many, control, 300, 0.002);
+  for (int w = 0; w < kWorlds; ++w) {
+    Control c = alone.control();
+    c.actuator_ctrl[0] = 40 * w;
+    const State s = test::run_steps(alone, c, 300, 0.002);
+    ASSERT_EQ(std::memcmp(&stepped.joint_q[2 * w], s.joint_q.data(), 2 * sizeof(Scalar)), 0) << "world " << w;
+    ASSERT_EQ(std::memcmp(&stepped.joint_qd[2 * w], s.joint_qd.data(), 2 * sizeof(Scalar)), 0) << "world " << w;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(Tendons, ArticulationsATendonCannotJoinAreNamed) {
+  const RigidBody link = RigidBody::from_box(1, Vec3(0.1, 0.1, 0.1));
+  JointOptions hinge;
+  hinge.dof.axis = Vec3::UnitZ();
+  {  // a floating robot's joint and a fixed one's
+    ModelBuilder builder;
+    const int base = builder.add_body(link);
+    builder.add_joint_free(-1, base);
+    const int arm = builder.add_joint_revolute(base, builder.add_body(link), hinge);
+    const int post = builder.add_joint_revolute(-1, builder.add_body(link), hinge);
+    builder.add_tendon({arm, post}, {1, 1}, {.name = "reach"});
+    EXPECT_NOVAPHY_ERROR(builder.finalize(),
+                         "tendon 0 ('reach'): its joints 1 and 2 are in different articulations, one of them "
+                         "floating (a tendon joins articulations of fixed base only)");
+  }
+  {  // an articulation given by add_articulation
+    ModelBuilder builder;
+    const int a = builder.add_joint_revolute(-1, builder.add_body(link), hinge);
+    const int b = builder.add_joint_revolute(-1, builder.add_body(link), hinge);
+    builder.add_articulation({a});
+    builder.add_tendon({a, b}, {1, -1});
+    EXPECT_NOVAPHY_ERROR(builder.finalize(),
+                         "tendon 0: its joints 0 and 1 are in different articulations, one given by add_articulation");
+  }
+  {  // two articulations with a third between them in joint order
+    ModelBuilder builder;
+    int joints[3];
+    for (int& j : joints) j = builder.add_joint_revolute(-1, builder.add_body(link), hinge);
+    builder.add_tendon({joints[0], joints[2]}, {1, 1}, {.name = "around"});
+    EXPECT_NOVAPHY_ERROR(builder.finalize(),
+                         "tendon 0 ('around'): joins articulations whose joints are not one after another");
+  }
 }
 
 }  // namespace

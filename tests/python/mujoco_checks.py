@@ -97,6 +97,19 @@ def menagerie_path(name):
     return cache.model_path(robot) if cache.is_cached(robot) else None
 
 
+def menagerie_entries():
+    """(robot, entry) of every Menagerie robot's default scene, and of its hand where it has one on its own"""
+    import mujoco_menagerie
+
+    entries = []
+    for name in mujoco_menagerie.names():
+        robot = mujoco_menagerie.get(name)
+        entries.append((name, robot.default_scene))
+        if "hand" in robot.entry_names:
+            entries.append((name, "hand"))
+    return entries
+
+
 def one_second_from_keyframe(m, model, imported):
     """NovaPhy and today's MuJoCo each step 1 s from the model's first keyframe (qpos0 without one), commands
     held: NovaPhy's state is finite, and the largest difference of their joint coordinates (MuJoCo's qpos) after it"""

@@ -2,7 +2,9 @@
 loads through both routes (today's MuJoCo's compile with add_mujoco_model, the file with add_mjcf), its contact-free
 dynamics match today's MuJoCo to 1e-9 with actuators on, and NovaPhy steps it 1 s from its keyframe without
 diverging; Go1's two routes step bit for bit alike (the Panda's do not: the two MuJoCo compilers differ in its
-inertias, mesh frames and mesh vertices, docs/mjcf.md). A robot not on disk is skipped, never fetched; without the PyPI packages the module is skipped."""
+inertias, mesh frames and mesh vertices, docs/mjcf.md). A robot's hand on its own (an entry named "hand", as the
+Franka gripper) is checked as well. A robot not on disk is skipped, never fetched; without the PyPI packages the
+module is skipped."""
 
 import pytest
 
@@ -11,17 +13,15 @@ mujoco_menagerie = pytest.importorskip(
     "mujoco_menagerie", reason="PyPI's mujoco-menagerie is not installed for this interpreter (tools/setup.sh)"
 )
 
-from mujoco_checks import menagerie_path, menagerie_status  # noqa: E402
+from mujoco_checks import menagerie_entries, menagerie_path, menagerie_status  # noqa: E402
 
 
-@pytest.mark.parametrize("name", mujoco_menagerie.names())
-def test_menagerie_robot(name):
+@pytest.mark.parametrize("name, entry", menagerie_entries(), ids=lambda x: x)
+def test_menagerie_robot(name, entry):
     path = menagerie_path(name)
     if path is None:
         pytest.skip(f"{name} is not on disk (set MENAGERIE_ROOT, or run `mujoco-menagerie` to fetch it)")
-    robot = mujoco_menagerie.get(name)
-    entry = robot.entry(robot.default_scene)
-    status = menagerie_status(name, path, entry)
+    status = menagerie_status(name, path, mujoco_menagerie.get(name).entry(entry))
     assert status["mjcf"] == "loads"
     assert status["dynamics"] < 1e-9
     assert status["finite"]
