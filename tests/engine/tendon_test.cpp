@@ -76,42 +76,11 @@ TEST(Tendons, SpringsDampersAndActuatorsMatchMujocosForwardDynamics) {
   std::filesystem::remove(path);
 }
 
-// a parallel gripper as Menagerie's Franka hand: a static palm, two fingers on slides (two articulations until
-// their tendon joins them), the second held to the first by a joint equality, a servo on the tendon whose
-// target (0.04) lies past the tendon's range (0.03)
-constexpr const char* kGripper = R"(
-<mujoco model="gripper">
-  <compiler autolimits="true"/>
-  <option gravity="0 0 -9.81" timestep="0.002"/>
-  <worldbody>
-    <body name="palm" pos="0 0 0.5">
-      <geom type="box" size="0.03 0.06 0.02" mass="0.7"/>
-      <body name="left" pos="0 0.01 -0.06">
-        <joint name="left" type="slide" axis="0 1 0" range="0 0.04" damping="1" armature="0.1"/>
-        <geom type="box" size="0.01 0.005 0.03" mass="0.02"/>
-      </body>
-      <body name="right" pos="0 -0.01 -0.06" quat="0 0 0 1">
-        <joint name="right" type="slide" axis="0 1 0" range="0 0.04" damping="1" armature="0.1"/>
-        <geom type="box" size="0.01 0.005 0.03" mass="0.03"/>
-      </body>
-    </body>
-  </worldbody>
-  <tendon>
-    <fixed name="split" range="0 0.03" stiffness="2" damping="0.3">
-      <joint joint="left" coef="0.5"/>
-      <joint joint="right" coef="0.5"/>
-    </fixed>
-  </tendon>
-  <equality><joint joint1="left" joint2="right" solref="0.005 1"/></equality>
-  <actuator>
-    <general name="grip" tendon="split" ctrlrange="0 255" gainprm="0.01568627451" biastype="affine"
-             biasprm="0 -100 -10" forcerange="-100 100"/>
-  </actuator>
-</mujoco>)";
+// a parallel gripper as Menagerie's Franka hand (tests/python/models/gripper.xml)
+const std::string kGripper = NOVAPHY_TEST_MODEL_DIR "/gripper.xml";
 
 TEST(Tendons, ATendonJoinsAGrippersFingersIntoOneArticulationAndMovesThemAsMujoco) {
-  const std::string path = test::write_temp_file("gripper.xml", kGripper);
-  MujocoOracle oracle(path);
+  MujocoOracle oracle(kGripper);
   const Model& model = oracle.model();
   ASSERT_EQ(model.articulation_count, 1);
   EXPECT_TRUE(oracle.import().warnings.empty()) << oracle.import().warnings[0];
@@ -121,7 +90,7 @@ TEST(Tendons, ATendonJoinsAGrippersFingersIntoOneArticulationAndMovesThemAsMujoc
   EXPECT_LT(worst.max(), 1e-9);
 
   // the servo opens the fingers against the tendon's range, on both routes, as MuJoCo 2.2.2 does
-  mjModel* m = load_mujoco_model(path);
+  mjModel* m = load_mujoco_model(kGripper);
   mjData* d = mj_makeData(m);
   d->ctrl[0] = 255;
   for (int k = 0; k < 500; ++k) mj_step(m, d);
@@ -137,15 +106,13 @@ TEST(Tendons, ATendonJoinsAGrippersFingersIntoOneArticulationAndMovesThemAsMujoc
   }
   mj_deleteData(d);
   mj_deleteModel(m);
-  std::filesystem::remove(path);
 }
 
 TEST(Tendons, EachWorldOfABatchOfGrippersStepsAsItDoesAlone) {
   // the joined articulation (two roots) in the SIMD blocks: 7 worlds, each with its own command
   constexpr int kWorlds = 7;
-  const std::string path = test::write_temp_file("gripper.xml", kGripper);
   ModelBuilder gripper;
-  gripper.add_mjcf(path);
+  gripper.add_mjcf(kGripper);
   ModelBuilder batch(gripper.gravity());
   batch.replicate(gripper, kWorlds);
   const Model many = batch.finalize(), alone = gripper.finalize();
@@ -160,7 +127,6 @@ TEST(Tendons, EachWorldOfABatchOfGrippersStepsAsItDoesAlone) {
     ASSERT_EQ(std::memcmp(&stepped.joint_q[2 * w], s.joint_q.data(), 2 * sizeof(Scalar)), 0) << "world " << w;
     ASSERT_EQ(std::memcmp(&stepped.joint_qd[2 * w], s.joint_qd.data(), 2 * sizeof(Scalar)), 0) << "world " << w;
   }
-  std::filesystem::remove(path);
 }
 
 TEST(Tendons, ArticulationsATendonCannotJoinAreNamed) {

@@ -23,6 +23,7 @@ FILES = [
     os.path.join(SCENES, "quadruped.xml"),
     os.path.join(MODELS, "arm.xml"),
     os.path.join(MODELS, "hand.xml"),
+    os.path.join(MODELS, "gripper.xml"),
 ]
 
 
