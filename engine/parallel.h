@@ -7,34 +7,46 @@
 
 namespace novaphy {
 
-// f(i) for i in [0, count) on `threads` threads, then done() once on each thread. The first seven eighths
-// of i go by a static schedule (thread t runs their t-th run: the same i, and their data in its caches,
-// at every call); the last eighth is dealt out a few at a time to whichever thread is free, so that a
-// thread the machine slows down does not keep the others waiting at the end. f must not depend on which
-// thread runs i. One thread runs the loop without a parallel region (one costs more than a short loop),
+// run(begin, end) over runs of i covering [0, count) on `threads` threads, then done() once on each thread. The
+// first seven eighths of i go as one run a thread (thread t runs the t-th: the same i, and their data in its
+// caches, at every call); the last eighth is dealt out a few at a time to whichever thread is free, so that a
+// thread the machine slows down does not keep the others waiting at the end. run must not depend on which
+// thread runs it. One thread runs [0, count) without a parallel region (one costs more than a short loop),
 // unless this runs inside another region, where only a region of its own numbers its thread 0,
 // which per-thread scratch is indexed by. Each thread makes a Scope before its share and destroys it after
-// done() (a mode the thread keeps while it runs f, such as SubnormalsAsZero: set once a call, not once an i)
+// done() (a mode the thread keeps while it runs, such as SubnormalsAsZero: set once a call, not once an i)
 struct NoScope {};
-template <typename Scope = NoScope, typename F, typename Done>
-void parallel_for(int threads, int count, F&& f, Done&& done) {
+
+template <typename Scope = NoScope, typename Run, typename Done>
+void parallel_runs(int threads, int count, Run&& run, Done&& done) {
   if (threads > 1 || omp_in_parallel()) {
     const int team = std::max(threads, 1), bulk = count - count / 8;
-    const int chunk = std::max(1, (count - bulk) / (4 * team));
+    const int chunk = std::max(1, (count - bulk) / (4 * team)), chunks = (count - bulk + chunk - 1) / chunk;
 #pragma omp parallel num_threads(team)
     {
       [[maybe_unused]] const Scope scope;
-#pragma omp for schedule(static) nowait
-      for (int i = 0; i < bulk; ++i) f(i);
-#pragma omp for schedule(dynamic, chunk) nowait
-      for (int i = bulk; i < count; ++i) f(i);
+      const long t = omp_get_thread_num(), n = omp_get_num_threads();
+      run(static_cast<int>(bulk * t / n), static_cast<int>(bulk * (t + 1) / n));
+#pragma omp for schedule(dynamic) nowait
+      for (int c = 0; c < chunks; ++c) run(bulk + c * chunk, std::min(count, bulk + (c + 1) * chunk));
       done();
     }
   } else {
     [[maybe_unused]] const Scope scope;
-    for (int i = 0; i < count; ++i) f(i);
+    run(0, count);
     done();
   }
+}
+
+// f(i) for i in [0, count), as parallel_runs runs them
+template <typename Scope = NoScope, typename F, typename Done>
+void parallel_for(int threads, int count, F&& f, Done&& done) {
+  parallel_runs<Scope>(
+      threads, count,
+      [&f](int begin, int end) {
+        for (int i = begin; i < end; ++i) f(i);
+      },
+      done);
 }
 
 template <typename F>

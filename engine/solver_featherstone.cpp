@@ -412,21 +412,20 @@ void SolverFeatherstone::scan_unit(const int* arts, int count, StepContext& loca
   *finite = bad == 0;
 }
 
-void SolverFeatherstone::prefetch_inputs(const int* arts, int count, const StepContext& step) const {
-  auto fetch = [](const std::vector<Scalar>& x, int begin, int n) {
-    const char* p = reinterpret_cast<const char*>(x.data() + begin);
-    for (int k = 0; k < n * static_cast<int>(sizeof(Scalar)); k += 64) __builtin_prefetch(p + k);
-  };
-  const State& in = *step.in;
-  const Control& control = *step.control;
-  for (int i = 0; i < count; ++i) {
-    const ArticulationView& art = art_[arts[i]];
-    for (const auto* x : {&control.joint_target_ke, &control.joint_target_kd, &in.joint_qd})
-      fetch(*x, art.qd_begin(), art.dof_count());
-    fetch(in.joint_q, art.q_begin(), art.coord_count());
-    for (int k = art_body_start_[arts[i]]; k < art_body_start_[arts[i] + 1]; ++k)
-      fetch(in.body_f, 6 * art_body_runs_[2 * k], 6 * art_body_runs_[2 * k + 1]);
+void SolverFeatherstone::block_unit_notes(int u, int run_end, UnitNotes& notes, StepContext& local) const {
+  if (u < notes.begin || u >= notes.end) {
+    notes.begin = u;
+    notes.end = std::min(run_end, u + UnitNotes::kUnits);
+    for (int v = u; v < notes.end; ++v) {
+      int arts[kMostUnitArticulations];
+      StepContext scanned = local;
+      scan_unit(arts, batches_->unit_articulations(v, arts), scanned, nullptr);
+      notes.drives[v - u] = scanned.drives;
+      notes.wrenches[v - u] = scanned.wrenches;
+    }
   }
+  local.drives = notes.drives[u - notes.begin];
+  local.wrenches = notes.wrenches[u - notes.begin];
 }
 
 bool SolverFeatherstone::input_finite(int a, const StepContext& step) const {
@@ -665,29 +664,34 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
     const ParallelTimer timer(settings.count_serial_time, &serial_seconds_.parallel);
     // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread. A unit
     // notes whether its worlds have wrenches and drives, then actuates and steps them
-    auto unit = [&](int u) {
-      StepRoute& route = u < blocks ? static_cast<StepRoute&>(*batches_) : *dense_;
-      const int r = u < blocks ? u : u - blocks;
-      if (from != Stage::Dynamics) {
-        route.run(r, from, to, step);
-        return;
+    auto units_from = [&](int begin, int end) {
+      UnitNotes notes;
+      for (int u = begin; u < end; ++u) {
+        StepRoute& route = u < blocks ? static_cast<StepRoute&>(*batches_) : *dense_;
+        const int r = u < blocks ? u : u - blocks;
+        if (from != Stage::Dynamics) {
+          route.run(r, from, to, step);
+          continue;
+        }
+        int arts[kMostUnitArticulations];
+        const int count = route.unit_articulations(r, arts);
+        StepContext local = step;
+        if (u < blocks)
+          block_unit_notes(u, std::min(end, blocks), notes, local);
+        else
+          scan_unit(arts, count, local, nullptr);
+        actuate_unit(arts, count, local);
+        route.run(r, from, to, local);
       }
-      int arts[kMostUnitArticulations];
-      if (u + 1 < blocks) prefetch_inputs(arts, batches_->unit_articulations(u + 1, arts), step);
-      const int count = route.unit_articulations(r, arts);
-      StepContext local = step;
-      scan_unit(arts, count, local, nullptr);
-      actuate_unit(arts, count, local);
-      route.run(r, from, to, local);
     };
     auto done = [&] {
       if (step.stream) stream_fence();
     };
     const int threads = std::min(thread_count(), std::max(units, 1));
     if (model_.precision == Precision::Float32)
-      parallel_for<SubnormalsAsZero>(threads, units, unit, done);
+      parallel_runs<SubnormalsAsZero>(threads, units, units_from, done);
     else
-      parallel_for(threads, units, unit, done);
+      parallel_runs(threads, units, units_from, done);
   };
   if (step.block_major) {
     run(first, last);

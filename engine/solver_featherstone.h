@@ -8,6 +8,7 @@
 // rows that join articulations are solved as islands (engine/island_rows.h). docs/step.md tells the step.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -129,9 +130,16 @@ class SolverFeatherstone {
   // gain or a wrench that is not finite is nonzero), so the pass scans only body_f and the gains; the guard and
   // check_factors scan all of an articulation whose step went wrong
   void scan_unit(const int* arts, int count, StepContext& local, bool* finite) const;
-  // asks the caches for what scan_unit and the unit's gathers will read of these articulations' inputs (the
-  // next unit's, while this one steps)
-  void prefetch_inputs(const int* arts, int count, const StepContext& step) const;
+  // scan_unit's notes of block units [begin, end), scanned back to back (each input array read as one stream, as
+  // a pass over all of them would read it, rather than a short run a unit between the unit's other work)
+  struct UnitNotes {
+    static constexpr int kUnits = 8;
+    int begin = 0, end = 0;
+    std::array<std::uint8_t, kUnits> drives, wrenches;
+  };
+  // local's notes for block unit u of a thread's run that ends at `run_end`, from `notes` or scanned into it
+  // with the units after u
+  void block_unit_notes(int u, int run_end, UnitNotes& notes, StepContext& local) const;
   // whether all articulation a reads is finite
   bool input_finite(int a, const StepContext& step) const;
   // throws naming the first non-finite input (check_finite_step's message); the next step refactors
