@@ -15,7 +15,7 @@ namespace {
 
 void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
   const int bodies = builder.body_count(), joints = builder.joint_count();
-  switch (data.ConsumeIntegralInRange(0, 7)) {
+  switch (data.ConsumeIntegralInRange(0, 8)) {
     case 0: {
       RigidBody body;
       body.mass = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(0.1, 5) : fuzz::number(data);
@@ -79,6 +79,20 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
                         fuzz::number(data));
       break;
     case 6: builder.set_gravity(fuzz::vec3(data)); break;
+    case 7: {  // a fixed tendon over a few joints (of one articulation or several, fixed or floating), an actuator
+      std::vector<int> list;
+      std::vector<Scalar> coefs;
+      for (int k = 0, n = data.ConsumeIntegralInRange(0, 3); k < n; ++k) {
+        list.push_back(data.ConsumeIntegralInRange(-1, joints));
+        coefs.push_back(fuzz::number(data));
+      }
+      TendonOptions options;
+      if (data.ConsumeBool()) options.stiffness = fuzz::number(data), options.damping = fuzz::number(data);
+      if (data.ConsumeBool()) options.limit_lower = fuzz::number(data), options.limit_upper = fuzz::number(data);
+      const int tendon = builder.add_tendon(list, coefs, options);
+      if (data.ConsumeBool()) builder.add_tendon_actuator(tendon);
+      break;
+    }
     default: builder.add_ground_plane(fuzz::number(data)); break;
   }
 }
