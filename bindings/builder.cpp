@@ -207,9 +207,11 @@ void bind_builder(py::module_& m) {
           py::arg("joints"), py::arg("coefs"), py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
           py::arg("rest_length") = NAN, py::arg("limit_lower") = -INFINITY, py::arg("limit_upper") = INFINITY,
           py::arg("name") = "",
-          "Fixed tendon: length = sum coefs[i] * q(joints[i]) over Revolute/Prismatic joints of one articulation, "
-          "with a spring (rest_length NaN: its length at the initial coordinates) and damper, taken explicitly, and "
-          "limits kept by rows of the step.")
+          "Fixed tendon: length = sum coefs[i] * q(joints[i]) over Revolute/Prismatic joints, with a spring "
+          "(rest_length NaN: its length at the initial coordinates) and damper, taken explicitly, and limits kept by "
+          "rows of the step. finalize() joins its joints' articulations into one where they have a fixed base and "
+          "follow one another (a gripper's fingers on a static palm); a floating one or one given by "
+          "add_articulation is an error.")
       .def(
           "add_tendon_actuator",
           [](ModelBuilder& self, int tendon, Scalar gear, Scalar gain, const Vec3& bias, Scalar ctrl_lower,
