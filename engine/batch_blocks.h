@@ -101,7 +101,7 @@ struct alignas(64) RowWork {
   std::vector<V> coef, qd_in;  // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
   std::vector<V> point;        // [dof][3] the velocity of a slot's contact point moved by each dof
   int rows = 0;                // rows of the block being built
-  V warm_share{};              // the share of the last step's impulses the block's rows start from (warm_share)
+  V warm_share{};              // the share of the last step's impulses its limit and friction-loss rows start from
   // room for `rows` rows of `dofs` dofs and `slots` contacts a lane (inline: every block calls it)
   void resize(int rows_, int dofs_, int slots) {
     dofs = dofs_;

@@ -215,7 +215,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   V<T>* d = &R.frame[9 * t];
   contact_frame<T>(n, d);
   V<T> warm[6];
-  contact_warm_start(in + 3, d, R.warm_share, warm);
+  contact_warm_start(in + 3, d, contact_warm_share<V<T>>(step.rows), warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
   for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);

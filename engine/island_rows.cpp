@@ -169,7 +169,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     }
     Scalar warm[6];
     const Scalar* previous = C.previous(c);
-    contact_warm_start(previous ? previous : zero, d, warm_share_of(rn, step), warm);
+    contact_warm_start(previous ? previous : zero, d, contact_warm_share<Scalar>(step.rows), warm);
     for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
     contact_row_[c] = rn;
     // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents

@@ -27,8 +27,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(Scalar, erp, 0.2, 0, 1, "", "Share of the penetration beyond the slop removed per step.")                         \
   X(Scalar, cfm, 1e-6, 0, 1e6, "", "Constraint force mixing: softens every constraint row.")                          \
   X(Scalar, warmstarting_factor, 0.85, 0, 1, "",                                                                      \
-    "Share of the last step's impulses a world's rows start from where its last sweeps ran out (num_iterations) "     \
-    "before converging to pgs_tolerance; where they converged, they start from all of them.")                         \
+    "Share of the last step's impulses a world's limit, dry-friction and equality rows start from where its last "    \
+    "sweeps ran out (num_iterations) before converging to pgs_tolerance; where they converged, all of them. A "       \
+    "contact's rows always start from all of theirs.")                                                                \
   X(Scalar, restitution_threshold, 0.2, 0, 1e6, "m/s", "Approach speed below which contacts do not bounce.")          \
   X(bool, use_warmstarting, true, 0, 0, "", "Rows start from a share of the last step's impulses.")                   \
   X(Scalar, angular_damping, 0.05, 0, kUnbounded, "1/s",                                                              \

@@ -33,7 +33,8 @@ inline V limit_row_target(const V& gap, const RowParams& p, const V& dt) {
   return select<V>(gap >= 0, -gap / dt, static_cast<Element<V>>(p.erp) * select<V>(depth > 0, depth, zero) / dt);
 }
 
-// the share of its last step's impulses a world's rows start from: all of them where its last sweeps converged
+// the share of its last step's impulses a world's rows but its contacts' (contact_warm_share) start from: all of
+// them where its last sweeps converged
 // (stopped at one that moved no row beyond pgs_tolerance), warmstarting_factor of them where they ran out (an
 // error left by sweeps that ran out, carried whole from step to step, can build up), none without warm starting
 template <typename V>
@@ -41,6 +42,14 @@ inline V warm_share(const Mask<V>& converged, const RowParams& p) {
   using E = Element<V>;
   if (!p.use_warmstarting) return V{};
   return select<V>(converged, splat<V>(E(1)), splat<V>(static_cast<E>(p.warmstarting_factor)));
+}
+
+// the share of their last impulses a contact's rows start from: all of them (none without warm starting), whether
+// or not the sweeps converged. A contact's rows push and are bounded by friction, so carried whole they do not
+// build up as an equality's can; a smaller share lets a stack creep, its friction restarting short of what holds it
+template <typename V>
+inline V contact_warm_share(const RowParams& p) {
+  return splat<V>(static_cast<Element<V>>(p.use_warmstarting ? 1 : 0));
 }
 
 // the impulse a limit or friction-loss row keeps for the next step: 0 where it was off or is not finite
