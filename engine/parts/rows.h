@@ -302,7 +302,7 @@ inline V contact_normal_target(const V& depth, const V& v_approach, const V& res
 
 // the rows' starting impulses warm [6] (normal, t1, t2, then torsion about the normal and rolling about t1 and
 // t2): the last step's impulse and spin impulse `previous` [6] (world vectors; 0 for a new contact) along this
-// step's frame d [9], their share (warm_share), never pulling along the normal
+// step's frame d [9], their share (contact_warm_share), never pulling along the normal
 template <typename V>
 inline void contact_warm_start(const V* previous, const V* d, const V& share, V* warm) {
   for (int e = 0; e < 6; ++e) {
