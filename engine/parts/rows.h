@@ -34,9 +34,9 @@ inline V limit_row_target(const V& gap, const RowParams& p, const V& dt) {
 }
 
 // the share of its last step's impulses a world's rows but its contacts' (contact_warm_share) start from: all of
-// them where its last sweeps converged
-// (stopped at one that moved no row beyond pgs_tolerance), warmstarting_factor of them where they ran out (an
-// error left by sweeps that ran out, carried whole from step to step, can build up), none without warm starting
+// them where its last sweeps converged (stopped at one that moved no row beyond pgs_tolerance), warmstarting_factor
+// of them where they ran out (an error left by sweeps that ran out, carried whole from step to step, can build up),
+// none without warm starting
 template <typename V>
 inline V warm_share(const Mask<V>& converged, const RowParams& p) {
   using E = Element<V>;
