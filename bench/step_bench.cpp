@@ -60,6 +60,7 @@ CollisionOptions collision_options(int threads) {
   CollisionOptions options;
   options.num_threads = threads;
   options.margin = 0;
+  options.count_serial_time = true;
   return options;
 }
 
@@ -82,11 +83,21 @@ struct NovaPhyWorlds {
         state(model.state()),
         control(model.control()) {
     for (int k = 0; k < kSettleSteps; ++k) step();
-    solver.reset_serial_seconds();
+    reset_serial_seconds();
   }
   void step() {
     if (floor) pipeline.collide(state, contacts);
     solver.step(state, state, control, contacts, kDt);
+  }
+  void reset_serial_seconds() {
+    solver.reset_serial_seconds();
+    pipeline.reset_serial_seconds();
+  }
+  // the share of a step's wall time (collide's, on the floor scenes, and the solver's) outside their parallel work
+  double serial_share() const {
+    const SerialSeconds &s = solver.serial_seconds(), &c = pipeline.serial_seconds();
+    const double wall = s.step + (floor ? c.step : 0);
+    return wall > 0 ? (wall - s.parallel - (floor ? c.parallel : 0)) / wall : 0;
   }
   // the floor scenes' robots still standing: their base's mean height
   double base_height() const { return mean_base_height(model, state); }
@@ -135,7 +146,7 @@ void BM_NovaPhyStep(benchmark::State& bm) {
   for (auto _ : bm) nova.step();
   label(bm, worlds);
   if (spec.floor) bm.counters["base_height"] = nova.base_height();
-  bm.counters["serial_share"] = nova.solver.serial_seconds().share();
+  bm.counters["serial_share"] = nova.serial_share();
   // memory per world: what the solver holds, the State's arrays, and H with its factor (two packed
   // triangles in the model's precision): the least a world can be stepped in
   const Model& model = nova.model;
@@ -320,8 +331,8 @@ void BM_PairedStep(benchmark::State& bm) {
 // round runs every line once, the order rotating; runs of at least 20 ms after as many steps not timed).
 // Counters per thread count t: each engine's robot-steps/s (median over rounds), its speed-up over one
 // thread and parallel efficiency (the speed-up over t), the ratio NovaPhy / MuJoCo, and NovaPhy's serial
-// share (solver.serial_seconds: the step's wall time outside its parallel work over the whole, over all
-// rounds). MuJoCo to 4096 worlds (its mjData of 16384 do not fit in 24 GiB); tools/scaling.sh runs it.
+// share (collide's and the solver's serial_seconds: the step's wall time outside their parallel work over the whole,
+// over all rounds). MuJoCo to 4096 worlds (its mjData of 16384 do not fit in 24 GiB); tools/scaling.sh runs it.
 std::vector<int> thread_counts() {
   const int all = omp_get_num_procs();
   std::vector<int> counts;
@@ -352,7 +363,7 @@ void BM_ThreadSweep(benchmark::State& bm) {
     const double one = seconds([&] { step(line); }, 1);
     steps[line] = std::max(1, static_cast<int>(std::ceil(0.02 / one)));
   }
-  for (auto& copy : nova) copy->solver.reset_serial_seconds();
+  for (auto& copy : nova) copy->reset_serial_seconds();
   std::vector<std::vector<double>> rate(lines);
   int round = 0;
   for (auto _ : bm) {
@@ -371,7 +382,7 @@ void BM_ThreadSweep(benchmark::State& bm) {
     bm.counters["novaphy" + t] = nova_rate;
     bm.counters["novaphy_speedup" + t] = nova_rate / nova_one;
     bm.counters["novaphy_efficiency" + t] = nova_rate / nova_one / threads[i];
-    bm.counters["serial_share" + t] = nova[i]->solver.serial_seconds().share();
+    bm.counters["serial_share" + t] = nova[i]->serial_share();
     if (!with_mujoco) continue;
     const double mujoco_rate = median(rate[n + i]), mujoco_one = median(rate[n]);
     bm.counters["mujoco" + t] = mujoco_rate;
@@ -405,7 +416,7 @@ BENCHMARK(BM_PairedStep)
     ->UseRealTime();
 // scenes 1 (quadruped, no floor), 2 (standing) and 3 (humanoid.xml); its rounds are its repetitions
 BENCHMARK(BM_ThreadSweep)
-    ->ArgsProduct({{1, 2, 3}, {0, 1}, {256, 1024, 4096, 16384}})
+    ->ArgsProduct({{1, 2, 3}, {0, 1}, {256, 512, 1024, 4096, 16384}})
     ->ArgNames({"scene", "precision", "worlds"})
     ->Iterations(9)
     ->Repetitions(1)

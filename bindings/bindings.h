@@ -6,6 +6,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "engine/parallel.h"
+
 namespace novaphy::python {
 
 namespace py = pybind11;
@@ -26,6 +28,16 @@ py::array view(T* data, int count, int width, py::handle owner, bool writeable) 
   py::array array(py::dtype::of<T>(), shape, strides, data, owner);
   if (!writeable) array.attr("setflags")(py::arg("write") = false);
   return array;
+}
+
+// serial_seconds as a dict: step, parallel, steps and share
+inline py::dict serial_seconds_dict(const SerialSeconds& t) {
+  py::dict d;
+  d["step"] = t.step;
+  d["parallel"] = t.parallel;
+  d["steps"] = t.steps;
+  d["share"] = t.share();
+  return d;
 }
 
 }  // namespace novaphy::python

@@ -108,16 +108,7 @@ void bind_solver_featherstone(py::module_& m) {
           "Seconds spent in each stage of step while settings.profile_stages is on, and the steps timed.")
       .def("reset_stage_seconds", &SolverFeatherstone::reset_stage_seconds, "Zeroes stage_seconds.")
       .def_property_readonly(
-          "serial_seconds",
-          [](const SolverFeatherstone& self) {
-            const SolverSerialSeconds& t = self.serial_seconds();
-            py::dict d;
-            d["step"] = t.step;
-            d["parallel"] = t.parallel;
-            d["steps"] = t.steps;
-            d["share"] = t.share();
-            return d;
-          },
+          "serial_seconds", [](const SolverFeatherstone& self) { return serial_seconds_dict(self.serial_seconds()); },
           "Seconds of whole steps and of their parallel work while settings.count_serial_time is on, the steps "
           "timed, and the serial share (the rest over the whole).")
       .def("reset_serial_seconds", &SolverFeatherstone::reset_serial_seconds, "Zeroes serial_seconds.")

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 
 #include "engine/error.h"
@@ -91,6 +92,7 @@ void CollisionPipeline::sort_shapes() {
   const Model& model = model_;
   world_others_.resize(model.world_count);
   world_planes_.resize(model.world_count);
+  shape_run_.assign(model.shape_count, -1);
   for (int s = 0; s < model.shape_count; ++s) {
     if (visual_only(s)) continue;  // the broad phase never sees it
     const int w = model.shape_world[s];
@@ -100,6 +102,7 @@ void CollisionPipeline::sort_shapes() {
       continue;
     }
     (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
+    shape_run_[s] = w;
   }
 }
 
@@ -175,11 +178,13 @@ bool CollisionPipeline::may_collide(int a, int b) const {
 }
 
 void CollisionPipeline::collide(const State& state, Contacts& contacts) {
+  const std::int64_t start = options_.count_serial_time ? now_ns() : 0;
   model_.check(state);
   if (!same_layout(contacts, model_) || contacts.contact_capacity != options_.contact_capacity)
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
-  keep_previous(contacts);
+  // (a buffer not made by contacts() gets its warm-start bookkeeping here)
+  if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
 
   // the poses of the planes on bodies and the boxes of the shapes of no world first: every world meets
   // them. Then per world, its shapes' boxes into the thread's scratch (in cache while used): its pairs
@@ -188,37 +193,94 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // against its shapes. Worlds alike go a group at a time: their boxes, their pairs' overlaps and their
   // planes' reach in lanes (group_boxes, group_planes), then each world's narrow phase in that order.
   // Then the shapes of no world against each other, and every plane against them. Groups of worlds (and
-  // shared shapes, and planes) spread over threads
+  // shared shapes, and planes) spread over threads, in one parallel region (find_on_thread)
   place_shared(state);
-  const int groups = static_cast<int>(group_first_.size()) - 1;
-  find_contacts(groups, contacts, kWorldsPerThread / kLanes<Scalar>,
-                [&](int g, Scratch& scratch) { group_contacts(state, g, scratch); });
-  find_contacts(static_cast<int>(shared_others_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
-    for (size_t k = i + 1; k < shared_others_.size(); ++k)
-      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
-  });
-  find_contacts(static_cast<int>(planes_.size()), contacts, kWorldsPerThread, [&](int i, Scratch& scratch) {
-    against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), static_cast<int>(shared_others_.size()),
-                  scratch.found);
-  });
-  match_previous(contacts);
+  const int groups = static_cast<int>(group_first_.size()) - 1, previous = contacts.contact_count;
+  const int shared = static_cast<int>(shared_others_.size()), planes = static_cast<int>(planes_.size());
+  const int threads = std::max({team(groups, kWorldsPerThread / kLanes<Scalar>), team(shared, kWorldsPerThread),
+                                team(planes, kWorldsPerThread), team(previous, kKeptPerThread)});
+  if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
+  contacts.previous_count = previous;
+  int found = 0;
+  {
+    const ParallelTimer timer(timed(threads), &serial_seconds_.parallel);
+    if (threads > 1 || omp_in_parallel()) {
+#pragma omp parallel num_threads(threads)
+      find_on_thread(state, contacts, &found);
+    } else {
+      find_on_thread(state, contacts, &found);
+    }
+  }
+  contacts.contact_count = std::min(found, contacts.contact_capacity);
+  contacts.contact_dropped = found - contacts.contact_count;
+  if (!options_.count_serial_time) return;
+  serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
+  ++serial_seconds_.steps;
 }
 
-void CollisionPipeline::keep_previous(Contacts& contacts) const {
-  // this step's contacts, in their order, become the previous ones for warm starting (a buffer not
-  // made by contacts() gets its bookkeeping here)
-  if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
-  auto keep = [&contacts](int c) {
+void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, int* found) {
+  // the directives bind to the region collide opened, or to this thread alone: thread t runs the t-th run of each
+  // loop's i (static schedules, without waiting between loops, which write only the thread's scratch)
+  const int t = omp_get_thread_num(), n = omp_get_num_threads();
+  Scratch& scratch = scratch_[t];
+  scratch.found.clear();
+  const int previous = contacts.previous_count, groups = static_cast<int>(group_first_.size()) - 1;
+  const int shared = static_cast<int>(shared_others_.size()), planes = static_cast<int>(planes_.size());
+  // the buffer's contacts, in their order, become the previous ones for warm starting
+#pragma omp for schedule(static) nowait
+  for (int c = 0; c < previous; ++c) {
     contacts.previous_key[c] = contacts.key_of(c);
     for (int i = 0; i < 3; ++i) {
       contacts.previous_impulse[6 * c + i] = contacts.contact_impulse[3 * c + i];
       contacts.previous_impulse[6 * c + 3 + i] = contacts.contact_spin_impulse[3 * c + i];
     }
-  };
-  parallel_for(team(contacts.contact_count, 1024), contacts.contact_count, keep);
-  contacts.previous_count = contacts.contact_count;
-  contacts.contact_count = 0;
-  contacts.contact_dropped = 0;
+  }
+#pragma omp for schedule(static) nowait
+  for (int g = 0; g < groups; ++g) group_contacts(state, g, scratch);
+  scratch.loop_end[0] = scratch.found.size();
+#pragma omp for schedule(static) nowait
+  for (int i = 0; i < shared; ++i)
+    for (int k = i + 1; k < shared; ++k)
+      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
+  scratch.loop_end[1] = scratch.found.size();
+#pragma omp for schedule(static) nowait
+  for (int i = 0; i < planes; ++i)
+    against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), shared, scratch.found);
+  scratch.loop_end[2] = scratch.found.size();
+#pragma omp barrier
+  // each loop's contacts after the loops' before, each thread's after the threads' before: the order of the loops
+  // and of i whatever the thread count; those beyond the capacity dropped
+  std::size_t c = 0;
+  for (int loop = 0; loop < 3; ++loop)
+    for (int u = 0; u < n; ++u) {
+      const std::size_t begin = loop > 0 ? scratch_[u].loop_end[loop - 1] : 0, end = scratch_[u].loop_end[loop];
+      if (u == t)
+        for (std::size_t k = begin; k < end && c + (k - begin) < static_cast<std::size_t>(contacts.contact_capacity);
+             ++k)
+          write_contact(scratch.found[k], static_cast<int>(c + (k - begin)), contacts);
+      c += end - begin;
+    }
+  const int kept = static_cast<int>(std::min<std::size_t>(c, contacts.contact_capacity));
+#pragma omp barrier
+  // each contact matched with the previous ones, in runs of a fixed length (what a run finds does not depend on
+  // the threads)
+  const int runs = (kept + kMatchRun - 1) / kMatchRun;
+#pragma omp for schedule(static)
+  for (int r = 0; r < runs; ++r) match_previous(contacts, r * kMatchRun, std::min(kept, (r + 1) * kMatchRun));
+  if (t == 0) *found = static_cast<int>(c);
+}
+
+void CollisionPipeline::write_contact(const Found& found, int c, Contacts& contacts) const {
+  contacts.contact_shape_a[c] = found.a;
+  contacts.contact_shape_b[c] = found.b;
+  contacts.contact_body_a[c] = model_.shape_body[found.a];
+  contacts.contact_body_b[c] = model_.shape_body[found.b];
+  Eigen::Map<Vec3>(&contacts.contact_point[3 * c]) = found.point.point;
+  Eigen::Map<Vec3>(&contacts.contact_normal[3 * c]) = found.point.normal;
+  contacts.contact_depth[c] = found.point.depth;
+  contacts.contact_feature[c] = found.point.feature;
+  Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]).setZero();
+  Eigen::Map<Vec3>(&contacts.contact_spin_impulse[3 * c]).setZero();
 }
 
 void CollisionPipeline::place_shared(const State& state) {
@@ -313,85 +375,58 @@ void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes
   }
 }
 
-void CollisionPipeline::match_previous(Contacts& contacts) {
-  // a contact is most often found where it was, right after the contact matched before it; otherwise
-  // among the previous contacts sorted by key (sorted once per collide, when first needed)
+int CollisionPipeline::contact_run(std::uint64_t key) const {
+  const auto a = static_cast<std::int64_t>(key >> 40), b = static_cast<std::int64_t>((key >> 16) & 0xffffff);
+  if (a >= model_.shape_count || b >= model_.shape_count) return std::numeric_limits<int>::max();
+  const int run = std::max(shape_run_[a], shape_run_[b]);
+  return run >= 0 ? run : std::numeric_limits<int>::max();
+}
+
+void CollisionPipeline::match_previous(Contacts& contacts, int begin, int end) const {
+  // a contact is most often where the one before it matched, + 1 (the first of a run: at its own place);
+  // otherwise among the previous contacts of its run (contact_run), which are listed together, the runs ascending
   const int n = contacts.previous_count;
   const std::vector<std::uint64_t>& key = contacts.previous_key;
-  previous_order_.clear();
-  int next = 0;
-  for (int c = 0; c < contacts.contact_count; ++c) {
+  int next = begin;
+  for (int c = begin; c < end; ++c) {
     const std::uint64_t k = contacts.key_of(c);
     int m = -1;
     if (next < n && key[next] == k) {
       m = next;
-    } else if (n > 0) {
-      if (previous_order_.empty()) {
-        previous_order_.resize(n);
-        std::iota(previous_order_.begin(), previous_order_.end(), 0);
-        std::sort(previous_order_.begin(), previous_order_.end(),
-                  [&](int x, int y) { return key[x] < key[y] || (key[x] == key[y] && x < y); });
+    } else {
+      const int run = contact_run(k);
+      int p = 0;
+      for (int count = n; count > 0;) {  // the first previous contact of a run not before this one's
+        const int half = count / 2;
+        if (contact_run(key[p + half]) < run) {
+          p += half + 1;
+          count -= half + 1;
+        } else {
+          count = half;
+        }
       }
-      const auto it = std::lower_bound(previous_order_.begin(), previous_order_.end(), k,
-                                       [&](int x, std::uint64_t value) { return key[x] < value; });
-      if (it != previous_order_.end() && key[*it] == k) m = *it;
+      for (; p < n && contact_run(key[p]) == run; ++p)
+        if (key[p] == k) {
+          m = p;
+          break;
+        }
     }
     contacts.previous_match[c] = m;
-    if (m >= 0) next = m + 1;
+    next = m >= 0 ? m + 1 : next + 1;
   }
+}
+
+int CollisionPipeline::thread_count() const {
+  return options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
 }
 
 int CollisionPipeline::team(int count, int grain) const {
   // no thread wakes for less than `grain` items: a small scene stays on one
-  const int threads = options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
-  return std::max(1, std::min(threads, count / grain));
+  return std::max(1, std::min(thread_count(), count / grain));
 }
 
-template <typename F>
-void CollisionPipeline::find_contacts(int count, Contacts& contacts, int grain, F&& f) {
-  // a static schedule hands thread t the t-th run of consecutive i: the threads' lists in thread
-  // order are the contacts in the order of i, and each thread writes its own after the others' before
-  if (count <= 0) return;
-  const int threads = team(count, grain);
-  if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
-  for (int t = 0; t < threads; ++t) scratch_[t].found.clear();
-  const int first = contacts.contact_count;
-  // thread t's contacts into the buffer after those of the threads before it
-  auto write = [&](int t) {
-    std::size_t c = first;
-    for (int u = 0; u < t; ++u) c += scratch_[u].found.size();
-    for (const Found& found : scratch_[t].found) {
-      if (c >= static_cast<std::size_t>(contacts.contact_capacity)) break;
-      contacts.contact_shape_a[c] = found.a;
-      contacts.contact_shape_b[c] = found.b;
-      contacts.contact_body_a[c] = model_.shape_body[found.a];
-      contacts.contact_body_b[c] = model_.shape_body[found.b];
-      Eigen::Map<Vec3>(&contacts.contact_point[3 * c]) = found.point.point;
-      Eigen::Map<Vec3>(&contacts.contact_normal[3 * c]) = found.point.normal;
-      contacts.contact_depth[c] = found.point.depth;
-      contacts.contact_feature[c] = found.point.feature;
-      Eigen::Map<Vec3>(&contacts.contact_impulse[3 * c]).setZero();
-      Eigen::Map<Vec3>(&contacts.contact_spin_impulse[3 * c]).setZero();
-      ++c;
-    }
-  };
-  if (threads == 1) {
-    for (int i = 0; i < count; ++i) f(i, scratch_[0]);
-    write(0);
-  } else {
-#pragma omp parallel num_threads(threads)
-    {
-      const int t = omp_get_thread_num();
-#pragma omp for schedule(static)
-      for (int i = 0; i < count; ++i) f(i, scratch_[t]);
-      write(t);
-    }
-  }
-  std::size_t total = 0;
-  for (int t = 0; t < threads; ++t) total += scratch_[t].found.size();
-  const int kept = static_cast<int>(std::min<std::size_t>(total, contacts.contact_capacity - first));
-  contacts.contact_count += kept;
-  contacts.contact_dropped += static_cast<int>(total) - kept;
+bool CollisionPipeline::timed(int threads) const {
+  return options_.count_serial_time && (threads > 1 || thread_count() == 1);
 }
 
 const HullView& CollisionPipeline::hull_view(int s, HullView* view) const {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "engine/model.h"
+#include "engine/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/convex.h"
 
@@ -65,8 +66,9 @@ struct CollisionOptions {
   // contacts are made this far before touching (pairs of soft shapes: within their shape_margin, MuJoCo's rule);
   // the broad phase's bounds reach the larger of this and every shape_margin
   Scalar margin = 0.01;
-  bool self_collision = true;  // links of one articulation collide (never a parent with its child)
-  int num_threads = 0;         // threads of collide's loops over shapes, worlds and planes; 0: OpenMP's default
+  bool self_collision = true;      // links of one articulation collide (never a parent with its child)
+  int num_threads = 0;             // threads of collide's loops over shapes, worlds and planes; 0: OpenMP's default
+  bool count_serial_time = false;  // accumulate collide's wall time and that of its parallel work (serial_seconds)
 };
 
 // keeps a reference to the model, which must outlive it
@@ -79,6 +81,12 @@ class CollisionPipeline {
   void collide(const State& state, Contacts& contacts);
 
   const CollisionOptions& options() const { return options_; }
+  // wall time of whole collides and of their parallel work (the loops over worlds, shared shapes and planes, the
+  // previous contacts kept, when each takes more than one thread), accumulated while options.count_serial_time is
+  // on; the rest (the argument checks, the boxes of the shapes of no world, the match with the previous contacts) is
+  // the share more threads do not shorten
+  const SerialSeconds& serial_seconds() const { return serial_seconds_; }
+  void reset_serial_seconds() { serial_seconds_ = {}; }
 
  private:
   bool may_collide(int a, int b) const;
@@ -129,8 +137,11 @@ class CollisionPipeline {
   void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
-  // where each contact of the buffer was among the previous ones (Contacts::previous_match)
-  void match_previous(Contacts& contacts);
+  // which run of collide's list a contact of this key is in: its world's (the world of its shapes that are not
+  // planes), or the last (INT_MAX) where they have none (shapes of no world with each other, planes with them)
+  int contact_run(std::uint64_t key) const;
+  // where each contact in [begin, end) of the buffer was among the previous ones (Contacts::previous_match)
+  void match_previous(Contacts& contacts, int begin, int end) const;
   // the constructor's stages, in this order:
   // each body's parent (skipping massless links) and articulation, for may_collide
   void link_bodies();
@@ -155,8 +166,6 @@ class CollisionPipeline {
   // the poses and normals of the planes on no body; those on bodies listed as moving
   void place_static_planes();
   // collide()'s stages:
-  // the buffer's contacts and impulses kept as the previous ones, the buffer emptied
-  void keep_previous(Contacts& contacts) const;
   // the poses of the planes on bodies and the boxes of the shapes of no world at `state`
   void place_shared(const State& state);
   // whether two boxes overlap (inline: the broad phase's innermost test)
@@ -178,20 +187,30 @@ class CollisionPipeline {
   void world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits);
   // world w's pairs by sweep and prune along x (a world of many shapes)
   void sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out);
-  // f(i, scratch) for i in [0, count) on the threads (at least `grain` i each), each appending its
-  // contacts to its scratch's `found`; then every contact into the buffer in the order of i, so the
-  // order does not depend on the thread count
-  template <typename F>
-  void find_contacts(int count, Contacts& contacts, int grain, F&& f);
+  // collide on thread t of the region it opened (or alone): the buffer's contacts and impulses kept as the previous
+  // ones, the thread's runs of groups of worlds, shared shapes and planes into its scratch, its contacts written into
+  // the buffer in the order of the loops and of i, whatever the thread count, and the buffer's contacts matched with
+  // the previous ones; *found: the contacts found, kept or not (thread 0 writes it)
+  void find_on_thread(const State& state, Contacts& contacts, int* found);
+  // contact c of the buffer from the narrow phase's
+  void write_contact(const Found& found, int c, Contacts& contacts) const;
+  // threads collide may take: options.num_threads, or OpenMP's default
+  int thread_count() const;
   // threads for a loop of `count` items, at least `grain` items each
   int team(int count, int grain) const;
+  // a loop on `threads` threads counts as parallel work in serial_seconds (on one thread only where collide has
+  // no more)
+  bool timed(int threads) const;
   static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes) a thread at least
+  static constexpr int kKeptPerThread = 1024;  // previous contacts a thread at least, where nothing else wakes one
+  static constexpr int kMatchRun = 256;        // contacts matched one after another (match_previous)
   // a world of at most this many shapes tests the pairs may_collide allows, from a bit mask per shape
   // worked out once; a larger one sweeps and prunes
   static constexpr int kMaskedWorldShapes = 64;
 
   const Model& model_;
   CollisionOptions options_;
+  SerialSeconds serial_seconds_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
   std::vector<int> planes_;                     // shape indices of the planes
@@ -236,12 +255,13 @@ class CollisionPipeline {
   std::vector<Box> shared_boxes_;      // [shared_others_]
   std::vector<Transform> plane_pose_;  // [shape] of the planes
   std::vector<Vec3> plane_normal_;     // [shape] of the planes, their normals (+Y) in the world
-  std::vector<int> previous_order_;    // previous contacts by key, when a contact is not where it was
+  std::vector<int> shape_run_;         // [shape] its world where it is not a plane and has one, else -1
   // per thread: the contacts it found, the boxes of the world it is at, of the group of worlds it is at
   // and their pairs' overlaps; on cache lines of its own (each push writes its vector's end, which would
   // otherwise share a line with another thread's)
   struct alignas(64) Scratch {
     std::vector<Found> found;
+    std::size_t loop_end[3] = {};  // where its contacts of each loop of find_on_thread end in found
     std::vector<Box> boxes;
     std::vector<ShapeLanes> lanes;
     std::vector<ShapeLanes> slots;      // a group's slots' boxes (lower, upper)

@@ -4,8 +4,39 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdint>
 
 namespace novaphy {
+
+inline std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+// wall time of whole calls (a solver's steps, a pipeline's collides) and of their parallel work, accumulated while
+// counting is on; the rest of a call is the share more threads do not shorten
+struct SerialSeconds {
+  double step = 0;
+  double parallel = 0;
+  int steps = 0;
+  double share() const { return step > 0 ? (step - parallel) / step : 0; }
+};
+
+// while one lives (and `on`), the wall time is added to *total in seconds
+class ParallelTimer {
+ public:
+  ParallelTimer(bool on, double* total) : total_(on ? total : nullptr), start_(on ? now_ns() : 0) {}
+  ~ParallelTimer() {
+    if (total_) *total_ += 1e-9 * static_cast<double>(now_ns() - start_);
+  }
+  ParallelTimer(const ParallelTimer&) = delete;
+  ParallelTimer& operator=(const ParallelTimer&) = delete;
+
+ private:
+  double* total_;
+  std::int64_t start_;
+};
 
 // run(begin, end) over runs of i covering [0, count) on `threads` threads, then done() once on each thread. The
 // first seven eighths of i go as one run a thread (thread t runs the t-th: the same i, and their data in its

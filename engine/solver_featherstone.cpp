@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -35,28 +34,8 @@ void group_by_key(int n, int buckets, Key key, int* start, int* items, int* next
     if (key(i) >= 0) items[next[key(i)]++] = i;
 }
 
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 // no thread wakes in the contact lists for fewer contacts (a parallel region costs about as much)
 constexpr int kContactsPerThread = 512;
-
-// while one lives (and `on`), the wall time is added to *total in seconds
-class ParallelTimer {
- public:
-  ParallelTimer(bool on, double* total) : total_(on ? total : nullptr), start_(on ? now_ns() : 0) {}
-  ~ParallelTimer() {
-    if (total_) *total_ += 1e-9 * static_cast<double>(now_ns() - start_);
-  }
-  ParallelTimer(const ParallelTimer&) = delete;
-  ParallelTimer& operator=(const ParallelTimer&) = delete;
-
- private:
-  double* total_;
-  std::int64_t start_;
-};
 
 }  // namespace
 

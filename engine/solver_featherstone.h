@@ -18,6 +18,7 @@
 #include "engine/collision.h"
 #include "engine/dense_articulations.h"
 #include "engine/island_rows.h"
+#include "engine/parallel.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/rows.h"
 #include "engine/solver_settings.h"
@@ -33,17 +34,6 @@ struct SolverStageSeconds {
   double solve = 0;         // M^-1 J^T, warm start and PGS sweeps
   double integrate = 0;     // joint integration, the divergence guard, FK into body_q/body_qd
   int steps = 0;
-};
-
-// wall time of whole steps and of their parallel work (the passes over blocks and dense articulations, each
-// unit's stages on its thread; the islands' solve; the contact lists' regions when they take more than one
-// thread), accumulated while settings.count_serial_time is on; the rest of a step (argument checks, the guard,
-// the counting sort of unordered contacts) is the share more threads do not shorten
-struct SolverSerialSeconds {
-  double step = 0;
-  double parallel = 0;
-  int steps = 0;
-  double share() const { return step > 0 ? (step - parallel) / step : 0; }
 };
 
 struct JointSupportMatrix {
@@ -109,7 +99,11 @@ class SolverFeatherstone {
   const Model& model() const { return model_; }
   const SolverStageSeconds& stage_seconds() const { return stage_seconds_; }
   void reset_stage_seconds() { stage_seconds_ = {}; }
-  const SolverSerialSeconds& serial_seconds() const { return serial_seconds_; }
+  // wall time of whole steps and of their parallel work (the passes over blocks and dense articulations, each
+  // unit's stages on its thread; the islands' solve; the contact lists' regions when they take more than one
+  // thread), accumulated while settings.count_serial_time is on; the rest of a step (argument checks, the guard,
+  // the counting sort of unordered contacts) is the share more threads do not shorten
+  const SerialSeconds& serial_seconds() const { return serial_seconds_; }
   void reset_serial_seconds() { serial_seconds_ = {}; }
   // bytes the solver holds for its articulations: blocks, scalar scratch, rows, step vectors
   std::size_t memory_bytes() const;
@@ -224,7 +218,7 @@ class SolverFeatherstone {
   int max_threads_ = 1;  // the threads the routes keep scratch for
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;  // steady_clock nanoseconds at the last lap
-  SolverSerialSeconds serial_seconds_;
+  SerialSeconds serial_seconds_;
   // index_inputs: per articulation its bodies and actuators as runs ([begin, count] pairs from *_start_[a]) and
   // its tendons; the bodies and actuators of none
   std::vector<int> art_body_start_, art_body_runs_, art_actuator_start_, art_actuator_runs_;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The thread sweep on this machine: NovaPhy (float64 and float32) and MuJoCo 2.2.2 on 1, 2, 4, ... threads and
-# all, the contact-free quadruped, the standing quadruped and humanoid.xml at 256, 1024, 4096 and 16384 worlds
+# all, the contact-free quadruped, the standing quadruped and humanoid.xml at 256, 512, 1024, 4096 and 16384 worlds
 # (novaphy_bench_step's BM_ThreadSweep), then the table of speed-ups, parallel efficiency and NovaPhy's serial
 # share. Runs on any machine with the build's dependencies; the threads pinned one to a core as in bench.sh.
 #   bash tools/scaling.sh [extra Google Benchmark options, e.g. --benchmark_filter=BM_ThreadSweep/scene:1/]

@@ -51,7 +51,8 @@ def main():
     context = data.get("context", {})
     head = (f"# Thread sweep\n\nMachine: {context.get('host_name', '?')}, {context.get('num_cpus', '?')} CPUs; "
             f"{os.path.basename(args.json)} from `bash tools/scaling.sh`. Medians over the rounds of one run; the "
-            "serial share is the step's wall time outside its parallel work over the whole (solver.serial_seconds)."
+            "serial share is the step's wall time outside its parallel work over the whole (the floor scene's collide "
+            "with the solver's step: their serial_seconds)."
             "\n\n")
     with open(args.out, "w") as f:
         f.write(head + table(data))

@@ -196,6 +196,64 @@ TEST(CollisionPipeline, PreviousImpulsesFollowTheirContactsWhenTheListChanges) {
   expect_marked(spheres[1]);
 }
 
+TEST(CollisionPipeline, PreviousImpulsesFollowTheirContactsInManyWorldsOnAnyThreads) {
+  // 120 worlds of three spheres on their floor, and a sphere of no world on a box of no world (the list's last
+  // run): more contacts than one run of matching. A sphere of three worlds lifted off, then put back: every other
+  // contact keeps its impulse, the returning ones start without one, and where each was matched is the same on one,
+  // two and three threads
+  ModelBuilder world, builder;
+  world.add_ground_plane();
+  for (int k = 0; k < 3; ++k) world.add_shape_sphere(world.add_body(RigidBody(), Transform{Vec3(k, 0.09, 0)}), 0.1);
+  builder.replicate(world, 120);
+  builder.add_shape_box(-1, Vec3(0.5, 0.5, 0.5), ShapeOptions{.xform = Transform{Vec3(0, 5, 0)}});
+  builder.add_shape_sphere(builder.add_body(RigidBody(), Transform{Vec3(0, 5.59, 0)}), 0.1);
+  const Model model = builder.finalize();
+  const std::vector<int> lifted = {1 * 3 + 1, 64 * 3 + 0, 119 * 3 + 2};  // bodies: a world's three in order
+  auto run = [&](int threads) {
+    CollisionOptions options;
+    options.num_threads = threads;
+    CollisionPipeline pipeline(model, options);
+    Contacts contacts = pipeline.contacts();
+    State state = model.state();
+    auto sphere = [&](int c) { return std::max(contacts.contact_body_a[c], contacts.contact_body_b[c]); };
+    auto mark = [&] {  // impulse y = 10 + the sphere's body
+      for (int c = 0; c < contacts.contact_count; ++c) contacts.contact_impulse[3 * c + 1] = 10 + sphere(c);
+    };
+    auto expect_marked = [&](const std::vector<int>& missing) {
+      for (int c = 0; c < contacts.contact_count; ++c) {
+        const Scalar* previous = contacts.previous(c);
+        if (std::count(missing.begin(), missing.end(), sphere(c))) {
+          EXPECT_EQ(previous, nullptr) << "contact " << c;
+          continue;
+        }
+        ASSERT_NE(previous, nullptr) << "contact " << c << ", " << threads << " threads";
+        EXPECT_EQ(previous[1], 10 + sphere(c));
+      }
+    };
+    std::vector<int> matched;
+    pipeline.collide(state, contacts);
+    EXPECT_EQ(contacts.contact_count, 361);
+    mark();
+    for (const int b : lifted) state.body_q[7 * b + 1] = 1;
+    pipeline.collide(state, contacts);
+    EXPECT_EQ(contacts.contact_count, 358);
+    expect_marked({});
+    matched.insert(matched.end(), contacts.previous_match.begin(),
+                   contacts.previous_match.begin() + contacts.contact_count);
+    mark();
+    for (const int b : lifted) state.body_q[7 * b + 1] = 0.09;
+    pipeline.collide(state, contacts);
+    EXPECT_EQ(contacts.contact_count, 361);
+    expect_marked(lifted);
+    matched.insert(matched.end(), contacts.previous_match.begin(),
+                   contacts.previous_match.begin() + contacts.contact_count);
+    return matched;
+  };
+  const std::vector<int> one = run(1);
+  EXPECT_EQ(run(2), one);
+  EXPECT_EQ(run(3), one);
+}
+
 TEST(CollisionPipeline, ABufferWithoutItsWarmStartBookkeepingGetsIt) {
   // a buffer copied field by field (the contact arrays only) still warm starts after one collide
   ModelBuilder builder;
@@ -214,6 +272,34 @@ TEST(CollisionPipeline, ABufferWithoutItsWarmStartBookkeepingGetsIt) {
   pipeline.collide(model.state(), contacts);
   ASSERT_NE(contacts.previous(0), nullptr);
   EXPECT_EQ(contacts.previous(0)[1], 3);
+}
+
+TEST(CollisionPipeline, CountSerialTimeSplitsEachCollideOnlyWhenOn) {
+  // 40 worlds of a sphere on a floor on two threads: the collides' wall time, and within it their region's
+  ModelBuilder world, builder;
+  world.add_ground_plane();
+  world.add_shape_sphere(world.add_body(RigidBody(), Transform{Vec3(0, 0.09, 0)}), 0.1);
+  builder.replicate(world, 40);
+  const Model model = builder.finalize();
+  for (const bool on : {false, true}) {
+    CollisionOptions options;
+    options.num_threads = 2;
+    options.count_serial_time = on;
+    CollisionPipeline pipeline(model, options);
+    Contacts contacts = pipeline.contacts();
+    for (int k = 0; k < 3; ++k) pipeline.collide(model.state(), contacts);
+    const SerialSeconds& t = pipeline.serial_seconds();
+    if (!on) {
+      EXPECT_EQ(t.steps, 0);
+      EXPECT_EQ(t.step, 0);
+      continue;
+    }
+    EXPECT_EQ(t.steps, 3);
+    EXPECT_GT(t.parallel, 0);
+    EXPECT_LT(t.parallel, t.step);
+    pipeline.reset_serial_seconds();
+    EXPECT_EQ(pipeline.serial_seconds().steps, 0);
+  }
 }
 
 TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {

@@ -256,7 +256,7 @@ TEST(SolverFeatherstoneSettingsEffect, CountSerialTimeSplitsEachStepOnlyWhenOn) 
   EXPECT_EQ(scene.solver.serial_seconds().step, 0);
   scene.solver.settings.count_serial_time = true;
   scene.run(0.1);
-  const SolverSerialSeconds& t = scene.solver.serial_seconds();
+  const SerialSeconds& t = scene.solver.serial_seconds();
   EXPECT_EQ(t.steps, 12);
   EXPECT_GT(t.parallel, 0);
   EXPECT_LT(t.parallel, t.step);  // the parallel work is a part of the steps' time

@@ -283,6 +283,14 @@ def test_stage_seconds_and_implicit_coriolis_settings():
     assert s["steps"] == 3 and 0 < s["parallel"] < s["step"] and 0 < s["share"] < 1
     solver.reset_serial_seconds()
     assert solver.serial_seconds["steps"] == 0
+    timed = novaphy.CollisionPipeline(model, num_threads=1, count_serial_time=True)
+    assert pipeline.serial_seconds["steps"] == 0  # off unless asked for
+    for _ in range(3):
+        timed.collide(state, contacts)
+    s = timed.serial_seconds
+    assert s["steps"] == 3 and 0 < s["parallel"] < s["step"] and 0 < s["share"] < 1
+    timed.reset_serial_seconds()
+    assert timed.serial_seconds["steps"] == 0
     solver.settings.coriolis_implicitness = 1.5
     with pytest.raises(ValueError, match="coriolis_implicitness"):
         solver.step(state, state, control, contacts, 0.01)
