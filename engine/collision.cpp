@@ -31,7 +31,8 @@ CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions&
     fail("margin must be finite and >= 0, got ", options.margin);
   if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
   if (options_.contact_capacity == 0) options_.contact_capacity = std::max(64, 8 * model.shape_count);
-  for (int s = 0; s < model.shape_count; ++s) options_.margin = std::max(options_.margin, model.shape_margin[s]);
+  reach_ = options_.margin;
+  for (int s = 0; s < model.shape_count; ++s) reach_ = std::max(reach_, model.shape_margin[s]);
   list_exclusions();
   link_bodies();
   sort_shapes();
@@ -241,7 +242,8 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
 #pragma omp for schedule(static) nowait
   for (int i = 0; i < shared; ++i)
     for (int k = i + 1; k < shared; ++k)
-      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found);
+      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found,
+                shared_others_[i], shared_others_[k]);
   scratch.loop_end[1] = scratch.found.size();
 #pragma omp for schedule(static) nowait
   for (int i = 0; i < planes; ++i)
@@ -301,10 +303,15 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
   group_planes(g, scratch);
   const int* code = group_plane_.data() + group_plane_start_[g];
   const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
+  const std::vector<int>& alike = world_others_[first];
+  const std::uint8_t* plane_same = group_plane_same_.data() + group_plane_start_[g];
   for (int l = 0; l < count; ++l) {
     const std::vector<int>& shapes = world_others_[first + l];
     const int n = static_cast<int>(shapes.size());
     const std::uint64_t* hits = scratch.hits.data() + l * n;
+    // the narrow phase reads a shape alike in every world of the group from the first world (in cache)
+    scratch.read.resize(n);
+    for (int i = 0; i < n; ++i) scratch.read[i] = group_same_[g] >> i & 1 ? alike[i] : shapes[i];
     // the boxes the lane's narrow phase reads: the shapes of its pairs and those reaching its planes (all of
     // them where shapes of no world meet every shape)
     std::uint64_t needed = shared_others_.empty() || n == 0 ? 0 : ~std::uint64_t{0} >> (64 - n);
@@ -314,10 +321,10 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
     lane_boxes(l, needed, scratch);
     world_contacts(state, first + l, scratch, hits);
     for (int k = 0; k < planes; ++k) {
-      const int p = plane_of(first + l, code[k]);
+      const int p = plane_of(first + l, code[k]), read_p = plane_same[k] ? plane_of(first, code[k]) : p;
       for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
         const int i = __builtin_ctzll(m);
-        narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found);
+        narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found, read_p, scratch.read[i]);
       }
     }
   }
@@ -327,6 +334,7 @@ void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scrat
   std::vector<Found>& out = scratch.found;
   const std::vector<int>& shapes = world_others_[w];
   const int n = static_cast<int>(shapes.size());
+  const int* read = hits ? scratch.read.data() : shapes.data();
   std::vector<Box>& boxes = scratch.boxes;
   if (!hits) {
     if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
@@ -337,13 +345,15 @@ void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scrat
     for (int i = 0; i < n; ++i)
       for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
         const int j = __builtin_ctzll(m);
-        if (hits || overlap(boxes[i], boxes[j])) narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out);
+        if (hits || overlap(boxes[i], boxes[j]))
+          narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out, read[i], read[j]);
       }
   } else {
     sweep_world(w, boxes, out);
   }
   for (size_t i = 0; i < shared_others_.size(); ++i)
-    for (int j = 0; j < n; ++j) test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out);
+    for (int j = 0; j < n; ++j)
+      test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out, shared_others_[i], read[j]);
   if (hits) return;  // (its group's planes follow)
   // the world's planes and the shared ones, in index order
   const std::vector<int>& own = world_planes_[w];
@@ -362,7 +372,8 @@ void CollisionPipeline::sweep_world(int w, const std::vector<Box>& boxes, std::v
   });
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n && boxes[order[j]].lower.x() <= boxes[order[i]].upper.x(); ++j)
-      test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out);
+      test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out, shapes[order[i]],
+                shapes[order[j]]);
 }
 
 void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes, int count,
@@ -371,7 +382,7 @@ void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes
   for (int i = 0; i < count; ++i) {
     const Box& b = boxes[i];
     const Scalar distance = plane_box_distance(X.p.data(), plane_normal_[p].data(), b.lower.data(), b.upper.data());
-    if (distance <= 0 && may_collide(p, shapes[i])) narrow_phase(p, X, shapes[i], b.pose, out);
+    if (distance <= 0 && may_collide(p, shapes[i])) narrow_phase(p, X, shapes[i], b.pose, out, p, shapes[i]);
   }
 }
 
@@ -457,14 +468,18 @@ Scalar CollisionPipeline::pair_margin(int a, int b) const {
 }
 
 void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b,
-                                     std::vector<Found>& out) const {
-  const bool swap = model_.shape_type[a] > model_.shape_type[b];
-  if (swap) std::swap(a, b);
-  const auto ta = static_cast<ShapeType>(model_.shape_type[a]), tb = static_cast<ShapeType>(model_.shape_type[b]);
+                                     std::vector<Found>& out, int read_a, int read_b) const {
+  const bool swap = model_.shape_type[read_a] > model_.shape_type[read_b];
+  if (swap) {
+    std::swap(a, b);
+    std::swap(read_a, read_b);
+  }
+  const auto ta = static_cast<ShapeType>(model_.shape_type[read_a]);
+  const auto tb = static_cast<ShapeType>(model_.shape_type[read_b]);
   const Transform &Xa = swap ? pose_b : pose_a, &Xb = swap ? pose_a : pose_b;
-  const Vec3 sa = Eigen::Map<const Vec3>(&model_.shape_scale[3 * a]);
-  const Vec3 sb = Eigen::Map<const Vec3>(&model_.shape_scale[3 * b]);
-  const Scalar m = pair_margin(a, b);
+  const Vec3 sa = Eigen::Map<const Vec3>(&model_.shape_scale[3 * read_a]);
+  const Vec3 sb = Eigen::Map<const Vec3>(&model_.shape_scale[3 * read_b]);
+  const Scalar m = pair_margin(read_a, read_b);
   ContactPoint points[kMaxPairContacts];
   int count = 0;
   switch (ta) {
@@ -497,9 +512,9 @@ void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, cons
     else if (ta == ShapeType::Plane && tb == ShapeType::Ellipsoid)
       count = collide_plane_ellipsoid(Xa, Xb, sb, m, points);
     else if (ta == ShapeType::Plane)
-      count = collide_plane_hull(Xa, Xb, hull_view(b, &hull_b), m, points);
+      count = collide_plane_hull(Xa, Xb, hull_view(read_b, &hull_b), m, points);
     else
-      count = collide_convex(convex_shape(a, Xa, &hull_a), convex_shape(b, Xb, &hull_b), m, points);
+      count = collide_convex(convex_shape(read_a, Xa, &hull_a), convex_shape(read_b, Xb, &hull_b), m, points);
   }
   for (int k = 0; k < count; ++k) out.push_back({a, b, points[k]});
 }

@@ -133,8 +133,12 @@ class CollisionPipeline {
   // how near shapes a and b are before they touch when their contacts are made: MuJoCo's rule (the larger
   // shape_margin) where both are soft (a solref each), else options.margin
   Scalar pair_margin(int a, int b) const;
-  // shapes a < b at those poses
-  void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out) const;
+  // shapes a < b at those poses, reading the model's entries of shapes read_a and read_b (a and b, or shapes the
+  // narrow phase meets alike, narrow_alike, in cache)
+  void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out, int read_a,
+                    int read_b) const;
+  // the narrow phase reads the same of shapes s and a: type, size, mesh, margin and solref
+  bool narrow_alike(int s, int a) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
   // which run of collide's list a contact of this key is in: its world's (the world of its shapes that are not
@@ -173,17 +177,19 @@ class CollisionPipeline {
     return boxes_overlap(a.lower.data(), a.upper.data(), b.lower.data(), b.upper.data());
   }
   // the narrow phase of shapes a and b (either order) where their boxes overlap and they may collide
-  void test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out) const {
+  // (reading read_a's and read_b's entries, as narrow_phase)
+  void test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out, int read_a, int read_b) const {
     if (!overlap(A, B) || !may_collide(a, b)) return;
     if (a < b)
-      narrow_phase(a, A.pose, b, B.pose, out);
+      narrow_phase(a, A.pose, b, B.pose, out, read_a, read_b);
     else
-      narrow_phase(b, B.pose, a, A.pose, out);
+      narrow_phase(b, B.pose, a, A.pose, out, read_b, read_a);
   }
   // the contacts of group g's worlds into scratch.found: a world alone, or each lane's after group_boxes
   void group_contacts(const State& state, int g, Scratch& scratch);
   // world w's contacts into scratch.found; hits: its boxes are in scratch already, with the pairs found
-  // overlapping (per shape, a bit for each shape after it), and its group's planes follow
+  // overlapping (per shape, a bit for each shape after it) and the shapes the narrow phase reads (scratch.read), and
+  // its group's planes follow
   void world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits);
   // world w's pairs by sweep and prune along x (a world of many shapes)
   void sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out);
@@ -210,6 +216,7 @@ class CollisionPipeline {
 
   const Model& model_;
   CollisionOptions options_;
+  Scalar reach_;  // the broad phase's bounds' margin: the larger of options_.margin and every shape_margin
   SerialSeconds serial_seconds_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
   std::vector<int> body_articulation_;
@@ -249,6 +256,7 @@ class CollisionPipeline {
   std::vector<int> group_plane_start_;
   std::vector<int> group_plane_;
   std::vector<std::uint64_t> group_plane_shapes_;
+  std::vector<std::uint8_t> group_plane_same_;      // per plane of a group: 1 where narrow_alike in all its worlds
   std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
   std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch
@@ -267,6 +275,7 @@ class CollisionPipeline {
     std::vector<ShapeLanes> slots;      // a group's slots' boxes (lower, upper)
     std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (group_run_)
     std::vector<std::uint64_t> hits, plane_hits;
+    std::vector<int> read;  // per shape of the lane being found: the shape whose entries the narrow phase reads
   };
   std::vector<Scratch> scratch_;
 };

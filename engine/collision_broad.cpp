@@ -25,10 +25,10 @@ void CollisionPipeline::group_worlds() {
 
 void CollisionPipeline::describe_groups() {
   // per group of several: each shape's body in each lane (-1: none; the first world's again in lanes
-  // past the group's), and a bit per shape whose local pose and size are the same in all its worlds
-  // (read once: a replicated robot's), where group_boxes reads the model's arrays from the first world
-  // only (a collide after a step finds little of them in cache); the runs of bodies its lanes' shapes
-  // lie in (group_run_), and its planes
+  // past the group's), and a bit per shape whose local pose and size, and what the narrow phase reads of it, are
+  // the same in all its worlds (read once: a replicated robot's), where group_boxes and the narrow phase read the
+  // model's arrays from the first world only (a collide after a step finds little of them in cache); the runs of
+  // bodies its lanes' shapes lie in (group_run_), and its planes (each the same in all its worlds, or not)
   const int groups = static_cast<int>(group_first_.size()) - 1;
   group_body_start_.assign(groups, -1);
   group_same_.assign(groups, 0);
@@ -86,22 +86,35 @@ void CollisionPipeline::group_shapes(int g) {
       group_body_.push_back(model.shape_body[s]);
       for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
       for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
+      same &= narrow_alike(s, a);
     }
     if (same) group_same_[g] |= std::uint64_t{1} << i;
   }
 }
 
 void CollisionPipeline::group_plane_reach(int g) {
-  const int first = group_first_[g];
+  const int first = group_first_[g], count = group_first_[g + 1] - first;
   const std::vector<int>& shapes = world_others_[first];
   const int n = static_cast<int>(shapes.size());
   for (const int code : plane_order(first)) {
     std::uint64_t reach = 0;
     for (int i = 0; i < n; ++i)
       if (may_collide(plane_of(first, code), shapes[i])) reach |= std::uint64_t{1} << i;
+    bool same = true;
+    for (int l = 1; l < count; ++l) same &= narrow_alike(plane_of(first + l, code), plane_of(first, code));
     group_plane_.push_back(code);
     group_plane_shapes_.push_back(reach);
+    group_plane_same_.push_back(same);
   }
+}
+
+bool CollisionPipeline::narrow_alike(int s, int a) const {
+  const Model& model = model_;
+  bool same = model.shape_type[s] == model.shape_type[a] && model.shape_mesh[s] == model.shape_mesh[a] &&
+              model.shape_margin[s] == model.shape_margin[a];
+  for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
+  for (int k = 0; k < 2; ++k) same &= model.shape_solref[2 * s + k] == model.shape_solref[2 * a + k];
+  return same;
 }
 
 bool CollisionPipeline::alike(int v, int w) const {
@@ -174,8 +187,7 @@ CollisionPipeline::Box CollisionPipeline::box(const State& state, int s) const {
   Scalar pose[7];
   Vec3 lower, upper;
   shape_bounds(bounds_kind(model_.shape_type[s]), b < 0 ? kIdentity : &state.body_q[7 * b],
-               &model_.shape_transform[7 * s], &model_.shape_scale[3 * s], options_.margin, pose, lower.data(),
-               upper.data());
+               &model_.shape_transform[7 * s], &model_.shape_scale[3 * s], reach_, pose, lower.data(), upper.data());
   return {Transform::from_array(pose), lower, upper};
 }
 
@@ -220,8 +232,8 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
       }
     }
     ShapeLanes& X = scratch.lanes[i];
-    shape_bounds(bounds_kind(model_.shape_type[world_others_[first][i]]), body, local, scale, options_.margin, X.pose,
-                 X.lower, X.upper);
+    shape_bounds(bounds_kind(model_.shape_type[world_others_[first][i]]), body, local, scale, reach_, X.pose, X.lower,
+                 X.upper);
   }
   // the slots' boxes, each joining its shapes'
   const int slot_start = group_slot_start_[g], slots = group_slot_start_[g + 1] - slot_start;

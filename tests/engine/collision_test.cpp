@@ -394,9 +394,14 @@ TEST(CollisionPipeline, ShapesOfNoWorldMeetEveryWorld) {
 // two shapes (the broad phase joins a body's shapes' boxes); each world has its floor and a box on no body, and a
 // tilted plane of no world cuts through them all
 TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
-  auto robot = [](Scalar radius, bool capsule, bool reversed) {
+  // (soft: the floor and the spheres of MuJoCo's softness with a 20 cm margin, where the others' rigid pairs make
+  // contacts within the pipeline's 1 cm)
+  auto robot = [](Scalar radius, bool capsule, bool reversed, bool soft = false) {
     ModelBuilder world;
-    world.add_ground_plane();
+    ShapeOptions softness;
+    softness.solref = {0.02, 1};
+    softness.margin = 0.2;
+    world.add_ground_plane(0, soft ? softness : ShapeOptions{});
     ShapeOptions step;  // a step in the floor, on no body, that the lowest bodies reach
     step.xform.p = Vec3(0.1, 0, 0);
     world.add_shape_box(-1, Vec3(0.15, 0.25, 0.15), step);
@@ -410,7 +415,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
     }
     for (int k = 0; k < 7; ++k) {
       const int b = body[reversed ? 6 - k : k];
-      if (k % 3 == 0) world.add_shape_sphere(b, radius);
+      if (k % 3 == 0) world.add_shape_sphere(b, radius, soft ? softness : ShapeOptions{});
       if (k % 3 == 1) world.add_shape_box(b, Vec3(0.12, 0.08, 0.1));
       if (k % 3 == 2 && (capsule || k < 5)) world.add_shape_capsule(b, 0.06, 0.1);
     }
@@ -419,9 +424,9 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
     world.add_shape_sphere(body[1], 0.12, beside);
     return world;
   };
-  const ModelBuilder kinds[4] = {robot(0.15, true, false), robot(0.2, true, false), robot(0.15, false, false),
-                                 robot(0.15, true, true)};
-  const int kind_of[13] = {0, 0, 0, 1, 0, 0, 0, 0, 0, 3, 2, 0, 0};
+  const ModelBuilder kinds[5] = {robot(0.15, true, false), robot(0.2, true, false), robot(0.15, false, false),
+                                 robot(0.15, true, true), robot(0.15, true, false, true)};
+  const int kind_of[13] = {0, 0, 0, 1, 0, 4, 0, 0, 0, 3, 2, 0, 0};
   ModelBuilder builder;
   for (const int k : kind_of) builder.add_builder(kinds[k], Transform{}, -1);
   const Vec3 tilted = Vec3(0.3, 1, 0.1).normalized();
@@ -437,7 +442,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   pipeline.collide(state, contacts);
-  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0, beside = 0;
+  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0, beside = 0, soft_gap = 0;
   for (int w = 0; w < model.world_count; ++w) {
     ModelBuilder one;
     one.add_builder(kinds[kind_of[w]]);
@@ -465,6 +470,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
       beside += c.contact_shape_b[k] == own_shapes - 1 && c.contact_shape_a[k] > 1;  // (with a robot's shape)
       EXPECT_EQ(contacts.contact_feature[m], c.contact_feature[k]);
       EXPECT_EQ(contacts.contact_depth[m], c.contact_depth[k]) << "world " << w << " contact " << k;
+      soft_gap += kind_of[w] == 4 && c.contact_depth[k] < -0.01;  // (apart by more than a rigid pair's margin)
       for (int i = 0; i < 3; ++i) {
         EXPECT_EQ(contacts.contact_point[3 * m + i], c.contact_point[3 * k + i]) << "world " << w << " contact " << k;
         EXPECT_EQ(contacts.contact_normal[3 * m + i], c.contact_normal[3 * k + i]) << "world " << w << " contact " << k;
@@ -479,6 +485,30 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   EXPECT_GT(tilted_plane, 13);
   EXPECT_GT(step_box, 13);
   EXPECT_GT(beside, 13);
+  EXPECT_GT(soft_gap, 0);
+}
+
+TEST(CollisionPipeline, ASoftShapesMarginLeavesRigidPairsTheirs) {
+  // a rigid sphere 3 cm above a rigid floor beside soft spheres of a 5 cm margin on a soft box: the broad phase
+  // reaches 5 cm, the rigid pair makes its contacts within the pipeline's 1 cm only
+  ModelBuilder builder;
+  builder.add_ground_plane();
+  builder.add_shape_sphere(builder.add_body(RigidBody(), Transform{Vec3(0, 0.13, 0)}), 0.1);
+  ShapeOptions soft;
+  soft.solref = {0.02, 1};
+  soft.margin = 0.05;
+  soft.xform.p = Vec3(3, 0.5, 0);
+  builder.add_shape_box(-1, Vec3(0.5, 0.5, 0.5), soft);
+  soft.xform.p = Vec3::Zero();
+  builder.add_shape_sphere(builder.add_body(RigidBody(), Transform{Vec3(3, 1.13, 0)}), 0.1, soft);
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  EXPECT_EQ(pipeline.options().margin, 0.01);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  ASSERT_EQ(contacts.contact_count, 1);  // the soft pair, 3 cm apart
+  EXPECT_EQ(std::max(contacts.contact_body_a[0], contacts.contact_body_b[0]), 1);
+  EXPECT_NEAR(contacts.contact_depth[0], -0.03, 1e-12);
 }
 
 // a body's shape far from its other shape meets a shape of another body in every world of a group found together
