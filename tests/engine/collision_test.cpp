@@ -426,13 +426,15 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   };
   const ModelBuilder kinds[5] = {robot(0.15, true, false), robot(0.2, true, false), robot(0.15, false, false),
                                  robot(0.15, true, true), robot(0.15, true, false, true)};
-  const int kind_of[13] = {0, 0, 0, 1, 0, 4, 0, 0, 0, 3, 2, 0, 0};
+  // (groups of worlds alike: 0-7, then 11-18 of rigid spheres and 19-26 of soft ones, each group's narrow phase
+  // reading its own)
+  const int kind_of[27] = {0, 0, 0, 1, 0, 4, 0, 0, 0, 3, 2, 0, 0, 0, 0, 0, 0, 0, 0, 4, 4, 4, 4, 4, 4, 4, 4};
   ModelBuilder builder;
   for (const int k : kind_of) builder.add_builder(kinds[k], Transform{}, -1);
   const Vec3 tilted = Vec3(0.3, 1, 0.1).normalized();
   builder.add_plane(tilted, 0.3);
   const Model model = builder.finalize();
-  ASSERT_EQ(model.world_count, 13);
+  ASSERT_EQ(model.world_count, 27);
   // each world's bodies moved apart a little, differently, so that each world meets its own pairs
   std::mt19937 rng(3);
   std::uniform_real_distribution<Scalar> u(-0.06, 0.06);
@@ -442,7 +444,8 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   CollisionPipeline pipeline(model);
   Contacts contacts = pipeline.contacts();
   pipeline.collide(state, contacts);
-  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0, beside = 0, soft_gap = 0;
+  int body0 = 0, shape0 = 0, checked = 0, tilted_plane = 0, step_box = 0, beside = 0;
+  int soft_gap[2] = {};  // world 5's, and those of worlds 19-26
   for (int w = 0; w < model.world_count; ++w) {
     ModelBuilder one;
     one.add_builder(kinds[kind_of[w]]);
@@ -470,7 +473,7 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
       beside += c.contact_shape_b[k] == own_shapes - 1 && c.contact_shape_a[k] > 1;  // (with a robot's shape)
       EXPECT_EQ(contacts.contact_feature[m], c.contact_feature[k]);
       EXPECT_EQ(contacts.contact_depth[m], c.contact_depth[k]) << "world " << w << " contact " << k;
-      soft_gap += kind_of[w] == 4 && c.contact_depth[k] < -0.01;  // (apart by more than a rigid pair's margin)
+      soft_gap[w >= 19] += kind_of[w] == 4 && c.contact_depth[k] < -0.01;  // (further apart than a rigid pair's margin)
       for (int i = 0; i < 3; ++i) {
         EXPECT_EQ(contacts.contact_point[3 * m + i], c.contact_point[3 * k + i]) << "world " << w << " contact " << k;
         EXPECT_EQ(contacts.contact_normal[3 * m + i], c.contact_normal[3 * k + i]) << "world " << w << " contact " << k;
@@ -485,7 +488,8 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   EXPECT_GT(tilted_plane, 13);
   EXPECT_GT(step_box, 13);
   EXPECT_GT(beside, 13);
-  EXPECT_GT(soft_gap, 0);
+  EXPECT_GT(soft_gap[0], 0);
+  EXPECT_GT(soft_gap[1], 0);
 }
 
 TEST(CollisionPipeline, ASoftShapesMarginLeavesRigidPairsTheirs) {
