@@ -233,6 +233,29 @@ int collide_capsule_box(const Transform& capsule, Scalar radius, Scalar half_hei
   return flip(count, out);
 }
 
+bool boxes_apart(const Transform& a, const Vec3& half_a, const Transform& b, const Vec3& half_b, Scalar margin) {
+  // in a's frame: b's axes as the columns of R, its centre at t
+  const Mat3 R = a.rotation().transpose() * b.rotation();
+  const Vec3 t = a.q.conjugate() * (b.p - a.p);
+  const Mat3 abs_R = R.cwiseAbs();
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(t[i]) - half_a[i] - abs_R.row(i).dot(half_b) > margin) return true;
+  for (int j = 0; j < 3; ++j)
+    if (std::abs(t.dot(R.col(j))) - abs_R.col(j).dot(half_a) - half_b[j] > margin) return true;
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const Scalar length = std::sqrt(std::max(Scalar(0), 1 - R(i, j) * R(i, j)));  // |a_i x b_j|
+      if (length < 1e-6) continue;
+      const Scalar ra = half_a[i1] * abs_R(i2, j) + half_a[i2] * abs_R(i1, j);
+      const Scalar rb = half_b[j1] * abs_R(i, j2) + half_b[j2] * abs_R(i, j1);
+      if (std::abs(t[i2] * R(i1, j) - t[i1] * R(i2, j)) - ra - rb > margin * length) return true;
+    }
+  }
+  return false;
+}
+
 int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, const Vec3& half_b, Scalar margin,
                     ContactPoint* out) {
   const Mat3 Ra = a.rotation(), Rb = b.rotation();

@@ -107,6 +107,11 @@ int collide_capsule_box(const Transform& capsule, Scalar radius, Scalar half_hei
 int collide_box_box(const Transform& a, const Vec3& half_a, const Transform& b, const Vec3& half_b, Scalar margin,
                     ContactPoint* out);
 
+// whether boxes a and b (centred at their poses, half extents along their axes) are farther apart than `margin`
+// along one of the separating axis test's fifteen axes (an edge pair's only where the edges are not parallel): where
+// they are, so are any shapes inside them, which the narrow phase then need not search
+bool boxes_apart(const Transform& a, const Vec3& half_a, const Transform& b, const Vec3& half_b, Scalar margin);
+
 // signed distance from a point (box frame) to a box, and the outward normal of the nearest surface
 Scalar box_signed_distance(const Vec3& p, const Vec3& half, Vec3* normal);
 

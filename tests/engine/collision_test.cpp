@@ -10,6 +10,7 @@
 #include "engine/builder.h"
 #include "engine/mjcf_import.h"
 #include "engine/parts/rows.h"
+#include "kernels/convex.h"
 #include "test_support.h"
 #include "test_support_errors.h"
 
@@ -299,6 +300,66 @@ TEST(CollisionPipeline, CountSerialTimeSplitsEachCollideOnlyWhenOn) {
     EXPECT_LT(t.parallel, t.step);
     pipeline.reset_serial_seconds();
     EXPECT_EQ(pipeline.serial_seconds().steps, 0);
+  }
+}
+
+TEST(CollisionPipeline, PairsSkippedByTheirHoldingBoxesAreThoseTheKernelsFindApart) {
+  // a shape on a body moved about a static one of another kind, 300 poses a pair: the pipeline's contacts are the
+  // kernel's own (capsule-box by its search, the rest by MPR), so the boxes it first tests hold each kind whole
+  struct Kind {
+    ShapeType type;
+    ConvexKind convex;
+    Vec3 size;  // (radius, half height) of capsules and cylinders, half extents, radii
+  };
+  const Kind box{ShapeType::Box, ConvexKind::Box, Vec3(0.2, 0.1, 0.15)},
+      capsule{ShapeType::Capsule, ConvexKind::Capsule, Vec3(0.05, 0.2, 0)},
+      cylinder{ShapeType::Cylinder, ConvexKind::Cylinder, Vec3(0.1, 0.15, 0)},
+      ellipsoid{ShapeType::Ellipsoid, ConvexKind::Ellipsoid, Vec3(0.12, 0.2, 0.08)},
+      sphere{ShapeType::Sphere, ConvexKind::Sphere, Vec3(0.1, 0, 0)};
+  auto add = [](ModelBuilder& builder, int body, const Kind& kind, const ShapeOptions& options) {
+    switch (kind.type) {
+      case ShapeType::Box: return builder.add_shape_box(body, kind.size, options);
+      case ShapeType::Capsule: return builder.add_shape_capsule(body, kind.size.x(), kind.size.y(), options);
+      case ShapeType::Cylinder: return builder.add_shape_cylinder(body, kind.size.x(), kind.size.y(), options);
+      case ShapeType::Ellipsoid: return builder.add_shape_ellipsoid(body, kind.size, options);
+      default: return builder.add_shape_sphere(body, kind.size.x(), options);
+    }
+  };
+  const std::pair<Kind, Kind> pairs[] = {{box, capsule},       {capsule, cylinder}, {box, cylinder},
+                                         {cylinder, cylinder}, {box, ellipsoid},    {sphere, cylinder}};
+  std::mt19937 rng(12);
+  std::normal_distribution<Scalar> g;
+  for (const auto& [fixed, moving] : pairs) {
+    ModelBuilder builder;
+    ShapeOptions placed;
+    placed.xform = Transform{Vec3(0, 1, 0), Quat(0.9, 0.2, 0.3, 0.1).normalized()};
+    add(builder, -1, fixed, placed);
+    const int body = builder.add_body(RigidBody::from_sphere(1, 0.1));
+    add(builder, body, moving, {});
+    const Model model = builder.finalize();
+    CollisionPipeline pipeline(model);
+    Contacts contacts = pipeline.contacts();
+    State state = model.state();
+    int touching = 0, apart = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+      const Transform pose{placed.xform.p + 0.3 * Vec3(g(rng), g(rng), g(rng)),
+                           Quat(g(rng), g(rng), g(rng), g(rng)).normalized()};
+      for (int k = 0; k < 3; ++k) state.body_q[7 * body + k] = pose.p[k];
+      for (int k = 0; k < 4; ++k) state.body_q[7 * body + 3 + k] = pose.q.coeffs()[k];
+      pipeline.collide(state, contacts);
+      ContactPoint points[kMaxPairContacts];
+      const Scalar margin = pipeline.options().margin;
+      const int expected =
+          fixed.type == ShapeType::Box && moving.type == ShapeType::Capsule
+              ? collide_capsule_box(pose, moving.size.x(), moving.size.y(), placed.xform, fixed.size, margin, points)
+              : collide_convex({fixed.convex, placed.xform, fixed.size}, {moving.convex, pose, moving.size}, margin,
+                               points);
+      ASSERT_EQ(contacts.contact_count, expected)
+          << static_cast<int>(fixed.type) << "-" << static_cast<int>(moving.type) << " trial " << trial;
+      (expected > 0 ? touching : apart) += 1;
+    }
+    EXPECT_GT(touching, 30) << static_cast<int>(fixed.type) << "-" << static_cast<int>(moving.type);
+    EXPECT_GT(apart, 30) << static_cast<int>(fixed.type) << "-" << static_cast<int>(moving.type);
   }
 }
 

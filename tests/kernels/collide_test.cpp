@@ -6,6 +6,8 @@
 #include <random>
 #include <set>
 
+#include "kernels/convex.h"
+
 namespace novaphy {
 namespace {
 
@@ -134,6 +136,42 @@ TEST(Collide, BoxBoxDepthMatchesSupportScan) {
     EXPECT_LE(along_normal, (scan + face_preference) / 0.95 + 1e-9) << "trial " << trial;
     EXPECT_GT(deepest, 0) << "trial " << trial;
   }
+}
+
+TEST(Collide, BoxesApartWhereAnAxisSeparatesThemAndNeverWhereMprFindsContact) {
+  // random pairs of boxes near each other, margin 2 cm: boxes_apart where one of the fifteen axes, normalised,
+  // separates their projections by more than the margin, and then libccd's MPR finds no contact within it
+  std::mt19937 rng(5);
+  std::normal_distribution<Scalar> g;
+  const Scalar margin = 0.02;
+  int apart = 0, near = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Vec3 ha(0.05 + 0.2 * std::abs(g(rng)), 0.05 + 0.2 * std::abs(g(rng)), 0.05 + 0.2 * std::abs(g(rng)));
+    const Vec3 hb(0.05 + 0.2 * std::abs(g(rng)), 0.05 + 0.2 * std::abs(g(rng)), 0.05 + 0.2 * std::abs(g(rng)));
+    const Transform a{0.3 * Vec3(g(rng), g(rng), g(rng)), Quat(g(rng), g(rng), g(rng), g(rng)).normalized()};
+    const Transform b{0.3 * Vec3(g(rng), g(rng), g(rng)) + Vec3(0.4, 0, 0),
+                      Quat(g(rng), g(rng), g(rng), g(rng)).normalized()};
+    const Mat3 Ra = a.rotation(), Rb = b.rotation();
+    Scalar gap = -std::numeric_limits<Scalar>::infinity();
+    auto separate = [&](Vec3 L) {
+      L.normalize();
+      const Scalar pa = (Ra.transpose() * L).cwiseAbs().dot(ha), pb = (Rb.transpose() * L).cwiseAbs().dot(hb);
+      gap = std::max(gap, std::abs((b.p - a.p).dot(L)) - pa - pb);
+    };
+    for (int k = 0; k < 3; ++k) separate(Ra.col(k)), separate(Rb.col(k));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (Ra.col(i).cross(Rb.col(j)).norm() > 1e-6) separate(Ra.col(i).cross(Rb.col(j)));
+    if (std::abs(gap - margin) < 1e-9) continue;
+    const bool is_apart = boxes_apart(a, ha, b, hb, margin);
+    EXPECT_EQ(is_apart, gap > margin) << "trial " << trial;
+    ContactPoint c[kMaxPairContacts];
+    if (is_apart)
+      EXPECT_EQ(collide_convex({ConvexKind::Box, a, ha}, {ConvexKind::Box, b, hb}, margin, c), 0) << "trial " << trial;
+    (is_apart ? apart : near) += 1;
+  }
+  EXPECT_GT(apart, 80);
+  EXPECT_GT(near, 80);
 }
 
 TEST(Collide, BoxBoxFeaturesAreDistinctWithinAPair) {
