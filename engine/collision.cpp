@@ -28,7 +28,7 @@ Vec3 holding_box(ShapeType type, const Vec3& scale) {
     case ShapeType::Sphere: return Vec3::Constant(scale.x());
     case ShapeType::Capsule: return Vec3(scale.x(), scale.y() + scale.x(), scale.x());
     case ShapeType::Cylinder: return Vec3(scale.x(), scale.y(), scale.x());
-    default: return scale;  // a box's half extents, an ellipsoid's radii
+    default: return scale;  // a box's half extents, an ellipsoid's radii, a mesh's reach (its bounds' box too)
   }
 }
 
@@ -490,10 +490,11 @@ void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, cons
   const Vec3 sa = Eigen::Map<const Vec3>(&model_.shape_scale[3 * read_a]);
   const Vec3 sb = Eigen::Map<const Vec3>(&model_.shape_scale[3 * read_b]);
   const Scalar m = pair_margin(read_a, read_b);
-  // the pairs whose kernels search (capsule-box) or run MPR (cylinders, ellipsoids) first meet the boxes that hold
-  // their shapes: most such pairs the broad phase lets through are apart (a tumbling Go1's trunk and thighs)
+  // the pairs whose kernels search (capsule-box) or run MPR (cylinders, ellipsoids, meshes) first meet the boxes
+  // that hold their shapes: most such pairs the broad phase lets through are apart (a tumbling Go1's trunk and
+  // thighs, a swinging arm's links)
   const bool searched = (ta == ShapeType::Box && tb == ShapeType::Capsule) ||
-                        (ta != ShapeType::Plane && tb >= ShapeType::Cylinder && tb != ShapeType::Mesh);
+                        (ta != ShapeType::Plane && tb >= ShapeType::Cylinder);
   if (searched && boxes_apart(Xa, holding_box(ta, sa), Xb, holding_box(tb, sb), m)) return;
   ContactPoint points[kMaxPairContacts];
   int count = 0;
