@@ -493,8 +493,8 @@ void CollisionPipeline::narrow_phase(int a, const Transform& pose_a, int b, cons
   // the pairs whose kernels search (capsule-box) or run MPR (cylinders, ellipsoids, meshes) first meet the boxes
   // that hold their shapes: most such pairs the broad phase lets through are apart (a tumbling Go1's trunk and
   // thighs, a swinging arm's links)
-  const bool searched = (ta == ShapeType::Box && tb == ShapeType::Capsule) ||
-                        (ta != ShapeType::Plane && tb >= ShapeType::Cylinder);
+  const bool searched =
+      (ta == ShapeType::Box && tb == ShapeType::Capsule) || (ta != ShapeType::Plane && tb >= ShapeType::Cylinder);
   if (searched && boxes_apart(Xa, holding_box(ta, sa), Xb, holding_box(tb, sb), m)) return;
   ContactPoint points[kMaxPairContacts];
   int count = 0;
