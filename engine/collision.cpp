@@ -103,7 +103,7 @@ void CollisionPipeline::sort_shapes() {
   const Model& model = model_;
   world_others_.resize(model.world_count);
   world_planes_.resize(model.world_count);
-  shape_run_.assign(model.shape_count, -1);
+  shape_part_.assign(model.shape_count, -1);
   for (int s = 0; s < model.shape_count; ++s) {
     if (visual_only(s)) continue;  // the broad phase never sees it
     const int w = model.shape_world[s];
@@ -113,7 +113,7 @@ void CollisionPipeline::sort_shapes() {
       continue;
     }
     (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
-    shape_run_[s] = w;
+    shape_part_[s] = w;
   }
 }
 
@@ -274,11 +274,12 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
     }
   const int kept = static_cast<int>(std::min<std::size_t>(c, contacts.contact_capacity));
 #pragma omp barrier
-  // each contact matched with the previous ones, in runs of a fixed length (what a run finds does not depend on
-  // the threads)
-  const int runs = (kept + kMatchRun - 1) / kMatchRun;
+  // each contact matched with the previous ones, in stretches of a fixed length (what a stretch finds does not
+  // depend on the threads)
+  const int stretches = (kept + kMatchStretch - 1) / kMatchStretch;
 #pragma omp for schedule(static)
-  for (int r = 0; r < runs; ++r) match_previous(contacts, r * kMatchRun, std::min(kept, (r + 1) * kMatchRun));
+  for (int r = 0; r < stretches; ++r)
+    match_previous(contacts, r * kMatchStretch, std::min(kept, (r + 1) * kMatchStretch));
   if (t == 0) *found = static_cast<int>(c);
 }
 
@@ -313,15 +314,14 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
   group_planes(g, scratch);
   const int* code = group_plane_.data() + group_plane_start_[g];
   const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
-  const std::vector<int>& alike = world_others_[first];
   const std::uint8_t* plane_same = group_plane_same_.data() + group_plane_start_[g];
+  // the narrow phase reads a shape alike in every world of the group from the first world (in cache)
+  scratch.read_same = group_same_[g];
+  scratch.read_first = world_others_[first].data();
   for (int l = 0; l < count; ++l) {
     const std::vector<int>& shapes = world_others_[first + l];
     const int n = static_cast<int>(shapes.size());
     const std::uint64_t* hits = scratch.hits.data() + l * n;
-    // the narrow phase reads a shape alike in every world of the group from the first world (in cache)
-    scratch.read.resize(n);
-    for (int i = 0; i < n; ++i) scratch.read[i] = group_same_[g] >> i & 1 ? alike[i] : shapes[i];
     // the boxes the lane's narrow phase reads: the shapes of its pairs and those reaching its planes (all of
     // them where shapes of no world meet every shape)
     std::uint64_t needed = shared_others_.empty() || n == 0 ? 0 : ~std::uint64_t{0} >> (64 - n);
@@ -334,7 +334,8 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
       const int p = plane_of(first + l, code[k]), read_p = plane_same[k] ? plane_of(first, code[k]) : p;
       for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
         const int i = __builtin_ctzll(m);
-        narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found, read_p, scratch.read[i]);
+        narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found, read_p,
+                     scratch.read(i, shapes));
       }
     }
   }
@@ -344,7 +345,7 @@ void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scrat
   std::vector<Found>& out = scratch.found;
   const std::vector<int>& shapes = world_others_[w];
   const int n = static_cast<int>(shapes.size());
-  const int* read = hits ? scratch.read.data() : shapes.data();
+  auto read = [&](int i) { return hits ? scratch.read(i, shapes) : shapes[i]; };
   std::vector<Box>& boxes = scratch.boxes;
   if (!hits) {
     if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
@@ -356,14 +357,14 @@ void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scrat
       for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
         const int j = __builtin_ctzll(m);
         if (hits || overlap(boxes[i], boxes[j]))
-          narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out, read[i], read[j]);
+          narrow_phase(shapes[i], boxes[i].pose, shapes[j], boxes[j].pose, out, read(i), read(j));
       }
   } else {
     sweep_world(w, boxes, out);
   }
   for (size_t i = 0; i < shared_others_.size(); ++i)
     for (int j = 0; j < n; ++j)
-      test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out, shared_others_[i], read[j]);
+      test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out, shared_others_[i], read(j));
   if (hits) return;  // (its group's planes follow)
   // the world's planes and the shared ones, in index order
   const std::vector<int>& own = world_planes_[w];
@@ -396,16 +397,17 @@ void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes
   }
 }
 
-int CollisionPipeline::contact_run(std::uint64_t key) const {
+int CollisionPipeline::list_part(std::uint64_t key) const {
   const auto a = static_cast<std::int64_t>(key >> 40), b = static_cast<std::int64_t>((key >> 16) & 0xffffff);
   if (a >= model_.shape_count || b >= model_.shape_count) return std::numeric_limits<int>::max();
-  const int run = std::max(shape_run_[a], shape_run_[b]);
-  return run >= 0 ? run : std::numeric_limits<int>::max();
+  const int part = std::max(shape_part_[a], shape_part_[b]);
+  return part >= 0 ? part : std::numeric_limits<int>::max();
 }
 
 void CollisionPipeline::match_previous(Contacts& contacts, int begin, int end) const {
-  // a contact is most often where the one before it matched, + 1 (the first of a run: at its own place);
-  // otherwise among the previous contacts of its run (contact_run), which are listed together, the runs ascending
+  // a contact is most often where the one before it matched, + 1 (the first of a stretch: at its own place);
+  // otherwise among the previous contacts of its part of the list (list_part), which are listed together, the
+  // parts ascending
   const int n = contacts.previous_count;
   const std::vector<std::uint64_t>& key = contacts.previous_key;
   int next = begin;
@@ -415,18 +417,18 @@ void CollisionPipeline::match_previous(Contacts& contacts, int begin, int end) c
     if (next < n && key[next] == k) {
       m = next;
     } else {
-      const int run = contact_run(k);
+      const int part = list_part(k);
       int p = 0;
-      for (int count = n; count > 0;) {  // the first previous contact of a run not before this one's
+      for (int count = n; count > 0;) {  // the first previous contact of a part not before this one's
         const int half = count / 2;
-        if (contact_run(key[p + half]) < run) {
+        if (list_part(key[p + half]) < part) {
           p += half + 1;
           count -= half + 1;
         } else {
           count = half;
         }
       }
-      for (; p < n && contact_run(key[p]) == run; ++p)
+      for (; p < n && list_part(key[p]) == part; ++p)
         if (key[p] == k) {
           m = p;
           break;

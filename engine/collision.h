@@ -141,9 +141,9 @@ class CollisionPipeline {
   bool narrow_alike(int s, int a) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
-  // which run of collide's list a contact of this key is in: its world's (the world of its shapes that are not
+  // which part of collide's list a contact of this key is in: its world's (the world of its shapes that are not
   // planes), or the last (INT_MAX) where they have none (shapes of no world with each other, planes with them)
-  int contact_run(std::uint64_t key) const;
+  int list_part(std::uint64_t key) const;
   // where each contact in [begin, end) of the buffer was among the previous ones (Contacts::previous_match)
   void match_previous(Contacts& contacts, int begin, int end) const;
   // the constructor's stages, in this order:
@@ -188,8 +188,8 @@ class CollisionPipeline {
   // the contacts of group g's worlds into scratch.found: a world alone, or each lane's after group_boxes
   void group_contacts(const State& state, int g, Scratch& scratch);
   // world w's contacts into scratch.found; hits: its boxes are in scratch already, with the pairs found
-  // overlapping (per shape, a bit for each shape after it) and the shapes the narrow phase reads (scratch.read), and
-  // its group's planes follow
+  // overlapping (per shape, a bit for each shape after it) and the shapes the narrow phase reads (Scratch::read),
+  // and its group's planes follow
   void world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits);
   // world w's pairs by sweep and prune along x (a world of many shapes)
   void sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out);
@@ -209,7 +209,7 @@ class CollisionPipeline {
   bool timed(int threads) const;
   static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes) a thread at least
   static constexpr int kKeptPerThread = 1024;  // previous contacts a thread at least, where nothing else wakes one
-  static constexpr int kMatchRun = 256;        // contacts matched one after another (match_previous)
+  static constexpr int kMatchStretch = 256;    // contacts matched one after another (match_previous)
   // a world of at most this many shapes tests the pairs may_collide allows, from a bit mask per shape
   // worked out once; a larger one sweeps and prunes
   static constexpr int kMaskedWorldShapes = 64;
@@ -263,7 +263,7 @@ class CollisionPipeline {
   std::vector<Box> shared_boxes_;      // [shared_others_]
   std::vector<Transform> plane_pose_;  // [shape] of the planes
   std::vector<Vec3> plane_normal_;     // [shape] of the planes, their normals (+Y) in the world
-  std::vector<int> shape_run_;         // [shape] its world where it is not a plane and has one, else -1
+  std::vector<int> shape_part_;        // [shape] its world where it is not a plane and has one, else -1
   // per thread: the contacts it found, the boxes of the world it is at, of the group of worlds it is at
   // and their pairs' overlaps; on cache lines of its own (each push writes its vector's end, which would
   // otherwise share a line with another thread's)
@@ -275,7 +275,11 @@ class CollisionPipeline {
     std::vector<ShapeLanes> slots;      // a group's slots' boxes (lower, upper)
     std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (group_run_)
     std::vector<std::uint64_t> hits, plane_hits;
-    std::vector<int> read;  // per shape of the lane being found: the shape whose entries the narrow phase reads
+    // the group being found: a bit per shape alike in all its worlds, read from its first world's shapes
+    std::uint64_t read_same = 0;
+    const int* read_first = nullptr;
+    // the shape whose entries the narrow phase reads for shape i of a world of that group (its `shapes`)
+    int read(int i, const std::vector<int>& shapes) const { return read_same >> i & 1 ? read_first[i] : shapes[i]; }
   };
   std::vector<Scratch> scratch_;
 };
