@@ -22,14 +22,10 @@ void size_previous(Contacts& c) {
   c.previous_match.assign(c.contact_capacity, -1);
 }
 
-// the box in a shape's frame that holds it (capsules and cylinders along y), for boxes_apart
+// the box in a shape's frame that holds it, for boxes_apart: the box of its scale, as the broad phase bounds it
+// (bounds_kind), but a capsule's, whose scale leaves out its caps (along y)
 Vec3 holding_box(ShapeType type, const Vec3& scale) {
-  switch (type) {
-    case ShapeType::Sphere: return Vec3::Constant(scale.x());
-    case ShapeType::Capsule: return Vec3(scale.x(), scale.y() + scale.x(), scale.x());
-    case ShapeType::Cylinder: return Vec3(scale.x(), scale.y(), scale.x());
-    default: return scale;  // a box's half extents, an ellipsoid's radii, a mesh's reach (its bounds' box too)
-  }
+  return type == ShapeType::Capsule ? Vec3(scale.x(), scale.y() + scale.x(), scale.x()) : scale;
 }
 
 }  // namespace
