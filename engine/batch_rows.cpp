@@ -130,18 +130,17 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
       n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
       p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
     }
-    const Model& model = *lists.model;
+    const ShapeContacts& shapes = *lists.shapes;
     const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
-    const ContactMaterial &ma = lists.materials[lists.shape_material[sa]],
-                          &mb = lists.materials[lists.shape_material[sb]];
-    const ContactFriction f = contact_friction_of(model.friction_rule, ma, mb);
+    const ContactPair pair = shapes.pair(sa, sb);
+    const ContactFriction& f = pair.friction;
     Scalar softness[5];
-    contact_softness_row(contact_softness(ma, mb, contact_weight(model, sa), contact_weight(model, sb), model.impratio,
-                                          C.contact_depth[c], step.dt),
+    contact_softness_row(contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], lists.model->impratio,
+                                          C.contact_depth[c]),
                          softness);
     in[0][l] = static_cast<T>(C.contact_depth[c]);
     in[1][l] = static_cast<T>(f.mu);
-    in[2][l] = static_cast<T>(contact_restitution(ma, mb));
+    in[2][l] = static_cast<T>(pair.restitution);
     if (const Scalar* P = C.previous(c))
       for (int m = 0; m < 6; ++m) in[3 + m][l] = static_cast<T>(P[m]);
     for (int m = 0; m < 5; ++m) in[9 + m][l] = static_cast<T>(softness[m]);

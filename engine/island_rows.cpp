@@ -146,17 +146,17 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const int rn = add_row(ba, bb, &p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
     const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
     add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
-    const ContactMaterial &ma = step.lists.materials[step.lists.shape_material[sa]],
-                          &mb = step.lists.materials[step.lists.shape_material[sb]];
-    const ContactFriction f = contact_friction_of(model_.friction_rule, ma, mb);
+    const ShapeContacts& shapes = *step.lists.shapes;
+    const ContactPair pair = shapes.pair(sa, sb);
+    const ContactFriction& f = pair.friction;
     rows_[r1].normal = rn;
     rows_[r1].mu = f.mu;
     // the rows' velocities at the step's start; their targets and a soft contact's cfm
     Scalar v[3];
     for (int e = 0; e < 3; ++e) v[e] = row_velocity(rows_[rn + e], J_, step.in->joint_qd.data());
     const Scalar depth = C.contact_depth[c];
-    const ContactSoftness soft = contact_softness(ma, mb, contact_weight(model_, sa), contact_weight(model_, sb),
-                                                  model_.impratio, depth, step.dt);
+    const ContactSoftness soft =
+        contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], model_.impratio, depth);
     if (soft.soft) {
       rows_[rn].target = soft_normal_target(depth, v[0], soft.damping, soft.spring, soft.active_margin, step.dt);
       rows_[rn].cfm = soft.cfm_normal;
@@ -165,7 +165,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
         rows_[rn + e].cfm = soft.cfm_friction;
       }
     } else {
-      rows_[rn].target = contact_normal_target(depth, v[0], contact_restitution(ma, mb), step.rows, step.dt);
+      rows_[rn].target = contact_normal_target(depth, v[0], pair.restitution, step.rows, step.dt);
     }
     Scalar warm[6];
     const Scalar* previous = C.previous(c);

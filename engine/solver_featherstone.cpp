@@ -134,7 +134,15 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
   for (int s = 0; s < model.shape_count; ++s) {
     contact_dims_ = std::max(contact_dims_, contact_row_count(model.shape_condim[s]));
     shape_material_.push_back(materials.index(contact_material(model, s), contact_materials_));
+    shape_weight_.push_back(contact_weight(model, s));
   }
+  shape_contacts_ = {contact_materials_.data(),
+                     shape_material_.data(),
+                     shape_weight_.data(),
+                     nullptr,
+                     static_cast<int>(contact_materials_.size()),
+                     model.friction_rule,
+                     0};
 
   // limits kept per limited joint, by articulation: the blocks lay out their articulations' cells, the
   // others follow
@@ -387,13 +395,24 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     counts_.contacts = n;
     data_.allocate(counts_);
   }
+  if (shape_contacts_.dt != step.dt) {  // the materials' pairs at this dt, where there are few materials
+    const int m = shape_contacts_.material_count;
+    shape_contacts_.dt = step.dt;
+    if (m <= ShapeContacts::kPairTableMaterials) {
+      contact_pairs_.resize(static_cast<size_t>(m) * m);
+      for (int a = 0; a < m; ++a)
+        for (int b = 0; b < m; ++b)
+          contact_pairs_[m * a + b] =
+              contact_pair(model_.friction_rule, contact_materials_[a], contact_materials_[b], step.dt);
+      shape_contacts_.pairs = contact_pairs_.data();
+    }
+  }
   step.lists = {data_.contact_start.data(),
                 data_.contact_list.data(),
                 &model_,
                 &index_,
                 std::min(contact_dims_, contact_row_count(settings.max_condim)),
-                contact_materials_.data(),
-                shape_material_.data()};
+                &shape_contacts_};
   step.touched = data_.touched.data();
   island_contacts_.clear();
   island_articulations_ = dense_rows_;

@@ -189,9 +189,13 @@ class SolverFeatherstone {
   std::vector<int> dof_actuator_start_;
   std::vector<DofActuator> dof_actuators_;
   std::vector<ActuatorParams> actuator_params_;
-  // per shape: its contact numbers' place in contact_materials_, the distinct ones
+  // per shape: its contact numbers' place in contact_materials_, the distinct ones, and its body's invweight0; the
+  // materials' pairs at shape_contacts_.dt (ShapeContacts: where there are few materials)
   std::vector<int> shape_material_;
+  std::vector<Scalar> shape_weight_;
   std::vector<ContactMaterial> contact_materials_;
+  std::vector<ContactPair> contact_pairs_;
+  ShapeContacts shape_contacts_;
   // per tendon: the actuators on it, tendon_actuators_[tendon_actuator_start_[t] .. [t + 1]); per dof: the
   // tendon entries on it likewise (dof_entries_, dof_entry_start_), entry_tendon_: each entry's tendon
   std::vector<int> tendon_actuator_start_, tendon_actuators_, dof_entry_start_, dof_entries_, entry_tendon_;

@@ -19,7 +19,7 @@ namespace novaphy {
 enum class Stage : int { Dynamics = 0, Rows = 1, Integrate = 2, Store = 3 };
 
 struct ArticulationIndex;
-struct ContactMaterial;
+struct ShapeContacts;
 
 // the contacts whose rows an articulation's own unit solves (with static bodies or with itself), listed
 // per articulation in contact order; the unit reads each one's links, friction, restitution and softness from
@@ -30,9 +30,7 @@ struct ContactLists {
   const Model* model = nullptr;
   const ArticulationIndex* index = nullptr;
   int dims = 3;  // the rows of a contact of the most: 3, 4 (torsional) or 6 (and rolling), by the shapes' condim
-  // the shapes' contact numbers: materials[shape_material[shape]] (engine/parts/rows.h)
-  const ContactMaterial* materials = nullptr;
-  const int* shape_material = nullptr;
+  const ShapeContacts* shapes = nullptr;  // the shapes' contact numbers (engine/parts/rows.h)
 };
 
 struct StepContext {

@@ -151,9 +151,10 @@ inline Scalar contact_restitution(const ContactMaterial& a, const ContactMateria
 // step's J qd_out + R p = v + dt aref, v = J qd_in: a row of cfm R and target v + dt aref. A contact whose
 // deciding solref is (0, 0) is rigid (contact_normal_target)
 
-// a contact's softness from its shapes' solref, solimp, solmix, priority, margin and gap (combined as MuJoCo
-// combines geoms) at penetration `depth`: the normal row's cfm R (0 while the contact is inactive, farther
-// than margin - gap), the friction rows' (R / impratio), MuJoCo's B, and K imp (pos - margin)
+// a contact's softness, from its shapes' solref, solimp, solmix, priority, margin and gap (combined as MuJoCo
+// combines geoms: contact_pair) and its penetration (contact_softness): the normal row's cfm R (0 while the
+// contact is inactive, farther than margin - gap), the friction rows' (R / impratio), MuJoCo's B, and
+// K imp (pos - margin)
 struct ContactSoftness {
   bool soft = false;
   Scalar cfm_normal = 0, cfm_friction = 0;
@@ -178,10 +179,21 @@ inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
   return dmin + y * (dmax - dmin);
 }
 
-// weight_a, weight_b: the shapes' bodies' invweight0 (translational; 0 for a static body), impratio the model's
-inline ContactSoftness contact_softness(const ContactMaterial& a, const ContactMaterial& b, Scalar weight_a,
-                                        Scalar weight_b, Scalar impratio, Scalar depth, Scalar dt) {
-  ContactSoftness s;
+// what a contact's friction, restitution and softness take from its two shapes for a step of dt: all but its
+// depth and its bodies' weights (the step reads a table of the pairs of distinct materials, made once a dt)
+struct ContactPair {
+  ContactFriction friction;
+  Scalar restitution = 0;
+  bool soft = false;         // the deciding solref is not (0, 0)
+  Scalar active_margin = 0;  // margin - gap: a contact nearer than this is active
+  Scalar stiffness = 0;      // MuJoCo's K and B of the deciding solref and solimp at dt
+  Scalar damping = 0;
+  Scalar solimp[5] = {};
+};
+inline ContactPair contact_pair(FrictionRule rule, const ContactMaterial& a, const ContactMaterial& b, Scalar dt) {
+  ContactPair pair;
+  pair.friction = contact_friction_of(rule, a, b);
+  pair.restitution = contact_restitution(a, b);
   // the shape of higher priority decides, else a mix weighted by solmix
   const int pa = a.priority, pb = b.priority;
   const Scalar wa = a.solmix, wb = b.solmix;
@@ -192,30 +204,58 @@ inline ContactSoftness contact_softness(const ContactMaterial& a, const ContactM
                                                 : wa / (wa + wb);
   const Scalar* ra = a.solref;
   const Scalar* rb = b.solref;
-  Scalar solref[2], solimp[5];
+  Scalar solref[2];
   for (int k = 0; k < 2; ++k)
     solref[k] = (ra[0] > 0 && rb[0] > 0) || pa != pb ? mix * ra[k] + (1 - mix) * rb[k] : std::min(ra[k], rb[k]);
-  for (int k = 0; k < 5; ++k) solimp[k] = mix * a.solimp[k] + (1 - mix) * b.solimp[k];
-  if (solref[0] == 0 && solref[1] == 0) return s;
-  s.soft = true;
-  s.active_margin = std::max(a.margin, b.margin) - std::max(a.gap, b.gap);
-  const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
-  if (x >= 0) return s;
-  const Scalar dmax = std::clamp(solimp[1], Scalar(1e-4), Scalar(0.9999));
-  Scalar K, B;
+  for (int k = 0; k < 5; ++k) pair.solimp[k] = mix * a.solimp[k] + (1 - mix) * b.solimp[k];
+  if (solref[0] == 0 && solref[1] == 0) return pair;
+  pair.soft = true;
+  pair.active_margin = std::max(a.margin, b.margin) - std::max(a.gap, b.gap);
+  const Scalar dmax = std::clamp(pair.solimp[1], Scalar(1e-4), Scalar(0.9999));
   if (solref[0] > 0) {
     const Scalar tc = std::max(solref[0], 2 * dt);  // (MuJoCo's refsafe)
-    K = 1 / std::max(Scalar(1e-15), dmax * dmax * tc * tc * solref[1] * solref[1]);
-    B = 2 / std::max(Scalar(1e-15), dmax * tc);
+    pair.stiffness = 1 / std::max(Scalar(1e-15), dmax * dmax * tc * tc * solref[1] * solref[1]);
+    pair.damping = 2 / std::max(Scalar(1e-15), dmax * tc);
   } else {
-    K = -solref[0] / std::max(Scalar(1e-15), dmax * dmax);
-    B = -solref[1] / std::max(Scalar(1e-15), dmax);
+    pair.stiffness = -solref[0] / std::max(Scalar(1e-15), dmax * dmax);
+    pair.damping = -solref[1] / std::max(Scalar(1e-15), dmax);
   }
-  const Scalar imp = contact_impedance(solimp, x);
+  return pair;
+}
+
+// the shapes' contact numbers as a step reads them: the distinct materials, each shape's place among them and its
+// body's invweight0 (0: a static body), and the table of the materials' pairs at the step's dt where the model has
+// at most kPairTableMaterials of them (else each pair is made as it is read)
+struct ShapeContacts {
+  static constexpr int kPairTableMaterials = 32;
+  const ContactMaterial* materials = nullptr;
+  const int* shape_material = nullptr;
+  const Scalar* shape_weight = nullptr;
+  const ContactPair* pairs = nullptr;  // [material_count * material a + material b], or null
+  int material_count = 0;
+  FrictionRule rule = FrictionRule::Mujoco;
+  Scalar dt = 0;
+  ContactPair pair(int shape_a, int shape_b) const {
+    const int a = shape_material[shape_a], b = shape_material[shape_b];
+    return pairs ? pairs[material_count * a + b] : contact_pair(rule, materials[a], materials[b], dt);
+  }
+};
+
+// a contact's softness from its pair at penetration `depth`; weight_a, weight_b: the shapes' bodies'
+// invweight0 (translational; 0 for a static body), impratio the model's
+inline ContactSoftness contact_softness(const ContactPair& pair, Scalar weight_a, Scalar weight_b, Scalar impratio,
+                                        Scalar depth) {
+  ContactSoftness s;
+  if (!pair.soft) return s;
+  s.soft = true;
+  s.active_margin = pair.active_margin;
+  const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
+  if (x >= 0) return s;
+  const Scalar imp = contact_impedance(pair.solimp, x);
   s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (weight_a + weight_b));
   s.cfm_friction = s.cfm_normal / impratio;
-  s.damping = B;
-  s.spring = K * imp * x;
+  s.damping = pair.damping;
+  s.spring = pair.stiffness * imp * x;
   return s;
 }
 // a shape's body's invweight0 (0: a static body), as contact_softness takes it

@@ -105,6 +105,58 @@ TEST(SoftContacts, BodiesRestAtMujocosDepth) {
   std::filesystem::remove(path);
 }
 
+// spheres each of its own solref, solimp, priority and solmix (more distinct materials than the step tables: each
+// contact's pair made as it is read, engine/parts/rows.h ShapeContacts) rest as deep as in MuJoCo
+TEST(SoftContacts, ManyMaterialsRestAtMujocosDepth) {
+  constexpr int kSpheres = 40;
+  static_assert(kSpheres + 1 > ShapeContacts::kPairTableMaterials);
+  std::string xml = R"(<mujoco><option timestep="0.002"/><worldbody>
+    <geom name="floor" type="plane" size="20 20 0.1" solmix="2"/>)";
+  for (int k = 0; k < kSpheres; ++k)
+    xml += "<body name=\"s" + std::to_string(k) + "\" pos=\"" + std::to_string(0.3 * k) +
+           " 0 0.05\"><freejoint/><geom type=\"sphere\" size=\"0.05\" mass=\"" + std::to_string(1 + 0.05 * k) +
+           "\" solref=\"" + std::to_string(0.01 + 0.001 * k) + " " + std::to_string(0.5 + 0.02 * k) + "\" solimp=\"" +
+           std::to_string(0.5 + 0.01 * k) + " 0.99 " + std::to_string(0.005 + 0.0005 * k) + "\" priority=\"" +
+           std::to_string(k % 3 == 0 ? 1 : 0) + "\" solmix=\"" + std::to_string(0.5 + 0.1 * k) + "\"/></body>";
+  xml += "</worldbody></mujoco>";
+  const std::string path = test::write_temp_file("soft_many.xml", xml);
+  const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
+  const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
+  for (int k = 0; k < 1000; ++k) mj_step(m.get(), d.get());
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  solver_test::Scene scene(builder);
+  scene.run(2, 0.002);
+  for (int k = 0; k < kSpheres; ++k) {
+    const int b = mj_name2id(m.get(), mjOBJ_BODY, ("s" + std::to_string(k)).c_str());
+    const Scalar mujoco = d->xpos[3 * b + 2], novaphy = scene.position(import.body_map[b]).z();
+    EXPECT_NEAR(novaphy, mujoco, 2e-4) << "sphere " << k;
+    EXPECT_LT(novaphy, 0.05 - 1e-4) << "sphere " << k;  // (soft: each sank)
+  }
+  std::filesystem::remove(path);
+}
+
+// a contact's softness follows the step's dt where a solref's time constant is under two steps (MuJoCo's refsafe):
+// a solver that stepped at another dt steps a state as a new one does
+TEST(SoftContacts, SoftnessFollowsTheStepsDt) {
+  ModelBuilder builder;
+  const int ball = builder.add_body(RigidBody::from_sphere(1, 0.05), Transform{Vec3(0, 0.049, 0)});
+  builder.add_joint_free(-1, ball);
+  ShapeOptions soft;
+  soft.solref = {0.005, 1};
+  builder.add_shape_sphere(ball, 0.05, soft);
+  builder.add_ground_plane(0, soft);
+  solver_test::Scene used(builder), fresh(builder);
+  used.run(0.04, 0.004);
+  const State start = used.state;
+  for (solver_test::Scene* scene : {&used, &fresh}) {
+    scene->state = start;
+    scene->run(0.01, 0.001);
+  }
+  EXPECT_EQ(used.state.joint_q, fresh.state.joint_q);
+  EXPECT_EQ(used.state.joint_qd, fresh.state.joint_qd);
+}
+
 // a ball spinning on the spot (condim 4), one rolling with condim 6 and one with condim 3
 constexpr const char* kSpinAndRoll = R"(
 <mujoco>
