@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/builder.h"
 #include "engine/mjcf_import.h"
@@ -70,6 +71,25 @@ TEST(SoftContacts, ImpedanceFollowsSolimp) {
   EXPECT_EQ(contact_impedance(flat, -0.0005), 0.95);
 }
 
+// the bodies' heights after 2 s from the MJCF at `path`, NovaPhy's; each within 0.2 mm of MuJoCo's
+std::vector<Scalar> rest_heights_as_in_mujoco(const std::string& path, const std::vector<std::string>& bodies) {
+  const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
+  const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
+  for (int k = 0; k < 1000; ++k) mj_step(m.get(), d.get());
+  ModelBuilder builder;
+  const MujocoImport import = import_mjcf(builder, path);
+  solver_test::Scene scene(builder);
+  scene.run(2, 0.002);
+  std::vector<Scalar> heights;
+  for (const std::string& name : bodies) {
+    const int b = mj_name2id(m.get(), mjOBJ_BODY, name.c_str());
+    const Scalar mujoco = d->xpos[3 * b + 2], novaphy = scene.position(import.body_map[b]).z();
+    EXPECT_NEAR(novaphy, mujoco, 2e-4) << name;
+    heights.push_back(novaphy);
+  }
+  return heights;
+}
+
 // bodies dropped on soft contacts come to rest as deep as in MuJoCo: MuJoCo's defaults on a box; a sphere
 // of Go1's feet's solimp (soft at the surface, hard 23 mm in), which sinks over a centimetre; a capsule of a
 // slower solref; a cylinder on a priority-deciding floor
@@ -87,21 +107,8 @@ TEST(SoftContacts, BodiesRestAtMujocosDepth) {
     <body name="can" pos="3 0 0.12"><freejoint/><geom type="cylinder" size="0.1 0.1" mass="4" solmix="3"/></body>
   </worldbody>
 </mujoco>)");
-  const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
-  const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
-  for (int k = 0; k < 1000; ++k) mj_step(m.get(), d.get());
-  ModelBuilder builder;
-  const MujocoImport import = import_mjcf(builder, path);
-  solver_test::Scene scene(builder);
-  scene.run(2, 0.002);
-  for (const char* name : {"box", "foot", "capsule", "can"}) {
-    const int b = mj_name2id(m.get(), mjOBJ_BODY, name);
-    const Scalar mujoco = d->xpos[3 * b + 2], novaphy = scene.position(import.body_map[b]).z();
-    EXPECT_NEAR(novaphy, mujoco, 2e-4) << name;
-  }
-  // (the foot sinks more than a rigid contact's slop would allow)
-  const int foot = mj_name2id(m.get(), mjOBJ_BODY, "foot");
-  EXPECT_LT(scene.position(import.body_map[foot]).z(), 0.023 - 0.005);
+  const std::vector<Scalar> heights = rest_heights_as_in_mujoco(path, {"box", "foot", "capsule", "can"});
+  EXPECT_LT(heights[1], 0.023 - 0.005);  // (the foot sinks more than a rigid contact's slop would allow)
   std::filesystem::remove(path);
 }
 
@@ -120,19 +127,10 @@ TEST(SoftContacts, ManyMaterialsRestAtMujocosDepth) {
            std::to_string(k % 3 == 0 ? 1 : 0) + "\" solmix=\"" + std::to_string(0.5 + 0.1 * k) + "\"/></body>";
   xml += "</worldbody></mujoco>";
   const std::string path = test::write_temp_file("soft_many.xml", xml);
-  const MjModelPtr m(load_mujoco_model(path), mj_deleteModel);
-  const MjDataPtr d(mj_makeData(m.get()), mj_deleteData);
-  for (int k = 0; k < 1000; ++k) mj_step(m.get(), d.get());
-  ModelBuilder builder;
-  const MujocoImport import = import_mjcf(builder, path);
-  solver_test::Scene scene(builder);
-  scene.run(2, 0.002);
-  for (int k = 0; k < kSpheres; ++k) {
-    const int b = mj_name2id(m.get(), mjOBJ_BODY, ("s" + std::to_string(k)).c_str());
-    const Scalar mujoco = d->xpos[3 * b + 2], novaphy = scene.position(import.body_map[b]).z();
-    EXPECT_NEAR(novaphy, mujoco, 2e-4) << "sphere " << k;
-    EXPECT_LT(novaphy, 0.05 - 1e-4) << "sphere " << k;  // (soft: each sank)
-  }
+  std::vector<std::string> spheres;
+  for (int k = 0; k < kSpheres; ++k) spheres.push_back("s" + std::to_string(k));
+  const std::vector<Scalar> heights = rest_heights_as_in_mujoco(path, spheres);
+  for (int k = 0; k < kSpheres; ++k) EXPECT_LT(heights[k], 0.05 - 1e-4) << spheres[k];  // (soft: each sank)
   std::filesystem::remove(path);
 }
 
