@@ -323,13 +323,20 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
     std::uint64_t needed = shared_others_.empty() || n == 0 ? 0 : ~std::uint64_t{0} >> (64 - n);
     for (int i = 0; i < n; ++i)
       if (hits[i] != 0) needed |= hits[i] | std::uint64_t{1} << i;
-    for (int k = 0; k < planes; ++k) needed |= scratch.plane_hits[l * planes + k];
+    for (int k = 0; k < planes; ++k) needed |= scratch.plane_hits[l * planes + k] & ~scratch.spheres;
     lane_boxes(l, needed, scratch);
     world_contacts(state, first + l, scratch, hits);
     for (int k = 0; k < planes; ++k) {
       const int p = plane_of(first + l, code[k]), read_p = plane_same[k] ? plane_of(first, code[k]) : p;
       for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
         const int i = __builtin_ctzll(m);
+        if (scratch.spheres >> i & 1) {  // (found in lanes by group_planes)
+          const SphereOnPlane& c = scratch.plane_spheres[k * n + i];
+          if (c.touching[l])
+            scratch.found.push_back(
+                {p, shapes[i], {Vec3(c.point[0][l], c.point[1][l], c.point[2][l]), plane_normal_[p], c.depth[l], 0}});
+          continue;
+        }
         narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found, read_p,
                      scratch.read(i, shapes));
       }

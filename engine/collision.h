@@ -108,6 +108,12 @@ class CollisionPipeline {
   struct ShapeLanes {
     Lanes<Scalar> pose[7], lower[3], upper[3];
   };
+  // a group's sphere against one of its planes in lanes (plane_sphere_contact): the lanes touching, their depths
+  // and points
+  struct SphereOnPlane {
+    Lanes<Scalar> point[3], depth;
+    IntLanes<Scalar> touching;
+  };
   struct Scratch;
   // the boxes of the worlds of group g into scratch.lanes (a world per lane), and the pairs whose boxes
   // overlap into scratch.hits ([lane][shape]: a bit for each shape after it)
@@ -116,7 +122,8 @@ class CollisionPipeline {
   void lane_boxes(int l, std::uint64_t needed, Scratch& scratch) const;
   // the planes of group g against its worlds' shapes, in lanes (scratch.lanes): for each of the group's
   // planes, in the order its worlds meet them (group_plane_), the shapes that may reach it, into
-  // scratch.plane_hits ([lane][plane]: a bit for each shape)
+  // scratch.plane_hits ([lane][plane]: a bit for each shape); the spheres' contacts with them into
+  // scratch.plane_spheres ([plane][shape], where a lane may reach it; scratch.spheres: a bit for each sphere)
   void group_planes(int g, Scratch& scratch) const;
   // group g's runs of bodies into group_run_ and group_local_, where its worlds have them
   void group_runs(int g);
@@ -275,6 +282,8 @@ class CollisionPipeline {
     std::vector<ShapeLanes> slots;      // a group's slots' boxes (lower, upper)
     std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (group_run_)
     std::vector<std::uint64_t> hits, plane_hits;
+    std::vector<SphereOnPlane> plane_spheres;
+    std::uint64_t spheres = 0;
     // the group being found: a bit per shape alike in all its worlds, read from its first world's shapes
     std::uint64_t read_same = 0;
     const int* read_first = nullptr;

@@ -285,11 +285,19 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
   constexpr int L = kLanes<Scalar>;
   const int first = group_first_[g], count = group_first_[g + 1] - first;
   const int start = group_plane_start_[g], planes = group_plane_start_[g + 1] - start;
+  const std::vector<int>& first_shapes = world_others_[first];
+  const int n = static_cast<int>(first_shapes.size());
   scratch.plane_hits.assign(static_cast<size_t>(L) * planes, 0);
+  scratch.plane_spheres.resize(static_cast<size_t>(planes) * n);
+  scratch.spheres = 0;
+  for (int i = 0; i < n; ++i)
+    if (model_.shape_type[first_shapes[i]] == static_cast<int>(ShapeType::Sphere))
+      scratch.spheres |= std::uint64_t{1} << i;
   for (int k = 0; k < planes; ++k) {
     V origin[3], normal[3];
+    int plane[L];
     for (int l = 0; l < L; ++l) {
-      const int p = plane_of(first + (l < count ? l : 0), group_plane_[start + k]);
+      const int p = plane[l] = plane_of(first + (l < count ? l : 0), group_plane_[start + k]);
       for (int m = 0; m < 3; ++m) origin[m][l] = plane_pose_[p].p[m], normal[m][l] = plane_normal_[p][m];
     }
     for (std::uint64_t m = group_plane_shapes_[start + k]; m != 0; m &= m - 1) {
@@ -299,6 +307,17 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
       if (!any_lane<Scalar>(hit)) continue;
       for (int l = 0; l < count; ++l)
         if (hit[l]) scratch.plane_hits[l * planes + k] |= std::uint64_t{1} << i;
+      if (!(scratch.spheres >> i & 1)) continue;
+      // the sphere's contacts in lanes, its radius and the pair's margin read once where alike in every world
+      V radius, margin;
+      const bool same = (group_same_[g] >> i & 1) && group_plane_same_[start + k];
+      for (int l = 0; l < L; ++l) {
+        const int s = same ? first_shapes[i] : world_others_[first + (l < count ? l : 0)][i];
+        radius[l] = l > 0 && same ? radius[0] : model_.shape_scale[3 * s];
+        margin[l] = l > 0 && same ? margin[0] : pair_margin(same ? plane[0] : plane[l], s);
+      }
+      SphereOnPlane& c = scratch.plane_spheres[k * n + i];
+      c.touching = plane_sphere_contact<V>(origin, normal, X.pose, radius, margin, c.point, &c.depth);
     }
   }
 }

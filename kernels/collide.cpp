@@ -116,13 +116,9 @@ int reduce_to_four(int count, ContactPoint* points) {
 
 int collide_plane_sphere(const Transform& plane, const Vec3& center, Scalar radius, Scalar margin, ContactPoint* out) {
   const Vec3 n = plane.q * Vec3::UnitY();
-  const Vec3 s = center - n * n.dot(center - plane.p);
-  const Scalar depth = radius - n.dot(center - plane.p);
-  if (depth < -margin) return 0;
-  out->normal = n;
-  out->depth = depth;
-  out->point = 0.5 * (s + (center - radius * n));
-  out->feature = 0;
+  Scalar point[3], depth;
+  if (!plane_sphere_contact<Scalar>(plane.p.data(), n.data(), center.data(), radius, margin, point, &depth)) return 0;
+  *out = {Vec3(point[0], point[1], point[2]), n, depth, 0};
   return 1;
 }
 

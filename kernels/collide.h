@@ -89,6 +89,16 @@ int keep_four(int count, PointAt&& point_at, ContactPoint* out) {
 // points[0 .. count) reduced to keep_four's, in their order; returns how many are left
 int reduce_to_four(int count, ContactPoint* points);
 
+// a sphere (centre c, radius r) against a plane (a point o on it, unit normal n): its depth and contact point
+// (normal n, feature 0), and whether it is a contact (depth >= -margin, as a mask where V is lanes). V is Scalar or
+// lanes of pairs, one function for both: a world's contact is the same bits whether found alone or in lanes
+template <typename V>
+inline auto plane_sphere_contact(const V* o, const V* n, const V* c, const V& r, const V& margin, V* point, V* depth) {
+  const V d = n[0] * (c[0] - o[0]) + n[1] * (c[1] - o[1]) + n[2] * (c[2] - o[2]);
+  *depth = r - d;
+  for (int m = 0; m < 3; ++m) point[m] = 0.5 * ((c[m] - n[m] * d) + (c[m] - r * n[m]));
+  return (*depth < -margin) == 0;
+}
 int collide_plane_sphere(const Transform& plane, const Vec3& center, Scalar radius, Scalar margin, ContactPoint* out);
 int collide_plane_box(const Transform& plane, const Transform& box, const Vec3& half, Scalar margin, ContactPoint* out);
 int collide_plane_capsule(const Transform& plane, const Transform& capsule, Scalar radius, Scalar half_height,
