@@ -22,6 +22,43 @@ TEST(Collide, SphereOnPlane) {
   EXPECT_EQ(collide_plane_sphere(Transform{Vec3::Zero()}, Vec3(0, 0.52, 0), 0.5, 0.01, c), 0);
 }
 
+// the lanes of plane_sphere_contact are collide_plane_sphere's bits, lane by lane: tilted planes, spheres above,
+// touching and below them, margins from none to 5 cm
+TEST(Collide, SpheresOnPlanesInLanesAreTheScalarKernelsLaneByLane) {
+  using V = Lanes<Scalar>;
+  constexpr int L = kLanes<Scalar>;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<Scalar> unit(-1, 1);
+  int touching = 0, apart = 0;
+  for (int round = 0; round < 50; ++round) {
+    Transform plane[L];
+    Vec3 center[L];
+    V o[3], n[3], c[3], r, margin;
+    for (int l = 0; l < L; ++l) {
+      plane[l] =
+          Transform{Vec3(unit(rng), unit(rng), unit(rng)), about(Vec3(unit(rng), unit(rng), unit(rng)), unit(rng))};
+      const Vec3 normal = plane[l].q * Vec3::UnitY();
+      r[l] = 0.05 + 0.05 * (unit(rng) + 1);
+      margin[l] = 0.025 * (unit(rng) + 1);
+      center[l] = plane[l].p + 2 * Vec3(unit(rng), unit(rng), unit(rng)) + normal * (r[l] + 0.1 * unit(rng));
+      for (int m = 0; m < 3; ++m) o[m][l] = plane[l].p[m], n[m][l] = normal[m], c[m][l] = center[l][m];
+    }
+    V point[3], depth;
+    const IntLanes<Scalar> on = plane_sphere_contact<V>(o, n, c, r, margin, point, &depth);
+    for (int l = 0; l < L; ++l) {
+      ContactPoint expected[kMaxPairContacts];
+      const int count = collide_plane_sphere(plane[l], center[l], r[l], margin[l], expected);
+      ASSERT_EQ(on[l] != 0, count == 1) << "round " << round << " lane " << l;
+      (count ? touching : apart) += 1;
+      if (!count) continue;
+      EXPECT_EQ(depth[l], expected[0].depth);
+      for (int m = 0; m < 3; ++m) EXPECT_EQ(point[m][l], expected[0].point[m]);
+    }
+  }
+  EXPECT_GT(touching, 50);
+  EXPECT_GT(apart, 50);
+}
+
 TEST(Collide, BoxRestingOnPlaneTouchesAtFourCorners) {
   ContactPoint c[kMaxPairContacts];
   const int n = collide_plane_box(Transform{Vec3::Zero()}, Transform{Vec3(0, 0.19, 0), about(Vec3::UnitY(), 0.3)},
