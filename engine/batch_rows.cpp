@@ -132,7 +132,8 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     }
     const ShapeContacts& shapes = *lists.shapes;
     const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
-    const ContactPair pair = shapes.pair(sa, sb);
+    ContactPair made;
+    const ContactPair& pair = shapes.pair(sa, sb, &made);
     const ContactFriction& f = pair.friction;
     Scalar softness[5];
     contact_softness_row(contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], lists.model->impratio,

@@ -147,7 +147,8 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
     add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
     const ShapeContacts& shapes = *step.lists.shapes;
-    const ContactPair pair = shapes.pair(sa, sb);
+    ContactPair made;
+    const ContactPair& pair = shapes.pair(sa, sb, &made);
     const ContactFriction& f = pair.friction;
     rows_[r1].normal = rn;
     rows_[r1].mu = f.mu;

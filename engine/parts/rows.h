@@ -235,9 +235,11 @@ struct ShapeContacts {
   int material_count = 0;
   FrictionRule rule = FrictionRule::Mujoco;
   Scalar dt = 0;
-  ContactPair pair(int shape_a, int shape_b) const {
+  // the table's entry, else the pair made into *made
+  const ContactPair& pair(int shape_a, int shape_b, ContactPair* made) const {
     const int a = shape_material[shape_a], b = shape_material[shape_b];
-    return pairs ? pairs[material_count * a + b] : contact_pair(rule, materials[a], materials[b], dt);
+    if (pairs) return pairs[material_count * a + b];
+    return *made = contact_pair(rule, materials[a], materials[b], dt);
   }
 };
 
