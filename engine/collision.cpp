@@ -313,7 +313,7 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
   const std::uint8_t* plane_same = group_plane_same_.data() + group_plane_start_[g];
   // the narrow phase reads a shape alike in every world of the group from the first world (in cache)
   scratch.read_same = group_same_[g];
-  scratch.read_first = world_others_[first].data();
+  scratch.read_first = world_others_[group_read_[g]].data();
   for (int l = 0; l < count; ++l) {
     const std::vector<int>& shapes = world_others_[first + l];
     const int n = static_cast<int>(shapes.size());

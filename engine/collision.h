@@ -146,6 +146,8 @@ class CollisionPipeline {
                     int read_b) const;
   // the narrow phase reads the same of shapes s and a: type, size, mesh, margin and solref
   bool narrow_alike(int s, int a) const;
+  // and so do the bounds (local pose, size): a group reads shapes alike so from another world
+  bool read_alike(int s, int a) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
   // which part of collide's list a contact of this key is in: its world's (the world of its shapes that are not
@@ -168,8 +170,9 @@ class CollisionPipeline {
   void group_worlds();
   // per group of several worlds: its shapes' bodies and sameness, its runs of bodies, its planes' reach
   void describe_groups();
-  // group g's shapes' bodies in each lane (group_body_) and which shapes are the same in all its worlds
-  void group_shapes(int g);
+  // group g's shapes' bodies in each lane (group_body_), which shapes are the same in all its worlds and the world
+  // it reads them from (group_read_: last_read, the group before's, where they are alike to its own)
+  void group_shapes(int g, int last_read);
   // group g's planes in the order its worlds meet them, each with the shapes that may reach it
   void group_plane_reach(int g);
   // group g's slots (group_slot_shapes_, group_slot_pairs_)
@@ -243,6 +246,10 @@ class CollisionPipeline {
   std::vector<int> group_body_start_;
   std::vector<int> group_body_;
   std::vector<std::uint64_t> group_same_;
+  // per group of several worlds: the world whose shapes it reads for those the same in all its worlds, the last
+  // group's where they are alike (a replicated robot's groups all read one world's, which stays in cache), else
+  // its first
+  std::vector<int> group_read_;
   // per group of several worlds whose shapes' bodies lie in a run of bodies each, at the same places in
   // every run (a replicated robot's): its runs' length (0: no such runs) and each lane's first body; per
   // shape of the group (from group_body_start_ / kLanes), its body's place in the run, or -1

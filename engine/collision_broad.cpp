@@ -32,13 +32,16 @@ void CollisionPipeline::describe_groups() {
   const int groups = static_cast<int>(group_first_.size()) - 1;
   group_body_start_.assign(groups, -1);
   group_same_.assign(groups, 0);
+  group_read_.assign(groups, -1);
   group_run_.assign(groups, {});
   group_plane_start_.assign(1, 0);
   group_slot_start_.assign(1, 0);
+  int last_read = -1;
   for (int g = 0; g < groups; ++g) {
     const int first = group_first_[g], count = group_first_[g + 1] - first;
     if (count > 1) {
-      group_shapes(g);
+      group_shapes(g, last_read);
+      last_read = group_read_[g];
       group_runs(g);
       group_plane_reach(g);
       group_slots(g);
@@ -72,8 +75,7 @@ void CollisionPipeline::group_slots(int g) {
       group_slot_pairs_[start + slot[i]] |= std::uint64_t{1} << slot[__builtin_ctzll(m)];
 }
 
-void CollisionPipeline::group_shapes(int g) {
-  const Model& model = model_;
+void CollisionPipeline::group_shapes(int g, int last_read) {
   const int L = kLanes<Scalar>;
   const int first = group_first_[g], count = group_first_[g + 1] - first;
   const std::vector<int>& shapes = world_others_[first];
@@ -82,14 +84,17 @@ void CollisionPipeline::group_shapes(int g) {
   for (int i = 0; i < n; ++i) {
     bool same = true;
     for (int l = 0; l < L; ++l) {
-      const int a = shapes[i], s = world_others_[first + (l < count ? l : 0)][i];
-      group_body_.push_back(model.shape_body[s]);
-      for (int k = 0; k < 7; ++k) same &= model.shape_transform[7 * s + k] == model.shape_transform[7 * a + k];
-      for (int k = 0; k < 3; ++k) same &= model.shape_scale[3 * s + k] == model.shape_scale[3 * a + k];
-      same &= narrow_alike(s, a);
+      const int s = world_others_[first + (l < count ? l : 0)][i];
+      group_body_.push_back(model_.shape_body[s]);
+      same &= read_alike(s, shapes[i]);
     }
     if (same) group_same_[g] |= std::uint64_t{1} << i;
   }
+  group_read_[g] = first;
+  if (last_read < 0 || static_cast<int>(world_others_[last_read].size()) != n) return;
+  for (std::uint64_t m = group_same_[g]; m != 0; m &= m - 1)
+    if (!read_alike(world_others_[last_read][__builtin_ctzll(m)], shapes[__builtin_ctzll(m)])) return;
+  group_read_[g] = last_read;
 }
 
 void CollisionPipeline::group_plane_reach(int g) {
@@ -106,6 +111,12 @@ void CollisionPipeline::group_plane_reach(int g) {
     group_plane_shapes_.push_back(reach);
     group_plane_same_.push_back(same);
   }
+}
+
+bool CollisionPipeline::read_alike(int s, int a) const {
+  bool same = narrow_alike(s, a);
+  for (int k = 0; k < 7; ++k) same &= model_.shape_transform[7 * s + k] == model_.shape_transform[7 * a + k];
+  return same;
 }
 
 bool CollisionPipeline::narrow_alike(int s, int a) const {
@@ -207,6 +218,7 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
     scratch.body_q.resize(7 * run.length);
     lanes_from_rows<Scalar>(rows, 7 * run.length, scratch.body_q.data());
   }
+  const std::vector<int>& read = world_others_[group_read_[g]];
   for (int i = 0; i < n; ++i) {
     // shape i of each world
     V gathered[7], local[7], scale[3];
@@ -220,8 +232,9 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
         for (int k = 0; k < 7; ++k) gathered[k][l] = x[k];
       }
     }
-    if (group_same_[g] >> i & 1) {
-      const int s = world_others_[first][i];
+    const bool same = group_same_[g] >> i & 1;
+    if (same) {
+      const int s = read[i];
       for (int k = 0; k < 7; ++k) local[k] = V{} + model_.shape_transform[7 * s + k];
       for (int k = 0; k < 3; ++k) scale[k] = V{} + model_.shape_scale[3 * s + k];
     } else {
@@ -232,8 +245,8 @@ void CollisionPipeline::group_boxes(const State& state, int g, Scratch& scratch)
       }
     }
     ShapeLanes& X = scratch.lanes[i];
-    shape_bounds(bounds_kind(model_.shape_type[world_others_[first][i]]), body, local, scale, reach_, X.pose, X.lower,
-                 X.upper);
+    shape_bounds(bounds_kind(model_.shape_type[same ? read[i] : world_others_[first][i]]), body, local, scale, reach_,
+                 X.pose, X.lower, X.upper);
   }
   // the slots' boxes, each joining its shapes'
   const int slot_start = group_slot_start_[g], slots = group_slot_start_[g + 1] - slot_start;
@@ -285,14 +298,15 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
   constexpr int L = kLanes<Scalar>;
   const int first = group_first_[g], count = group_first_[g + 1] - first;
   const int start = group_plane_start_[g], planes = group_plane_start_[g + 1] - start;
-  const std::vector<int>& first_shapes = world_others_[first];
+  const std::vector<int>&first_shapes = world_others_[first], &read = world_others_[group_read_[g]];
   const int n = static_cast<int>(first_shapes.size());
   scratch.plane_hits.assign(static_cast<size_t>(L) * planes, 0);
   scratch.plane_spheres.resize(static_cast<size_t>(planes) * n);
   scratch.spheres = 0;
-  for (int i = 0; i < n; ++i)
-    if (model_.shape_type[first_shapes[i]] == static_cast<int>(ShapeType::Sphere))
-      scratch.spheres |= std::uint64_t{1} << i;
+  for (int i = 0; i < n; ++i) {
+    const int s = group_same_[g] >> i & 1 ? read[i] : first_shapes[i];
+    if (model_.shape_type[s] == static_cast<int>(ShapeType::Sphere)) scratch.spheres |= std::uint64_t{1} << i;
+  }
   for (int k = 0; k < planes; ++k) {
     V origin[3], normal[3];
     int plane[L];
@@ -312,7 +326,7 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
       V radius, margin;
       const bool same = (group_same_[g] >> i & 1) && group_plane_same_[start + k];
       for (int l = 0; l < L; ++l) {
-        const int s = same ? first_shapes[i] : world_others_[first + (l < count ? l : 0)][i];
+        const int s = same ? read[i] : world_others_[first + (l < count ? l : 0)][i];
         radius[l] = l > 0 && same ? radius[0] : model_.shape_scale[3 * s];
         margin[l] = l > 0 && same ? margin[0] : pair_margin(same ? plane[0] : plane[l], s);
       }
