@@ -308,9 +308,8 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
   }
   group_boxes(state, g, scratch);
   group_planes(g, scratch);
-  const int* code = group_plane_.data() + group_plane_start_[g];
-  const int planes = group_plane_start_[g + 1] - group_plane_start_[g];
-  const std::uint8_t* plane_same = group_plane_same_.data() + group_plane_start_[g];
+  const int start = group_plane_start_[g], planes = group_plane_start_[g + 1] - start;
+  const int* plane_lanes = group_plane_lanes_.data() + start * kLanes<Scalar>;
   // the narrow phase reads a shape alike in every world of the group from the first world (in cache)
   scratch.read_same = group_same_[g];
   scratch.read_first = world_others_[group_read_[g]].data();
@@ -327,17 +326,22 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
     lane_boxes(l, needed, scratch);
     world_contacts(state, first + l, scratch, hits);
     for (int k = 0; k < planes; ++k) {
-      const int p = plane_of(first + l, code[k]), read_p = plane_same[k] ? plane_of(first, code[k]) : p;
+      // (a plane's pose and normal, where fixed alike in all worlds, and its entries, where alike, from the plane
+      // read for all)
+      const int p = plane_lanes[k * kLanes<Scalar> + l], read = group_plane_read_[start + k];
+      const int read_p = read >= 0 ? read : p, placed = group_plane_still_[start + k] ? read : p;
       for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
         const int i = __builtin_ctzll(m);
         if (scratch.spheres >> i & 1) {  // (found in lanes by group_planes)
           const SphereOnPlane& c = scratch.plane_spheres[k * n + i];
           if (c.touching[l])
             scratch.found.push_back(
-                {p, shapes[i], {Vec3(c.point[0][l], c.point[1][l], c.point[2][l]), plane_normal_[p], c.depth[l], 0}});
+                {p,
+                 shapes[i],
+                 {Vec3(c.point[0][l], c.point[1][l], c.point[2][l]), plane_normal_[placed], c.depth[l], 0}});
           continue;
         }
-        narrow_phase(p, plane_pose_[p], shapes[i], scratch.boxes[i].pose, scratch.found, read_p,
+        narrow_phase(p, plane_pose_[placed], shapes[i], scratch.boxes[i].pose, scratch.found, read_p,
                      scratch.read(i, shapes));
       }
     }

@@ -121,7 +121,7 @@ class CollisionPipeline {
   // lane l's boxes of the shapes set in `needed` (a bit per shape) from scratch.lanes into scratch.boxes
   void lane_boxes(int l, std::uint64_t needed, Scratch& scratch) const;
   // the planes of group g against its worlds' shapes, in lanes (scratch.lanes): for each of the group's
-  // planes, in the order its worlds meet them (group_plane_), the shapes that may reach it, into
+  // planes, in the order its worlds meet them (group_plane_lanes_), the shapes that may reach it, into
   // scratch.plane_hits ([lane][plane]: a bit for each shape); the spheres' contacts with them into
   // scratch.plane_spheres ([plane][shape], where a lane may reach it; scratch.spheres: a bit for each sphere)
   void group_planes(int g, Scratch& scratch) const;
@@ -173,8 +173,9 @@ class CollisionPipeline {
   // group g's shapes' bodies in each lane (group_body_), which shapes are the same in all its worlds and the world
   // it reads them from (group_read_: last_read, the group before's, where they are alike to its own)
   void group_shapes(int g, int last_read);
-  // group g's planes in the order its worlds meet them, each with the shapes that may reach it
-  void group_plane_reach(int g);
+  // group g's planes in the order its worlds meet them, each with the shapes that may reach it, its lanes' planes
+  // and the plane read for them (read_planes: those read by the groups before, a few)
+  void group_plane_reach(int g, std::vector<int>& read_planes);
   // group g's slots (group_slot_shapes_, group_slot_pairs_)
   void group_slots(int g);
   // the poses and normals of the planes on no body; those on bodies listed as moving
@@ -265,12 +266,16 @@ class CollisionPipeline {
   // two slots' shapes only where the slots' boxes overlap
   std::vector<int> group_slot_start_;
   std::vector<std::uint64_t> group_slot_shapes_, group_slot_pairs_;
-  // [group] where its planes start in group_plane_, then the end; per plane of a group: its code
-  // (plane_order) and a bit per shape may_collide lets meet it
+  // [group] where its planes start (in group_plane_shapes_, _read_ and _still_, and a lane each in _lanes_), then
+  // the end; per plane of a group (in plane_order): a bit per shape may_collide lets meet it
   std::vector<int> group_plane_start_;
-  std::vector<int> group_plane_;
   std::vector<std::uint64_t> group_plane_shapes_;
-  std::vector<std::uint8_t> group_plane_same_;      // per plane of a group: 1 where narrow_alike in all its worlds
+  // per plane of a group: each lane's plane ([plane][lane]; lanes past the group's, the first world's); the plane
+  // whose entries the narrow phase reads for every lane where they are narrow_alike in all (one read by a group
+  // before where alike, else the first world's; -1: each its own); 1 where the lanes' planes are fixed (on no
+  // body) at that plane's place, whose pose group_planes then reads for all
+  std::vector<int> group_plane_lanes_, group_plane_read_;
+  std::vector<std::uint8_t> group_plane_still_;
   std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
   std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch

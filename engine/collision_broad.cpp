@@ -37,16 +37,17 @@ void CollisionPipeline::describe_groups() {
   group_plane_start_.assign(1, 0);
   group_slot_start_.assign(1, 0);
   int last_read = -1;
+  std::vector<int> read_planes;
   for (int g = 0; g < groups; ++g) {
     const int first = group_first_[g], count = group_first_[g + 1] - first;
     if (count > 1) {
       group_shapes(g, last_read);
       last_read = group_read_[g];
       group_runs(g);
-      group_plane_reach(g);
+      group_plane_reach(g, read_planes);
       group_slots(g);
     }
-    group_plane_start_.push_back(static_cast<int>(group_plane_.size()));
+    group_plane_start_.push_back(static_cast<int>(group_plane_read_.size()));
     group_slot_start_.push_back(static_cast<int>(group_slot_shapes_.size()));
   }
 }
@@ -97,19 +98,38 @@ void CollisionPipeline::group_shapes(int g, int last_read) {
   group_read_[g] = last_read;
 }
 
-void CollisionPipeline::group_plane_reach(int g) {
+void CollisionPipeline::group_plane_reach(int g, std::vector<int>& read_planes) {
+  constexpr int L = kLanes<Scalar>;
+  constexpr std::size_t kReadPlanes = 8;  // (a model of many different planes reads its own beyond these)
   const int first = group_first_[g], count = group_first_[g + 1] - first;
   const std::vector<int>& shapes = world_others_[first];
   const int n = static_cast<int>(shapes.size());
+  const Scalar* transform = model_.shape_transform.data();
+  auto fixed_at = [&](int p, int q) {  // p on no body, where q is
+    return model_.shape_body[p] < 0 && std::equal(transform + 7 * p, transform + 7 * p + 7, transform + 7 * q);
+  };
   for (const int code : plane_order(first)) {
+    const int p0 = plane_of(first, code);
     std::uint64_t reach = 0;
     for (int i = 0; i < n; ++i)
-      if (may_collide(plane_of(first, code), shapes[i])) reach |= std::uint64_t{1} << i;
-    bool same = true;
-    for (int l = 1; l < count; ++l) same &= narrow_alike(plane_of(first + l, code), plane_of(first, code));
-    group_plane_.push_back(code);
+      if (may_collide(p0, shapes[i])) reach |= std::uint64_t{1} << i;
+    bool same = true, still = true;
+    for (int l = 0; l < L; ++l) {
+      const int p = plane_of(first + (l < count ? l : 0), code);
+      group_plane_lanes_.push_back(p);
+      same &= narrow_alike(p, p0);
+      still &= fixed_at(p, p0);
+    }
+    int read = -1;
+    if (same) {
+      const auto alike = [&](int q) { return narrow_alike(q, p0) && (!still || fixed_at(q, p0)); };
+      const auto before = std::find_if(read_planes.begin(), read_planes.end(), alike);
+      read = before != read_planes.end() ? *before : p0;
+      if (read == p0 && read_planes.size() < kReadPlanes) read_planes.push_back(p0);
+    }
     group_plane_shapes_.push_back(reach);
-    group_plane_same_.push_back(same);
+    group_plane_read_.push_back(read);
+    group_plane_still_.push_back(same && still);
   }
 }
 
@@ -309,10 +329,14 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
   }
   for (int k = 0; k < planes; ++k) {
     V origin[3], normal[3];
-    int plane[L];
-    for (int l = 0; l < L; ++l) {
-      const int p = plane[l] = plane_of(first + (l < count ? l : 0), group_plane_[start + k]);
-      for (int m = 0; m < 3; ++m) origin[m][l] = plane_pose_[p].p[m], normal[m][l] = plane_normal_[p][m];
+    const int *plane = &group_plane_lanes_[(start + k) * L], read_p = group_plane_read_[start + k];
+    if (group_plane_still_[start + k]) {
+      for (int m = 0; m < 3; ++m)
+        origin[m] = V{} + plane_pose_[read_p].p[m], normal[m] = V{} + plane_normal_[read_p][m];
+    } else {
+      for (int l = 0; l < L; ++l)
+        for (int m = 0; m < 3; ++m)
+          origin[m][l] = plane_pose_[plane[l]].p[m], normal[m][l] = plane_normal_[plane[l]][m];
     }
     for (std::uint64_t m = group_plane_shapes_[start + k]; m != 0; m &= m - 1) {
       const int i = __builtin_ctzll(m);
@@ -324,11 +348,11 @@ void CollisionPipeline::group_planes(int g, Scratch& scratch) const {
       if (!(scratch.spheres >> i & 1)) continue;
       // the sphere's contacts in lanes, its radius and the pair's margin read once where alike in every world
       V radius, margin;
-      const bool same = (group_same_[g] >> i & 1) && group_plane_same_[start + k];
+      const bool same = (group_same_[g] >> i & 1) && read_p >= 0;
       for (int l = 0; l < L; ++l) {
         const int s = same ? read[i] : world_others_[first + (l < count ? l : 0)][i];
         radius[l] = l > 0 && same ? radius[0] : model_.shape_scale[3 * s];
-        margin[l] = l > 0 && same ? margin[0] : pair_margin(same ? plane[0] : plane[l], s);
+        margin[l] = l > 0 && same ? margin[0] : pair_margin(same ? read_p : plane[l], s);
       }
       SphereOnPlane& c = scratch.plane_spheres[k * n + i];
       c.touching = plane_sphere_contact<V>(origin, normal, X.pose, radius, margin, c.point, &c.depth);

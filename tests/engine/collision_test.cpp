@@ -572,6 +572,33 @@ TEST(CollisionPipeline, WorldsFoundTogetherFindWhatEachFindsAlone) {
   EXPECT_GT(soft_gap[1], 0);
 }
 
+// worlds alike but for their floors' heights are found together, each sphere against its own world's floor
+// (a group reads one plane's pose for all its worlds only where their planes are at one place)
+TEST(CollisionPipeline, WorldsFindTheirOwnFloorsWhereTheFloorsDiffer) {
+  constexpr int kWorlds = 12;
+  ModelBuilder builder;
+  for (int w = 0; w < kWorlds; ++w) {
+    ModelBuilder world;
+    const Scalar floor = 0.02 * w;
+    world.add_ground_plane(floor);
+    world.add_shape_sphere(world.add_body(RigidBody(), Transform{Vec3(0, floor + 0.1 - 0.004, 0)}), 0.1);
+    world.add_shape_sphere(world.add_body(RigidBody(), Transform{Vec3(1, floor + 0.5, 0)}), 0.1);
+    builder.add_builder(world, Transform{}, -1);
+  }
+  const Model model = builder.finalize();
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(model.state(), contacts);
+  ASSERT_EQ(contacts.contact_count, kWorlds);
+  for (int c = 0; c < kWorlds; ++c) {
+    const int plane = contacts.contact_shape_a[c], sphere = contacts.contact_shape_b[c];
+    EXPECT_EQ(model.shape_world[plane], c);
+    EXPECT_EQ(model.shape_world[sphere], c);
+    EXPECT_NEAR(contacts.contact_depth[c], 0.004, 1e-12) << "world " << c;
+    EXPECT_NEAR(contacts.contact_point[3 * c + 1], 0.02 * c - 0.002, 1e-12) << "world " << c;
+  }
+}
+
 TEST(CollisionPipeline, ASoftShapesMarginLeavesRigidPairsTheirs) {
   // a rigid sphere 3 cm above a rigid floor beside soft spheres of a 5 cm margin on a soft box: the broad phase
   // reaches 5 cm, the rigid pair makes its contacts within the pipeline's 1 cm only
