@@ -120,6 +120,7 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
   const Contacts& C = *step.contacts;
   const ContactLists& lists = step.lists;
   IntLanes<T> on{};
+  ContactPair made;  // (a pair past the table: ShapeContacts::pair)
   *uniform = -1;
   for (int l = 0; l < kLanes<T>; ++l) {
     const int c = t < listed[l] ? lists.list[lists.start[G.arts[b * kLanes<T> + l]] + t] : -1;
@@ -132,7 +133,6 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
     }
     const ShapeContacts& shapes = *lists.shapes;
     const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
-    ContactPair made;
     const ContactPair& pair = shapes.pair(sa, sb, &made);
     const ContactFriction& f = pair.friction;
     Scalar softness[5];

@@ -310,9 +310,9 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
   group_planes(g, scratch);
   const int start = group_plane_start_[g], planes = group_plane_start_[g + 1] - start;
   const int* plane_lanes = group_plane_lanes_.data() + start * kLanes<Scalar>;
-  // the narrow phase reads a shape alike in every world of the group from the first world (in cache)
+  // the narrow phase reads a shape alike in every world of the group from the group's read world (in cache)
   scratch.read_same = group_same_[g];
-  scratch.read_first = world_others_[group_read_[g]].data();
+  scratch.read_shapes = world_others_[group_read_[g]].data();
   for (int l = 0; l < count; ++l) {
     const std::vector<int>& shapes = world_others_[first + l];
     const int n = static_cast<int>(shapes.size());

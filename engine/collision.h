@@ -296,11 +296,12 @@ class CollisionPipeline {
     std::vector<std::uint64_t> hits, plane_hits;
     std::vector<SphereOnPlane> plane_spheres;
     std::uint64_t spheres = 0;
-    // the group being found: a bit per shape alike in all its worlds, read from its first world's shapes
+    // the group being found: a bit per shape alike in all its worlds, read from its read world's shapes
+    // (group_read_)
     std::uint64_t read_same = 0;
-    const int* read_first = nullptr;
+    const int* read_shapes = nullptr;
     // the shape whose entries the narrow phase reads for shape i of a world of that group (its `shapes`)
-    int read(int i, const std::vector<int>& shapes) const { return read_same >> i & 1 ? read_first[i] : shapes[i]; }
+    int read(int i, const std::vector<int>& shapes) const { return read_same >> i & 1 ? read_shapes[i] : shapes[i]; }
   };
   std::vector<Scratch> scratch_;
 };

@@ -137,6 +137,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     contact_dims_.resize(C.contact_count);
   }
   const Scalar zero[6] = {};
+  ContactPair made;  // (a pair past the table: ShapeContacts::pair)
   for (const int c : contacts) {
     const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
     const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
@@ -147,7 +148,6 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
     add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
     const ShapeContacts& shapes = *step.lists.shapes;
-    ContactPair made;
     const ContactPair& pair = shapes.pair(sa, sb, &made);
     const ContactFriction& f = pair.friction;
     rows_[r1].normal = rn;
