@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 
@@ -40,8 +41,9 @@ class ParallelTimer {
 
 // run(begin, end) over runs of i covering [0, count) on `threads` threads, then done() once on each thread. The
 // first seven eighths of i go as one run a thread (thread t runs the t-th: the same i, and their data in its
-// caches, at every call); the last eighth is dealt out a few at a time to whichever thread is free, so that a
-// thread the machine slows down does not keep the others waiting at the end. run must not depend on which
+// caches, at every call); the last eighth is dealt out to whichever thread is free, in runs that shrink as it
+// runs out (a share of what is left, down to one i), so that a thread the machine slows down does not keep the
+// others waiting at the end, and none starts a long run when little is left. run must not depend on which
 // thread runs it. One thread runs [0, count) without a parallel region (one costs more than a short loop),
 // unless this runs inside another region, where only a region of its own numbers its thread 0,
 // which per-thread scratch is indexed by. Each thread makes a Scope before its share and destroys it after
@@ -52,14 +54,18 @@ template <typename Scope = NoScope, typename Run, typename Done>
 void parallel_runs(int threads, int count, Run&& run, Done&& done) {
   if (threads > 1 || omp_in_parallel()) {
     const int team = std::max(threads, 1), bulk = count - count / 8;
-    const int chunk = std::max(1, (count - bulk) / (4 * team)), chunks = (count - bulk + chunk - 1) / chunk;
+    std::atomic<int> next{bulk};
 #pragma omp parallel num_threads(team)
     {
       [[maybe_unused]] const Scope scope;
       const long t = omp_get_thread_num(), n = omp_get_num_threads();
       run(static_cast<int>(bulk * t / n), static_cast<int>(bulk * (t + 1) / n));
-#pragma omp for schedule(dynamic) nowait
-      for (int c = 0; c < chunks; ++c) run(bulk + c * chunk, std::min(count, bulk + (c + 1) * chunk));
+      for (;;) {
+        const int size = std::max(1, static_cast<int>((count - next.load(std::memory_order_relaxed)) / (2 * n)));
+        const int begin = next.fetch_add(size, std::memory_order_relaxed);
+        if (begin >= count) break;
+        run(begin, std::min(count, begin + size));
+      }
       done();
     }
   } else {

@@ -206,7 +206,9 @@ TEST(CollisionPipeline, PreviousImpulsesFollowTheirContactsInManyWorldsOnAnyThre
   world.add_ground_plane();
   for (int k = 0; k < 3; ++k) world.add_shape_sphere(world.add_body(RigidBody(), Transform{Vec3(k, 0.09, 0)}), 0.1);
   builder.replicate(world, 120);
-  builder.add_shape_box(-1, Vec3(0.5, 0.5, 0.5), ShapeOptions{.xform = Transform{Vec3(0, 5, 0)}});
+  ShapeOptions box;
+  box.xform = Transform{Vec3(0, 5, 0)};
+  builder.add_shape_box(-1, Vec3(0.5, 0.5, 0.5), box);
   builder.add_shape_sphere(builder.add_body(RigidBody(), Transform{Vec3(0, 5.59, 0)}), 0.1);
   const Model model = builder.finalize();
   const std::vector<int> lifted = {1 * 3 + 1, 64 * 3 + 0, 119 * 3 + 2};  // bodies: a world's three in order
