@@ -2,8 +2,10 @@
 // route, each world of a batch as it steps alone.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "engine/builder.h"
 #include "engine/dynamics.h"
@@ -68,6 +70,58 @@ TEST(FrictionLoss, EachWorldOfABatchStepsAsItDoesAlone) {
       ASSERT_EQ(std::memcmp(&stepped.joint_q[w], s.joint_q.data(), sizeof(Scalar)), 0) << "world " << w;
     }
   }
+}
+
+// a chain of three links on hinges about Z (no gravity), each driven by a motor, with the dry friction `loss[k]`
+Model turning_chain(const std::vector<std::array<Scalar, 3>>& loss, Precision precision) {
+  ModelBuilder batch(Vec3::Zero());
+  batch.set_precision(precision);
+  for (const auto& world_loss : loss) {
+    ModelBuilder robot(Vec3::Zero());
+    int parent = -1;
+    for (int k = 0; k < 3; ++k) {
+      const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.2, 0.05, 0.05)));
+      JointOptions options;
+      options.dof.axis = Vec3::UnitZ();
+      options.dof.frictionloss = world_loss[k];
+      options.child_xform.p = Vec3(-0.2, 0, 0);
+      options.parent_xform.p = Vec3(parent < 0 ? 0 : 0.2, 0, 0);
+      robot.add_motor(robot.add_joint_revolute(parent, link, options));
+      parent = link;
+    }
+    batch.add_builder(robot);
+  }
+  return batch.finalize();
+}
+
+TEST(FrictionLoss, EachDofOfEachWorldKeepsItsOwnImpulse) {
+  // the kept impulses start the next step's rows (warm start): a world's dofs, of their own friction and torques
+  // (some stick, some slip, changing over the steps), step as the same world's do alone, on the blocks and on the
+  // dense route (whose rows are the islands', which also take a block's articulation while a contact joins it to
+  // another)
+  constexpr int kWorlds = 19, kSteps = 30;
+  std::vector<std::array<Scalar, 3>> loss(kWorlds);
+  for (int w = 0; w < kWorlds; ++w)
+    for (int k = 0; k < 3; ++k) loss[w][k] = 0.05 * ((w + 2 * k) % 7);
+  auto torque = [](int w, int k) { return 0.6 * std::sin(1.3 * w + 2.1 * k); };
+  for (const Precision precision : {Precision::Float32, Precision::Float64})
+    for (const bool blocks : {true, false}) {
+      const Model batch = turning_chain(loss, precision);
+      Control control = batch.control();
+      for (int w = 0; w < kWorlds; ++w)
+        for (int k = 0; k < 3; ++k) control.actuator_ctrl[3 * w + k] = torque(w, k);
+      const State stepped = step(batch, control, kSteps, blocks);
+      for (int w = 0; w < kWorlds; ++w) {
+        const Model alone = turning_chain({loss[w]}, precision);
+        Control alone_control = alone.control();
+        for (int k = 0; k < 3; ++k) alone_control.actuator_ctrl[k] = torque(w, k);
+        const State s = step(alone, alone_control, kSteps, blocks);
+        ASSERT_EQ(std::memcmp(&stepped.joint_qd[3 * w], s.joint_qd.data(), 3 * sizeof(Scalar)), 0)
+            << "world " << w << (blocks ? ", blocks" : ", dense");
+        ASSERT_EQ(std::memcmp(&stepped.joint_q[3 * w], s.joint_q.data(), 3 * sizeof(Scalar)), 0)
+            << "world " << w << (blocks ? ", blocks" : ", dense");
+      }
+    }
 }
 
 }  // namespace
