@@ -383,7 +383,7 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.tendon_impulse = data_.tendon_impulse.data();
   step.diverged = data_.diverged.data();
   step.factor_failure = data_.factor_failure.data();
-  std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
+  trouble_ = 0;
   if (batches_) batches_->begin_step(step);
   lap_mark_ = settings.profile_stages ? now_ns() : 0;
   return step;
@@ -500,25 +500,35 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
   auto run = [&](Stage from, Stage to) {
     const ParallelTimer timer(settings.count_serial_time, &serial_seconds_.parallel);
     // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread. A unit
-    // notes whether its worlds have wrenches and drives, then actuates and steps them
+    // clears its worlds' factor failures, notes whether they have wrenches and drives, then actuates and steps
+    // them, and marks the step's trouble where one failed or diverged (else the guard reads no world)
     auto units_from = [&](int begin, int end) {
       UnitNotes notes;
       for (int u = begin; u < end; ++u) {
         StepRoute& route = u < blocks ? static_cast<StepRoute&>(*batches_) : *dense_;
         const int r = u < blocks ? u : u - blocks;
-        if (from != Stage::Dynamics) {
-          route.run(r, from, to, step);
-          continue;
-        }
         int arts[kMostUnitArticulations];
         const int count = route.unit_articulations(r, arts);
-        StepContext local = step;
-        if (u < blocks)
-          block_unit_notes(u, std::min(end, blocks), notes, local);
-        else
-          scan_unit(arts, count, local, nullptr);
-        actuate_unit(arts, count, local);
-        route.run(r, from, to, local);
+        if (from != Stage::Dynamics) {
+          route.run(r, from, to, step);
+        } else {
+          for (int i = 0; i < count; ++i) step.factor_failure[arts[i]] = -1;
+          StepContext local = step;
+          if (u < blocks)
+            block_unit_notes(u, std::min(end, blocks), notes, local);
+          else
+            scan_unit(arts, count, local, nullptr);
+          actuate_unit(arts, count, local);
+          route.run(r, from, to, local);
+        }
+        const bool factored = from == Stage::Dynamics, integrated = from <= Stage::Integrate && to >= Stage::Integrate;
+        bool failed = false;
+        for (int i = 0; i < count; ++i)
+          failed |= (factored & (step.factor_failure[arts[i]] >= 0)) | (integrated & (step.diverged[arts[i]] != 0));
+        if (failed) {
+#pragma omp atomic write
+          trouble_ = 1;
+        }
       }
     };
     auto done = [&] {

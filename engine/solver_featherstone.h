@@ -217,6 +217,7 @@ class SolverFeatherstone {
   SolverData data_;
   std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays
   int steps_since_factor_ = 0;
+  int trouble_ = 0;  // 1 where a unit's world failed its factor or diverged this step (its units' passes mark it)
   bool factor_kept_ = false;  // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
   Scalar factored_dt_ = 0;
   int max_threads_ = 1;  // the threads the routes keep scratch for

@@ -177,7 +177,11 @@ void SolverFeatherstone::guard(const StepContext& step) {
   // an articulation whose state went non-finite or beyond divergence_speed: where some input it read was not
   // finite, it is left as it was (the pass wrote none of it) and the step raises naming the first such entry,
   // after the others; else it is raised, kept as it was (Flag: the input state is finite) or reset to the
-  // model's initial state at rest (Reset)
+  // model's initial state at rest (Reset). No unit marked the step's trouble: none did
+  if (!trouble_) {
+    lap(stage_seconds_.integrate);
+    return;
+  }
   bool bad_input = false;
   for (int a = 0; a < model_.articulation_count && !bad_input; ++a)
     bad_input = (data_.diverged[a] || data_.factor_failure[a] >= 0) && !input_finite(a, step);
@@ -202,6 +206,7 @@ void SolverFeatherstone::guard(const StepContext& step) {
 
 void SolverFeatherstone::check_factors(const StepContext& step) const {
   // (a factor that failed on a non-finite input is the guard's to raise, after the other worlds' step)
+  if (!trouble_) return;
   for (int a = 0; a < model_.articulation_count; ++a)
     if (data_.factor_failure[a] >= 0 && input_finite(a, step))
       fail("articulation ", a, ": mass matrix is not positive definite at dof ", data_.factor_failure[a],
