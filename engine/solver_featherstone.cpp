@@ -502,6 +502,7 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
     // float32 blocks flush subnormals (lanes.h: SubnormalsAsZero), the mode set once on each thread. A unit
     // clears its worlds' factor failures, notes whether they have wrenches and drives, then actuates and steps
     // them, and marks the step's trouble where one failed or diverged (else the guard reads no world)
+    const bool factored = from == Stage::Dynamics, integrated = from <= Stage::Integrate && to >= Stage::Integrate;
     auto units_from = [&](int begin, int end) {
       UnitNotes notes;
       for (int u = begin; u < end; ++u) {
@@ -521,7 +522,6 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
           actuate_unit(arts, count, local);
           route.run(r, from, to, local);
         }
-        const bool factored = from == Stage::Dynamics, integrated = from <= Stage::Integrate && to >= Stage::Integrate;
         bool failed = false;
         for (int i = 0; i < count; ++i)
           failed |= (factored & (step.factor_failure[arts[i]] >= 0)) | (integrated & (step.diverged[arts[i]] != 0));
