@@ -145,10 +145,21 @@ void bind_builder(py::module_& m) {
       .def_readwrite("target_kd", &JointDofConfig::target_kd);
 
   auto builder = py::class_<ModelBuilder>(m, "ModelBuilder", "Builds a Model; every call checks its arguments.");
-  builder.def(py::init<const Vec3&>(), py::arg("gravity") = Vec3(0, -9.81, 0))
+  builder
+      .def(py::init([](const std::optional<Vec3>& gravity) {
+             return gravity ? std::make_unique<ModelBuilder>(*gravity) : std::make_unique<ModelBuilder>();
+           }),
+           py::arg("gravity") = py::none(),
+           "A builder of gravity `gravity`; without it, (0, -9.81, 0) until a builder or file added to it gives "
+           "one (add_builder, replicate, build_worlds, add_mjcf take theirs; two given ones that differ raise).")
       .def_property("gravity", &ModelBuilder::gravity, &ModelBuilder::set_gravity)
+      .def_property_readonly("gravity_given", &ModelBuilder::gravity_given,
+                             "Whether gravity was given (gravity=, the setter, a file or builder added).")
       .def_property("precision", &ModelBuilder::precision, &ModelBuilder::set_precision,
                     "Precision the solver's batched kernels step the finalized model in (Precision.Float64).")
+      .def_property("timestep", &ModelBuilder::timestep, &ModelBuilder::set_timestep,
+                    "The step the scene is made for, in s (a file's <option timestep>; 0.002 by default): "
+                    "model.timestep.")
       .def_property_readonly("body_count", &ModelBuilder::body_count)
       .def_property_readonly("joint_count", &ModelBuilder::joint_count)
       .def_property_readonly("shape_count", &ModelBuilder::shape_count)

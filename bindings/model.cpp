@@ -48,7 +48,8 @@ struct Checkpoint {
       const py::array array = py::array::ensure(value);
       if (!array || !(array.dtype().kind() == 'f' || array.dtype().kind() == 'i' || array.dtype().kind() == 'u'))
         throw py::type_error("from_numpy: field '" + name + "' must be a numeric array, got " +
-                             py::str(py::type::of(value)).cast<std::string>());
+                             (array ? "an array of dtype " + py::str(array.dtype()).cast<std::string>()
+                                    : py::str(py::type::of(value)).cast<std::string>()));
       std::vector<Scalar>& data = owner.*(fields[k].second);
       const int width = widths[k];
       const std::vector<py::ssize_t> expected =
@@ -80,7 +81,8 @@ void bind_checkpoint(Class& c, const Checkpoint<Owner>& checkpoint) {
 
 template <typename Class>
 void bind_counts(Class& c) {
-  c.def_readonly("world_count", &ModelCounts::world_count)
+  c.def_readonly("model_id", &ModelCounts::model_id, "The model this was made by: one number per model.")
+      .def_readonly("world_count", &ModelCounts::world_count)
       .def_readonly("body_count", &ModelCounts::body_count)
       .def_readonly("joint_count", &ModelCounts::joint_count)
       .def_readonly("joint_coord_count", &ModelCounts::joint_coord_count)
@@ -184,6 +186,8 @@ void bind_model(py::module_& m) {
   auto model = py::class_<Model>(m, "Model", "Read-only model: topology and parameters as flat arrays.");
   bind_counts(model);
   model.def_property_readonly("gravity", [](const Model& self) { return self.gravity; })
+      .def_readonly("timestep", &Model::timestep,
+                    "The step the scene was made for, in s (a file's <option timestep>; 0.002 by default).")
       .def_readonly("precision", &Model::precision, "Precision of the solver's batched kernels for this model.")
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("shape_name", &Model::shape_name)
@@ -211,6 +215,19 @@ void bind_model(py::module_& m) {
           "A zeroed control with the model's PD gains, or with the named keyframe's actuator commands.");
 #define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
   NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
+
+  // per class, each field's rows as its field table counts them ("body_count", "joint_count + 1"): which arrays
+  // split into worlds (novaphy.world_view)
+  py::dict field_rows, model_rows, state_rows, control_rows;
+#define NOVAPHY_FIELD_ROWS(rows, T, name, count, width) rows[#name] = #count;
+#define NOVAPHY_MODEL_ROWS(T, name, count, width) NOVAPHY_FIELD_ROWS(model_rows, T, name, count, width)
+#define NOVAPHY_STATE_ROWS(T, name, count, width) NOVAPHY_FIELD_ROWS(state_rows, T, name, count, width)
+#define NOVAPHY_CONTROL_ROWS(T, name, count, width) NOVAPHY_FIELD_ROWS(control_rows, T, name, count, width)
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_MODEL_ROWS)
+  NOVAPHY_STATE_FIELDS(NOVAPHY_STATE_ROWS)
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CONTROL_ROWS)
+  field_rows["Model"] = model_rows, field_rows["State"] = state_rows, field_rows["Control"] = control_rows;
+  m.attr("_field_rows") = field_rows;
 }
 
 }  // namespace novaphy::python

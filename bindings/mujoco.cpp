@@ -30,6 +30,7 @@ class MjModelFields {
       *count = attr(name).cast<int>();
     const py::object opt = attr("opt");
     f_.gravity = array<double>(opt.attr("gravity"), "opt.gravity", 1, 3);
+    f_.timestep = opt.attr("timestep").cast<double>();
     f_.impratio = opt.attr("impratio").cast<double>();
     f_.density = opt.attr("density").cast<double>();
     f_.viscosity = opt.attr("viscosity").cast<double>();

@@ -29,14 +29,21 @@ void bind_shard(py::module_& m) {
         "more.");
   m.def(
       "build_worlds",
-      [](const ModelBuilder& shared, const std::function<void(ModelBuilder*, int)>& build_world, WorldRange range) {
-        // the callback is handed the engine's builder itself (a pointer is passed by reference, not copied)
+      [](const ModelBuilder& shared, const py::function& build_world, WorldRange range) {
+        // each world is built into a builder Python owns (the callback may keep it), then copied into the scene
         return build_worlds(
-            shared, [&](ModelBuilder& builder, int world) { build_world(&builder, world); }, range);
+            shared,
+            [&](ModelBuilder& builder, int world) {
+              py::object built = py::cast(ModelBuilder());
+              build_world(built, world);
+              builder = built.cast<const ModelBuilder&>();
+            },
+            range);
       },
       py::arg("shared"), py::arg("build_world"), py::arg("range"),
-      "Model of `shared` (static shapes only, e.g. the ground; it sets gravity) followed by one world per index "
-      "in `range`, built by build_world(builder, world) into an empty builder.");
+      "Model of `shared` (static shapes only, e.g. the ground) followed by one world per index in `range`, built "
+      "by build_world(builder, world) into a new builder of its own. The scene takes the worlds' gravity and "
+      "timestep where `shared` was made without them.");
   m.def("world_layout", &world_layout, py::arg("model"),
         "Entries per world; raises ValueError naming the first entity whose count or order differs between "
         "worlds.");

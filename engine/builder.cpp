@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "engine/builder_checks.h"
 #include "engine/dynamics.h"
@@ -71,11 +72,51 @@ void ModelBuilder::set_precision(Precision precision) {
   if (precision != Precision::Float64 && precision != Precision::Float32)
     fail("builder: precision must be Float64 or Float32, got ", static_cast<int>(precision));
   precision_ = precision;
+  precision_given_ = true;
 }
 
 void ModelBuilder::set_gravity(const Vec3& gravity) {
   check_finite("builder", "gravity", gravity);
   gravity_ = gravity;
+  gravity_given_ = true;
+}
+
+void ModelBuilder::set_timestep(Scalar timestep) {
+  if (!(timestep > 0 && std::isfinite(timestep))) fail("builder: timestep must be finite and > 0, got ", timestep);
+  timestep_ = timestep;
+  timestep_given_ = true;
+}
+
+namespace {
+
+std::string vec_text(const Vec3& v) {
+  std::ostringstream os;
+  os << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+  return os.str();
+}
+
+}  // namespace
+
+void ModelBuilder::take_gravity(const Vec3& gravity, const char* source) {
+  if (gravity_given_ && gravity != gravity_)
+    fail(source, " gravity ", vec_text(gravity), " differs from the builder's ", vec_text(gravity_),
+         " (give both the same gravity, or make the builder without gravity= to take the added one)");
+  set_gravity(gravity);
+}
+
+void ModelBuilder::take_timestep(Scalar timestep, const char* source) {
+  if (timestep_given_ && timestep != timestep_)
+    fail(source, " timestep ", timestep, " s differs from the builder's ", timestep_, " s");
+  set_timestep(timestep);
+}
+
+void ModelBuilder::take_settings(const ModelBuilder& other) {
+  if (other.precision_given_ && precision_given_ && other.precision_ != precision_)
+    fail("add_builder: the added builder's precision ", precision_name(other.precision_),
+         " differs from the builder's ", precision_name(precision_));
+  if (other.gravity_given_) take_gravity(other.gravity_, "add_builder: the added builder's");
+  if (other.timestep_given_) take_timestep(other.timestep_, "add_builder: the added builder's");
+  if (other.precision_given_) set_precision(other.precision_);
 }
 
 int ModelBuilder::add_body(const RigidBody& body, const Transform& xform, const std::string& name) {
@@ -281,6 +322,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   if (&other == this) fail("add_builder: a builder cannot be added to itself");
   if (world < -1) fail("add_builder: world must be >= -1, got ", world);
   const Transform place = checked_transform("add_builder", "xform", xform);
+  take_settings(other);
   if (world < 0) world = world_count_;
   const int body0 = body_count(), joint0 = joint_count(), shape0 = shape_count();
   for (int b = 0; b < other.body_count(); ++b) {
@@ -488,6 +530,7 @@ Model ModelBuilder::finalize() const {
   }
   model.gravity = gravity_;
   model.precision = precision_;
+  model.timestep = timestep_;
   model.allocate();
 
   lay_out_joints(joints, model);

@@ -101,13 +101,22 @@ struct JointOptions {
 
 class ModelBuilder {
  public:
-  explicit ModelBuilder(const Vec3& gravity = Vec3(0, -9.81, 0));
+  // A builder's gravity, precision and timestep are given (the constructor's gravity, the setters) or not (the
+  // defaults: gravity (0, -9.81, 0), Float64, 0.002 s). One not given takes the first given one of what is added
+  // to it (add_builder, replicate, build_worlds; add_mjcf gives the file's gravity and timestep); a given one that
+  // differs from another given one fails naming both
+  ModelBuilder() = default;
+  explicit ModelBuilder(const Vec3& gravity);
 
   void set_gravity(const Vec3& gravity);
   const Vec3& gravity() const { return gravity_; }
+  bool gravity_given() const { return gravity_given_; }
   // the precision the solver's batched kernels step the finalized model in (default Float64)
   void set_precision(Precision precision);
   Precision precision() const { return precision_; }
+  // the step the scene was made for (model.timestep; MJCF's <option timestep>), in s
+  void set_timestep(Scalar timestep);
+  Scalar timestep() const { return timestep_; }
 
   // xform: the body's initial pose in the world; used for free bodies and Free joints
   int add_body(const RigidBody& body, const Transform& xform = Transform::identity(), const std::string& name = "");
@@ -276,8 +285,17 @@ class ModelBuilder {
   // ("a motor drives a Revolute or Prismatic joint")
   void check_scalar_joint(const std::string& item, const std::string& needs, int joint) const;
 
-  Vec3 gravity_;
+  // a given gravity or timestep from `source` ("the file's"): set where this builder has none given, else it
+  // must be the same
+  void take_gravity(const Vec3& gravity, const char* source);
+  void take_timestep(Scalar timestep, const char* source);
+  // what `other` gives of gravity, precision and timestep, taken so (add_builder)
+  void take_settings(const ModelBuilder& other);
+
+  Vec3 gravity_ = Vec3(0, -9.81, 0);
   Precision precision_ = Precision::Float64;
+  Scalar timestep_ = 0.002;
+  bool gravity_given_ = false, precision_given_ = false, timestep_given_ = false;
   std::vector<Scalar> body_mass_;
   std::vector<Vec3> body_com_;
   std::vector<Mat3> body_inertia_;

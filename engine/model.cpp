@@ -1,6 +1,7 @@
 #include "engine/model.h"
 
 #include <algorithm>
+#include <atomic>
 
 #include "engine/dynamics.h"
 #include "engine/error.h"
@@ -66,6 +67,8 @@ void Control::assign(const Control& other) {
 }
 
 void Model::allocate() {
+  static std::atomic<std::uint64_t> models{0};
+  model_id = ++models;
 #define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
   NOVAPHY_MODEL_FIELDS(NOVAPHY_ALLOCATE)
 }
@@ -151,7 +154,18 @@ Control Model::control() const {
   return s;
 }
 
+namespace {
+
+void check_model_id(const Model& model, const ModelCounts& made_by, const char* what) {
+  if (made_by.model_id != model.model_id)
+    fail(what, " from another model: made by model ", made_by.model_id, ", this is model ", model.model_id,
+         " (make it with this model's ", what, "())");
+}
+
+}  // namespace
+
 void Model::check(const State& state) const {
+  check_model_id(*this, state, "state");
 #define NOVAPHY_CHECK_ARRAY(T, name, count, width)                                                             \
   if (state.name.size() != static_cast<size_t>(count) * (width))                                               \
     fail(#name " has ", state.name.size(), " entries, the model needs ", static_cast<size_t>(count) * (width), \
@@ -160,6 +174,7 @@ void Model::check(const State& state) const {
 }
 
 void Model::check(const Control& control) const {
+  check_model_id(*this, control, "control");
   const auto& state = control;
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_ARRAY)
 }

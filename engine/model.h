@@ -3,6 +3,7 @@
 // numpy views of the binding: adding a field is one line.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -153,8 +154,11 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_target_ke, joint_dof_count, 1)  \
   X(Scalar, joint_target_kd, joint_dof_count, 1)
 
-// the counts every field's size is written in
+// the counts every field's size is written in, and the model they were made by: model_id is one number per
+// model allocated (a copy of a model keeps it), so a state, control or contacts of another model is refused even
+// where its counts are the same
 struct ModelCounts {
+  std::uint64_t model_id = 0;
   int world_count = 1;
   int body_count = 0;
   int joint_count = 0;
@@ -195,7 +199,8 @@ struct Model : ModelCounts {
   FrictionRule friction_rule = FrictionRule::GeometricMean;
   NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
 #undef NOVAPHY_DECLARE
-  Scalar impratio = 1;  // MuJoCo's ratio of a soft contact's normal to frictional regularisation
+  Scalar timestep = 0.002;  // (s) the step the scene was made for (MJCF's <option timestep>)
+  Scalar impratio = 1;      // MuJoCo's ratio of a soft contact's normal to frictional regularisation
   std::vector<std::string> body_name;
   std::vector<std::string> joint_name;
   std::vector<std::string> shape_name;

@@ -15,7 +15,8 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.nq = m->nq, f.nv = m->nv, f.nu = m->nu, f.nbody = m->nbody, f.njnt = m->njnt, f.ngeom = m->ngeom;
   f.ntendon = m->ntendon, f.nkey = m->nkey, f.neq = m->neq, f.nexclude = m->nexclude, f.npair = m->npair;
   f.gravity = m->opt.gravity;
-  f.impratio = m->opt.impratio, f.density = m->opt.density, f.viscosity = m->opt.viscosity;
+  f.timestep = m->opt.timestep, f.impratio = m->opt.impratio, f.density = m->opt.density,
+  f.viscosity = m->opt.viscosity;
   f.clamp_ctrl = !(m->opt.disableflags & mjDSBL_CLAMPCTRL);
   f.names = m->names;
   f.name_bodyadr = m->name_bodyadr, f.name_jntadr = m->name_jntadr, f.name_geomadr = m->name_geomadr;

@@ -19,7 +19,7 @@ struct MujocoFields {
   int nq = 0, nv = 0, nu = 0, nbody = 0, njnt = 0, ngeom = 0, ntendon = 0, nkey = 0, neq = 0, nexclude = 0, npair = 0;
   // options
   const double *gravity = nullptr;  // [3]
-  double impratio = 1, density = 0, viscosity = 0;
+  double timestep = 0.002, impratio = 1, density = 0, viscosity = 0;
   bool clamp_ctrl = true;  // mjDSBL_CLAMPCTRL not set (its bit differs between versions)
 
   // names: the null-terminated names at each kind's addresses; an empty one reads "#id"
