@@ -1,13 +1,16 @@
 // Model set-up cost on long chains: ModelBuilder::finalize on a revolute chain of n links (a capsule on each) in
 // one world and replicated into many, and what a user calls next on the model (model.state(), the solver's and
-// the collision pipeline's constructors).
+// the collision pipeline's constructors); and the kernel behind body_invweight0 beside its previous, dense version.
 //   novaphy_bench_finalize --benchmark_filter=BM_Finalize
-// Arguments: links, worlds. items_per_second is links (over all worlds) per second.
+// Arguments: links, worlds (BM_OsimInverse: links, path 0 the O(n) recursion, 1 the dense reference). items_per_second
+// is links (over all worlds) per second.
 #include <benchmark/benchmark.h>
 
 #include "engine/builder.h"
 #include "engine/collision.h"
 #include "engine/solver_featherstone.h"
+#include "kernels/fk.h"
+#include "kernels/osim.h"
 
 namespace novaphy {
 namespace {
@@ -86,6 +89,22 @@ void BM_PipelineConstruct(benchmark::State& bm) {
   count(bm);
 }
 
+// every link's inverse operational-space inertia on one chain at joint_q0: osim_inverse (O(n)) and its reference
+// twin osim_inverse_ref (dense H, Cholesky and six solves a link: O(n^3)), which finalize used before
+void BM_OsimInverse(benchmark::State& bm) {
+  const Model model = chain(static_cast<int>(bm.range(0))).finalize();
+  const ArticulationView art = model.articulation(0);
+  ArticulationScratch s;
+  s.resize(art);
+  forward_kinematics(art, model.joint_q0.data(), s);
+  std::vector<Mat6> Omega;
+  for (auto _ : bm)
+    benchmark::DoNotOptimize(bm.range(1) == 0 ? osim_inverse(art, s, Omega) : osim_inverse_ref(art, s, Omega));
+  bm.SetItemsProcessed(bm.iterations() * bm.range(0));
+  bm.counters["links"] = static_cast<double>(bm.range(0));
+  bm.SetLabel(bm.range(1) == 0 ? "recursion" : "dense");
+}
+
 // one world: 100 to 10,000 links; 1000 links in 1 to 1024 worlds
 void sizes(benchmark::internal::Benchmark* b) {
   for (const int n : {100, 300, 1000, 3000, 10000}) b->Args({n, 1});
@@ -99,6 +118,11 @@ BENCHMARK(BM_Replicate)->Apply(sizes);
 BENCHMARK(BM_ModelState)->Apply(sizes);
 BENCHMARK(BM_SolverConstruct)->Apply(sizes);
 BENCHMARK(BM_PipelineConstruct)->Apply(sizes);
+BENCHMARK(BM_OsimInverse)
+    ->ArgsProduct({{10, 30, 100, 300, 1000}, {0, 1}})
+    ->Args({3000, 0})
+    ->Args({10000, 0})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace novaphy
