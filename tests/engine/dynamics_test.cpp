@@ -69,7 +69,7 @@ TEST(ForwardDynamics, ChecksItsArguments) {
 }
 
 // a branching robot: a Free or hinged base, a Ball shoulder carrying two hinged arms, armature on every dof, the
-// second arm's tip of mass `tip`
+// second arm of mass `tip`
 ModelBuilder branching_robot(bool floating, Scalar tip) {
   ModelBuilder builder;
   JointOptions options;
@@ -80,17 +80,18 @@ ModelBuilder branching_robot(bool floating, Scalar tip) {
   const int shoulder = builder.add_body(RigidBody::from_sphere(0.5, 0.05));
   options.parent_xform.p = Vec3(0.2, 0, 0);
   builder.add_joint_ball(base, shoulder, options);
-  for (const Scalar mass : {Scalar(0.4), tip}) {
-    RigidBody arm = RigidBody::from_capsule(mass, 0.03, 0.1);
+  for (int k = 0; k < 2; ++k) {
+    RigidBody arm = RigidBody::from_capsule(0.4, 0.03, 0.1);
     arm.com = Vec3(0, 0.1, 0.02);
-    options.parent_xform.q = Quat(Eigen::AngleAxis<Scalar>(mass, Vec3::UnitX()));
+    if (k == 1) arm.mass = tip;  // (the mass alone: its inertia about the centre of mass stays)
+    options.parent_xform.q = Quat(Eigen::AngleAxis<Scalar>(0.4 + 0.3 * k, Vec3::UnitX()));
     builder.add_joint_revolute(shoulder, builder.add_body(arm), options);
   }
   return builder;
 }
 
 // replicas (replicate, add_builder elsewhere) get their original's weights, bit for bit, and an articulation that
-// differs in one body's mass its own: each world as its robot finalized alone
+// differs in one body's mass alone its own: each world as its robot finalized alone
 TEST(BodyInvweight0, ReplicasGetTheirOriginalsWeightsAndOthersTheirOwn) {
   for (const bool floating : {false, true}) {
     const Model lone = branching_robot(floating, 0.3).finalize();
@@ -111,7 +112,7 @@ TEST(BodyInvweight0, ReplicasGetTheirOriginalsWeightsAndOthersTheirOwn) {
         EXPECT_EQ(model.body_invweight0[w * n + k], expected.body_invweight0[k])
             << (floating ? "floating" : "fixed") << ", world " << w << ", weight " << k;
     }
-    EXPECT_NE(other.body_invweight0[n - 2], lone.body_invweight0[n - 2]);  // (the tip's translation weight)
+    EXPECT_NE(other.body_invweight0[n - 2], lone.body_invweight0[n - 2]);  // (the second arm's translation weight)
     EXPECT_GT(lone.body_invweight0[n - 2], 0);
   }
 }
