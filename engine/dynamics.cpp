@@ -122,8 +122,9 @@ void articulation_inverse_dynamics(const Model& model, const State& state, const
 
 // the bytes that decide an articulation's body_invweight0 (joint_q0's FK, the articulated-body factor and
 // osim_inverse) into key: per link its joint's type, parent and frames, axis, q0, armature and its body's mass, COM
-// and inertia; not a root's parent frame nor a root Free joint's position, which move only the link above a root,
-// where osim_inverse reads nothing (so replicas placed apart share one key)
+// and inertia; not a root's parent frame nor a root Free joint's position, which only place the articulation in the
+// world: neither enters a root's S or articulated inertia, and osim_inverse reads no transform above a root (so
+// replicas placed apart share one key, their weights the same bits)
 void invweight0_key(const Model& model, const ArticulationView& art, std::string& key) {
   key.clear();
   auto put = [&](const auto* x, int count) { key.append(reinterpret_cast<const char*>(x), sizeof(*x) * count); };
