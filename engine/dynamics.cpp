@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <unordered_map>
 
 #include "engine/articulation_batches.h"
 #include "engine/error.h"
@@ -15,6 +17,7 @@
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
 #include "kernels/fk.h"
+#include "kernels/osim.h"
 #include "kernels/rnea.h"
 
 namespace novaphy {
@@ -117,6 +120,30 @@ void articulation_inverse_dynamics(const Model& model, const State& state, const
        art.qd_begin() + dof, " (joint ", j, " '", model.joint_name[j], "'; a massless link without children?)");
 }
 
+// the bytes that decide an articulation's body_invweight0 (joint_q0's FK, the articulated-body factor and
+// osim_inverse) into key: per link its joint's type, parent and frames, axis, q0, armature and its body's mass, COM
+// and inertia; not a root's parent frame nor a root Free joint's position, which only place the articulation in the
+// world: neither enters a root's S or articulated inertia, and osim_inverse reads no transform above a root (so
+// replicas placed apart share one key, their weights the same bits)
+void invweight0_key(const Model& model, const ArticulationView& art, std::string& key) {
+  key.clear();
+  auto put = [&](const auto* x, int count) { key.append(reinterpret_cast<const char*>(x), sizeof(*x) * count); };
+  for (int i = 0; i < art.link_count(); ++i) {
+    const int j = art.joint_begin + i, b = art.body(i), parent = art.parent(i);
+    const int skip = parent < 0 && art.type(i) == JointType::Free ? 3 : 0;  // (a root Free joint's position)
+    put(&model.joint_type[j], 1);
+    put(&parent, 1);
+    if (parent >= 0) put(&model.joint_X_p[7 * j], 7);
+    put(&model.joint_X_c[7 * j], 7);
+    put(&model.joint_axis[3 * j], 3);
+    put(model.joint_q0.data() + model.joint_q_start[j] + skip, joint_coord_count(art.type(i)) - skip);
+    put(model.joint_armature.data() + model.joint_qd_start[j], art.dof(i));
+    put(&model.body_mass[b], 1);
+    put(&model.body_com[3 * b], 3);
+    put(&model.body_inertia[9 * b], 9);
+  }
+}
+
 }  // namespace
 
 void check_finite_state(const State& state, bool* any_wrench, int threads) {
@@ -185,23 +212,32 @@ MatX eval_mass_matrix(const Model& model, const State& state) {
 void set_body_invweight0(Model& model) {
   // inputs: the model at joint_q0; outputs: body_invweight0 (0 for a static body)
   model.body_invweight0.assign(2 * static_cast<size_t>(model.body_count), 0);
-  if (model.articulation_count == 0) return;
-  const State state = model.state();
   ArticulationScratch s;
+  std::vector<Mat6> Omega;
+  std::unordered_map<std::string, int> computed;  // an articulation's defining data -> the first that has it
+  std::string key;
   for (int a = 0; a < model.articulation_count; ++a) {
-    const ArticulationView art = kinematics(model, state, a, s);
+    const ArticulationView art = model.articulation(a);
     if (art.dof_count() == 0) continue;  // (welded to the world: weightless, as MuJoCo's static bodies)
-    mass_matrix_gemm(art, s);            // H, and each link's Jacobian [angular; linear] in its own frame
-    const Eigen::LLT<MatX> H(s.H);
-    if (H.info() != Eigen::Success) continue;
+    // a replica of one already computed: the same weights, link by link
+    invweight0_key(model, art, key);
+    const auto [first, inserted] = computed.try_emplace(key, a);
+    if (!inserted) {
+      const ArticulationView same = model.articulation(first->second);
+      for (int i = 0; i < art.link_count(); ++i)
+        std::copy_n(&model.body_invweight0[2 * same.body(i)], 2, &model.body_invweight0[2 * art.body(i)]);
+      continue;
+    }
+    s.resize(art);
+    forward_kinematics(art, model.joint_q0.data() + art.q_begin(), s);
+    if (osim_inverse(art, s, Omega) >= 0) continue;
     for (int i = 0; i < art.link_count(); ++i) {
-      const int b = art.joint_child[art.joint_begin + i];
-      const Eigen::Matrix<Scalar, 6, Eigen::Dynamic>& J = s.link_jacobian[i];
-      // the COM's velocity v + w x c = v - [c]x w
-      const Vec3 c = Eigen::Map<const Vec3>(&model.body_com[3 * b]);
-      const MatX Jc = J.bottomRows<3>() - skew(c) * J.topRows<3>();
-      model.body_invweight0[2 * b] = (Jc * H.solve(MatX(Jc.transpose()))).trace() / 3;
-      model.body_invweight0[2 * b + 1] = (J.topRows<3>() * H.solve(MatX(J.topRows<3>().transpose()))).trace() / 3;
+      // the COM's velocity v + w x c = v - [c]x w: C = [-[c]x, 1] maps the link's [w; v] to it
+      Eigen::Matrix<Scalar, 3, 6> C;
+      C << -skew(art.com(i)), Mat3::Identity();
+      const int b = art.body(i);
+      model.body_invweight0[2 * b] = (C * Omega[i] * C.transpose()).trace() / 3;
+      model.body_invweight0[2 * b + 1] = Omega[i].topLeftCorner<3, 3>().trace() / 3;
     }
   }
 }

@@ -1,5 +1,6 @@
 // ForwardDynamics (engine/dynamics.h): the step's batched kernels made once for a model, evaluated again and
-// again, against the reference kernels' CRBA + Cholesky (eval_forward_dynamics) on MuJoCo's humanoid.
+// again, against the reference kernels' CRBA + Cholesky (eval_forward_dynamics) on MuJoCo's humanoid; and
+// set_body_invweight0's sharing of weights between replicas.
 #include "engine/dynamics.h"
 
 #include <gtest/gtest.h>
@@ -65,6 +66,55 @@ TEST(ForwardDynamics, ChecksItsArguments) {
   state.joint_qd[4] = 0;
   control.joint_f.resize(3);
   EXPECT_NOVAPHY_ERROR(dynamics.evaluate(state, control, qdd.data()), "joint_f");
+}
+
+// a branching robot: a Free or hinged base, a Ball shoulder carrying two hinged arms, armature on every dof, the
+// second arm of mass `tip`
+ModelBuilder branching_robot(bool floating, Scalar tip) {
+  ModelBuilder builder;
+  JointOptions options;
+  options.dof.armature = 0.02;
+  options.dof.axis = Vec3(0, 0.6, 0.8);
+  const int base = builder.add_body(RigidBody::from_box(3, Vec3(0.2, 0.1, 0.1)), Transform::identity(), "base");
+  floating ? builder.add_joint_free(-1, base, options) : builder.add_joint_revolute(-1, base, options);
+  const int shoulder = builder.add_body(RigidBody::from_sphere(0.5, 0.05));
+  options.parent_xform.p = Vec3(0.2, 0, 0);
+  builder.add_joint_ball(base, shoulder, options);
+  for (int k = 0; k < 2; ++k) {
+    RigidBody arm = RigidBody::from_capsule(0.4, 0.03, 0.1);
+    arm.com = Vec3(0, 0.1, 0.02);
+    if (k == 1) arm.mass = tip;  // (the mass alone: its inertia about the centre of mass stays)
+    options.parent_xform.q = Quat(Eigen::AngleAxis<Scalar>(0.4 + 0.3 * k, Vec3::UnitX()));
+    builder.add_joint_revolute(shoulder, builder.add_body(arm), options);
+  }
+  return builder;
+}
+
+// replicas (replicate, add_builder elsewhere) get their original's weights, bit for bit, and an articulation that
+// differs in one body's mass alone its own: each world as its robot finalized alone
+TEST(BodyInvweight0, ReplicasGetTheirOriginalsWeightsAndOthersTheirOwn) {
+  for (const bool floating : {false, true}) {
+    const Model lone = branching_robot(floating, 0.3).finalize();
+    const Model other = branching_robot(floating, 0.31).finalize();
+    ModelBuilder scene;
+    scene.replicate(branching_robot(floating, 0.3), 3, Vec3(2, 0, 0));
+    Transform place;
+    place.p = Vec3(0, 5, 1);
+    if (!floating) place.q = Quat(Eigen::AngleAxis<Scalar>(0.7, Vec3(1, 2, 3).normalized()));
+    scene.add_builder(branching_robot(floating, 0.31), place);
+    scene.add_builder(branching_robot(floating, 0.3), place);
+    const Model model = scene.finalize();
+    const int n = 2 * lone.body_count;
+    ASSERT_EQ(model.body_invweight0.size(), static_cast<size_t>(5 * n));
+    for (int w = 0; w < 5; ++w) {
+      const Model& expected = w == 3 ? other : lone;
+      for (int k = 0; k < n; ++k)
+        EXPECT_EQ(model.body_invweight0[w * n + k], expected.body_invweight0[k])
+            << (floating ? "floating" : "fixed") << ", world " << w << ", weight " << k;
+    }
+    EXPECT_NE(other.body_invweight0[n - 2], lone.body_invweight0[n - 2]);  // (the second arm's translation weight)
+    EXPECT_GT(lone.body_invweight0[n - 2], 0);
+  }
 }
 
 }  // namespace
