@@ -104,10 +104,8 @@ void ModelBuilder::take_gravity(const Vec3& gravity, const char* source) {
   set_gravity(gravity);
 }
 
-void ModelBuilder::take_timestep(Scalar timestep, const char* source) {
-  if (timestep_given_ && timestep != timestep_)
-    fail(source, " timestep ", timestep, " s differs from the builder's ", timestep_, " s");
-  set_timestep(timestep);
+void ModelBuilder::take_timestep(Scalar timestep) {
+  if (!timestep_given_) set_timestep(timestep);
 }
 
 void ModelBuilder::take_settings(const ModelBuilder& other) {
@@ -115,7 +113,7 @@ void ModelBuilder::take_settings(const ModelBuilder& other) {
     fail("add_builder: the added builder's precision ", precision_name(other.precision_),
          " differs from the builder's ", precision_name(precision_));
   if (other.gravity_given_) take_gravity(other.gravity_, "add_builder: the added builder's");
-  if (other.timestep_given_) take_timestep(other.timestep_, "add_builder: the added builder's");
+  if (other.timestep_given_) take_timestep(other.timestep_);
   if (other.precision_given_) set_precision(other.precision_);
 }
 
@@ -549,6 +547,7 @@ Model ModelBuilder::finalize() const {
   lay_out_equalities(model);
   model.check_sizes();
   set_body_invweight0(model);
+  model.set_model_id();
   return model;
 }
 

@@ -103,8 +103,8 @@ class ModelBuilder {
  public:
   // A builder's gravity, precision and timestep are given (the constructor's gravity, the setters) or not (the
   // defaults: gravity (0, -9.81, 0), Float64, 0.002 s). One not given takes the first given one of what is added
-  // to it (add_builder, replicate, build_worlds; add_mjcf gives the file's gravity and timestep); a given one that
-  // differs from another given one fails naming both
+  // to it (add_builder, replicate, build_worlds; add_mjcf gives the file's gravity and timestep); a given gravity
+  // or precision that differs from another given one fails naming both (timesteps: the first given stays)
   ModelBuilder() = default;
   explicit ModelBuilder(const Vec3& gravity);
 
@@ -285,10 +285,11 @@ class ModelBuilder {
   // ("a motor drives a Revolute or Prismatic joint")
   void check_scalar_joint(const std::string& item, const std::string& needs, int joint) const;
 
-  // a given gravity or timestep from `source` ("the file's"): set where this builder has none given, else it
-  // must be the same
+  // a given gravity from `source` ("the file's"): set where this builder has none given, else it must be the same
   void take_gravity(const Vec3& gravity, const char* source);
-  void take_timestep(Scalar timestep, const char* source);
+  // a given timestep: set where this builder has none given (a scene of robots from files of different timesteps
+  // keeps the first)
+  void take_timestep(Scalar timestep);
   // what `other` gives of gravity, precision and timestep, taken so (add_builder)
   void take_settings(const ModelBuilder& other);
 

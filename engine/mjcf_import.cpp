@@ -50,7 +50,7 @@ class MjcfImporter {
     joint_index_.assign(m_.njnt, -1);
     const int joint0 = builder_.joint_count();
     builder_.take_gravity(vec3(m_.gravity), "the file's");
-    builder_.take_timestep(m_.timestep, "the file's");
+    builder_.take_timestep(m_.timestep);
     for (int b = 1; b < m_.nbody; ++b) add_body(b);
     builder_.set_collision_filter(CollisionFilter::Mujoco);
     builder_.set_friction_rule(FrictionRule::Mujoco);

@@ -1,7 +1,8 @@
 #include "engine/model.h"
 
 #include <algorithm>
-#include <atomic>
+#include <cstddef>
+#include <cstring>
 
 #include "engine/dynamics.h"
 #include "engine/error.h"
@@ -67,10 +68,40 @@ void Control::assign(const Control& other) {
 }
 
 void Model::allocate() {
-  static std::atomic<std::uint64_t> models{0};
-  model_id = ++models;
 #define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
   NOVAPHY_MODEL_FIELDS(NOVAPHY_ALLOCATE)
+}
+
+namespace {
+
+// 64-bit words mixed into h (FNV-1a's prime over whole words; a tail shorter than a word padded with zeros)
+void mix(std::uint64_t& h, const void* data, size_t bytes) {
+  const unsigned char* p = static_cast<const unsigned char*>(data);
+  for (size_t k = 0; k < bytes; k += 8) {
+    std::uint64_t word = 0;
+    std::memcpy(&word, p + k, std::min<size_t>(8, bytes - k));
+    h = (h ^ word) * 0x100000001b3ull;
+    h ^= h >> 29;
+  }
+  h = (h ^ bytes) * 0x100000001b3ull;
+}
+
+}  // namespace
+
+void Model::set_model_id() {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  const ModelCounts& counts = *this;
+  mix(h, &counts.world_count,
+      offsetof(ModelCounts, mesh_corner_count) + sizeof(int) - offsetof(ModelCounts, world_count));
+  const int enums[] = {static_cast<int>(precision), static_cast<int>(collision_filter),
+                       static_cast<int>(friction_rule)};
+  mix(h, enums, sizeof(enums));
+  mix(h, gravity.data(), sizeof(Scalar) * 3);
+  mix(h, &impratio, sizeof(impratio));
+#define NOVAPHY_MIX_FIELD(T, name, count, width) mix(h, name.data(), name.size() * sizeof(T));
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_MIX_FIELD)
+#undef NOVAPHY_MIX_FIELD
+  model_id = h;
 }
 
 void Model::check_sizes() const {
@@ -158,25 +189,25 @@ namespace {
 
 void check_model_id(const Model& model, const ModelCounts& made_by, const char* what) {
   if (made_by.model_id != model.model_id)
-    fail(what, " from another model: made by model ", made_by.model_id, ", this is model ", model.model_id,
+    fail(what, " from another model: made by model ", std::hex, made_by.model_id, ", this is model ", model.model_id,
          " (make it with this model's ", what, "())");
 }
 
 }  // namespace
 
 void Model::check(const State& state) const {
-  check_model_id(*this, state, "state");
 #define NOVAPHY_CHECK_ARRAY(T, name, count, width)                                                             \
   if (state.name.size() != static_cast<size_t>(count) * (width))                                               \
     fail(#name " has ", state.name.size(), " entries, the model needs ", static_cast<size_t>(count) * (width), \
          " (state or control from another model?)");
   NOVAPHY_STATE_FIELDS(NOVAPHY_CHECK_ARRAY)
+  check_model_id(*this, state, "state");
 }
 
 void Model::check(const Control& control) const {
-  check_model_id(*this, control, "control");
   const auto& state = control;
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_ARRAY)
+  check_model_id(*this, control, "control");
 }
 
 }  // namespace novaphy

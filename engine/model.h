@@ -154,9 +154,9 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_target_ke, joint_dof_count, 1)  \
   X(Scalar, joint_target_kd, joint_dof_count, 1)
 
-// the counts every field's size is written in, and the model they were made by: model_id is one number per
-// model allocated (a copy of a model keeps it), so a state, control or contacts of another model is refused even
-// where its counts are the same
+// the counts every field's size is written in, and the model they were made by: model_id is a fingerprint of the
+// model as finalized (every field, gravity and the enums), so a state, control or contacts of another model is
+// refused even where its counts are the same, while models finalized alike (a scene rebuilt) share their states
 struct ModelCounts {
   std::uint64_t model_id = 0;
   int world_count = 1;
@@ -211,6 +211,8 @@ struct Model : ModelCounts {
 
   // sizes every field from the counts (fields are zero-filled)
   void allocate();
+  // model_id from every field as it is now (the builder's last step)
+  void set_model_id();
   // throws Error naming the first field whose size does not match the counts
   void check_sizes() const;
 

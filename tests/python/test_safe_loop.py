@@ -87,12 +87,13 @@ def test_a_builder_kept_by_the_build_worlds_callback_stays_valid():
 
 
 def test_a_state_or_control_of_another_model_with_the_same_counts_is_refused():
-    def model():
+    def model(mass):
         builder = novaphy.ModelBuilder()
-        pendulum(builder)
+        link = builder.add_body(novaphy.RigidBody.from_sphere(mass, 0.1))
+        builder.add_joint_revolute(-1, link, axis=[0, 1, 0], child_xform=novaphy.Transform([0, 0, 0.5]))
         return builder.finalize()
 
-    a, b = model(), model()
+    a, b = model(1.0), model(2.0)  # the same counts, another mass
     assert a.model_id != b.model_id and a.state().model_id == a.model_id
     solver = novaphy.solvers.SolverFeatherstone(a)
     contacts = novaphy.CollisionPipeline(a).contacts()
@@ -102,6 +103,14 @@ def test_a_state_or_control_of_another_model_with_the_same_counts_is_refused():
         solver.step(a.state(), a.state(), b.control(), contacts, 0.01)
     with pytest.raises(ValueError, match="state from another model"):
         novaphy.eval_fk(a, b.state())
+    # a model finalized alike (the scene rebuilt) is the same model: its states step bit for bit as the first's
+    again = model(1.0)
+    assert again.model_id == a.model_id
+    state, rebuilt = a.state(), again.state()
+    state.joint_qd[:] = rebuilt.joint_qd[:] = 1.0
+    solver.step(state, state, a.control(), contacts, 0.01)
+    solver.step(rebuilt, rebuilt, again.control(), contacts, 0.01)
+    assert state.joint_q.tobytes() == rebuilt.joint_q.tobytes()
 
 
 def test_world_view_refuses_arrays_that_are_not_per_world():
