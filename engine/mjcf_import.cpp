@@ -478,6 +478,7 @@ mjModel* load_mujoco_model(const std::string& path) {
 }
 
 MujocoImport import_mujoco_fields(ModelBuilder& builder, const MujocoFields& m, const ImportOptions& options) {
+  check_mujoco_fields(m);
   return MjcfImporter(builder, m, options).run();
 }
 
