@@ -15,6 +15,9 @@ constexpr int kJointTypes = 4, kGeomTypes = 9, kWrapTypes = 6, kTrnTypes = 7, kD
 // a joint type's coordinates and dofs: free, ball, slide, hinge
 constexpr int kJointCoords[kJointTypes] = {7, 4, 1, 1}, kJointDofs[kJointTypes] = {6, 3, 1, 1};
 
+// a value that is not finite as a file writes it: "nan" whatever its sign bit, "inf", "-inf"
+const char* word(double x) { return std::isnan(x) ? "nan" : x > 0 ? "inf" : "-inf"; }
+
 const char* kind_word(MjKind kind) {
   constexpr const char* words[] = {"body", "joint", "geom", "mesh", "tendon", "actuator", "keyframe", "equality"};
   return words[static_cast<int>(kind)];
@@ -56,7 +59,7 @@ class FieldCheck {
 
   void finite(const char* field, int i, const std::string& who, const double* x, int width) const {
     for (int k = 0; k < width; ++k)
-      if (!std::isfinite(x[k])) fail("MjModel ", field, "[", i, "][", k, "]", who, " is not finite: ", x[k]);
+      if (!std::isfinite(x[k])) fail("MjModel ", field, "[", i, "][", k, "]", who, " is not finite: ", word(x[k]));
   }
 
   void quaternion(const char* field, int i, const std::string& who, const double* q) const {
@@ -83,7 +86,8 @@ class FieldCheck {
     for (const auto& [name, n] : counts)
       if (n < 0) fail("MjModel ", name, ": ", n, " is negative");
     if (m_.nbody < 1) fail("MjModel nbody: 0, expected at least the world body");
-    finite("opt.gravity", 0, "", m_.gravity, 3);
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(m_.gravity[k])) fail("MjModel opt.gravity[", k, "] is not finite: ", word(m_.gravity[k]));
   }
 
   // each name address inside names, a NUL after it

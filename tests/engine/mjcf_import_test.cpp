@@ -6,6 +6,7 @@
 
 #include "engine/error.h"
 #include "test_support.h"
+#include "test_support_errors.h"
 #include "tools/mujoco_oracle.h"
 
 namespace novaphy {
@@ -181,6 +182,56 @@ TEST(MjcfImport, UrdfGoesThroughTheSameParser) {
   EXPECT_EQ(model.joint_limit_lower[0], -1);
   EXPECT_EQ(model.joint_limit_upper[0], 1);
   expect_matches_mujoco(path, 11);
+  std::filesystem::remove(path);
+}
+
+// a compiled model whose indices and types are corrupted: each is named by its field, element and value before
+// the converter reads it (the same check guards the Python route, tests/python/test_mujoco_fuzz.py)
+TEST(MjcfImport, ACorruptCompiledModelIsNamedByItsField) {
+  const std::string path = test::write_temp_file("corrupt.xml", R"(<mujoco><compiler autolimits="true"/><worldbody>
+  <body name="base"><freejoint/><geom name="torso" size="0.1"/>
+    <body name="arm" pos="0.2 0 0"><joint name="elbow" range="-1 1"/><geom name="arm" size="0.05"/></body>
+  </body></worldbody>
+  <tendon><fixed name="t"><joint joint="elbow" coef="1"/></fixed></tendon>
+  <equality><joint name="lock" joint1="elbow"/></equality>
+  <actuator><motor name="drive" joint="elbow"/></actuator>
+  <keyframe><key name="home"/></keyframe></mujoco>)");
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  const auto corrupt = [&](auto* field, auto value, const std::string& message) {
+    const auto kept = *field;
+    *field = value;
+    ModelBuilder builder;
+    EXPECT_NOVAPHY_ERROR(import_mujoco_model(builder, m.get()), message);
+    *field = kept;
+  };
+  corrupt(&m->jnt_qposadr[1], 99, "MjModel jnt_qposadr[1] (joint 'elbow'): 99 out of range [0, 8)");
+  corrupt(&m->jnt_qposadr[1], 6, "MjModel jnt_qposadr[1] (joint 'elbow'): 6, expected 7");
+  corrupt(&m->jnt_dofadr[1], -1, "MjModel jnt_dofadr[1] (joint 'elbow'): -1 out of range [0, 7)");
+  corrupt(&m->jnt_type[1], 7, "MjModel jnt_type[1] (joint 'elbow'): 7 out of range [0, 4)");
+  corrupt(&m->body_parentid[2], 2, "MjModel body_parentid[2] (body 'arm'): 2 out of range [0, 2)");
+  corrupt(&m->body_jntnum[2], 5, "MjModel body_jntnum[2] (body 'arm'): 5 out of range [0, 2)");
+  corrupt(&m->geom_bodyid[1], 3, "MjModel geom_bodyid[1] (geom 'arm'): 3 out of range [0, 3)");
+  corrupt(&m->geom_type[0], -1, "MjModel geom_type[0] (geom 'torso'): -1 out of range [0, 9)");
+  corrupt(&m->actuator_trnid[0], 2, "MjModel actuator_trnid[0][0] (actuator 'drive'): 2 out of range [0, 2)");
+  corrupt(&m->actuator_gaintype[0], 1000, "MjModel actuator_gaintype[0] (actuator 'drive'): 1000 out of range [0, 7)");
+  corrupt(&m->wrap_objid[0], 5, "MjModel wrap_objid[0] (tendon 't'): 5 out of range [0, 2)");
+  corrupt(&m->tendon_num[0], 2, "MjModel tendon_num[0] (tendon 't'): 2 out of range [0, 2)");
+  corrupt(&m->eq_obj1id[0], -1, "MjModel eq_obj1id[0] (equality 'lock'): -1 out of range [0, 2)");
+  corrupt(&m->name_jntadr[1], m->nnames,
+          "MjModel name_jntadr[1] (joint 1): " + std::to_string(m->nnames) + " out of range [0, " +
+              std::to_string(m->nnames) + ")");
+  corrupt(&m->key_qpos[7], std::nan(""), "MjModel key_qpos[0][7] (keyframe 'home') is not finite: nan");
+  corrupt(&m->body_pos[6], -INFINITY, "MjModel body_pos[2][0] (body 'arm') is not finite: -inf");
+  const std::array<mjtNum, 4> quat{};
+  const std::array<mjtNum, 4> kept{m->body_quat[8], m->body_quat[9], m->body_quat[10], m->body_quat[11]};
+  std::copy(quat.begin(), quat.end(), m->body_quat + 8);
+  ModelBuilder builder;
+  EXPECT_NOVAPHY_ERROR(import_mujoco_model(builder, m.get()), "MjModel body_quat[2] (body 'arm') is a zero quaternion");
+  std::copy(kept.begin(), kept.end(), m->body_quat + 8);
+  m->names[m->nnames - 1] = 'x';  // the last name, the keyframe's, without its NUL
+  EXPECT_NOVAPHY_ERROR(import_mujoco_model(builder, m.get()),
+                       "MjModel name_keyadr[0] (keyframe 0): the name at " + std::to_string(m->name_keyadr[0]) +
+                           " has no NUL before the end of names (" + std::to_string(m->nnames) + " bytes)");
   std::filesystem::remove(path);
 }
 
