@@ -54,14 +54,17 @@ class MjModelFields {
       fail("the MjModel has no field '", name, "' (NovaPhy reads compiled models of MuJoCo 3 and 4)");
     return m_.attr(name);
   }
-  // a count (nq, nbody, ...): an int that fits a C int
+  // a count (nq, nbody, ...): an int that fits a C int, not negative
   int size(const char* name) const {
     const py::object n = attr(name);
+    int count = 0;
     try {
-      return n.cast<int>();
+      count = n.cast<int>();
     } catch (const py::cast_error&) {
       fail("the MjModel's count '", name, "' is not an int of 32 bits: ", py::repr(n).cast<std::string>());
     }
+    if (count < 0) fail("the MjModel's count '", name, "' is negative: ", count);
+    return count;
   }
   // `name`'s data, which must hold count x width values of T (a copy where it is not C-contiguous)
   template <typename T>

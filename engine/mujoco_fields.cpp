@@ -142,7 +142,9 @@ class FieldCheck {
       q += kJointCoords[m_.jnt_type[j]];
       d += kJointDofs[m_.jnt_type[j]];
       finite("jnt_pos", j, name, m_.jnt_pos + 3 * j, 3);
-      finite("jnt_axis", j, name, m_.jnt_axis + 3 * j, 3);
+      const double* axis = m_.jnt_axis + 3 * j;
+      finite("jnt_axis", j, name, axis, 3);
+      if (axis[0] == 0 && axis[1] == 0 && axis[2] == 0) fail("MjModel jnt_axis[", j, "]", name, " is a zero vector");
     }
     if (q != m_.nq) fail("MjModel nq: ", m_.nq, ", but the joints have ", q, " coordinates");
     if (d != m_.nv) fail("MjModel nv: ", m_.nv, ", but the joints have ", d, " dofs");
