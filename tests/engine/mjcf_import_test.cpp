@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <climits>
+#include <cmath>
 #include <filesystem>
+#include <memory>
+#include <random>
 
 #include "engine/error.h"
 #include "test_support.h"
@@ -233,6 +237,82 @@ TEST(MjcfImport, ACorruptCompiledModelIsNamedByItsField) {
                        "MjModel name_keyadr[0] (keyframe 0): the name at " + std::to_string(m->name_keyadr[0]) +
                            " has no NUL before the end of names (" + std::to_string(m->nnames) + " bytes)");
   std::filesystem::remove(path);
+}
+
+// seeded corruptions of the fields the converter reads, one to three at a time: each import raises Error or
+// converts (under the sanitizer build, tools/test.sh, an out-of-bounds read fails it)
+TEST(MjcfImport, RandomlyCorruptedCompiledModelsRaiseAnErrorOrConvert) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(NOVAPHY_TEST_MODEL_DIR "/fuzz.xml"),
+                                                       mj_deleteModel);
+  const std::vector<std::pair<int*, int>> indices = {{m->body_parentid, m->nbody},
+                                                     {m->body_jntnum, m->nbody},
+                                                     {m->body_jntadr, m->nbody},
+                                                     {m->jnt_type, m->njnt},
+                                                     {m->jnt_qposadr, m->njnt},
+                                                     {m->jnt_dofadr, m->njnt},
+                                                     {m->geom_type, m->ngeom},
+                                                     {m->geom_bodyid, m->ngeom},
+                                                     {m->geom_dataid, m->ngeom},
+                                                     {m->geom_condim, m->ngeom},
+                                                     {m->mesh_vertadr, m->nmesh},
+                                                     {m->mesh_vertnum, m->nmesh},
+                                                     {m->exclude_signature, m->nexclude},
+                                                     {m->tendon_adr, m->ntendon},
+                                                     {m->tendon_num, m->ntendon},
+                                                     {m->wrap_type, m->nwrap},
+                                                     {m->wrap_objid, m->nwrap},
+                                                     {m->actuator_trntype, m->nu},
+                                                     {m->actuator_dyntype, m->nu},
+                                                     {m->actuator_gaintype, m->nu},
+                                                     {m->actuator_biastype, m->nu},
+                                                     {m->actuator_trnid, 2 * m->nu},
+                                                     {m->eq_type, m->neq},
+                                                     {m->eq_obj1id, m->neq},
+                                                     {m->eq_obj2id, m->neq},
+                                                     {m->name_bodyadr, m->nbody},
+                                                     {m->name_jntadr, m->njnt},
+                                                     {m->name_geomadr, m->ngeom},
+                                                     {m->name_meshadr, m->nmesh},
+                                                     {m->name_tendonadr, m->ntendon},
+                                                     {m->name_actuatoradr, m->nu},
+                                                     {m->name_keyadr, m->nkey},
+                                                     {m->name_eqadr, m->neq}};
+  const std::vector<std::pair<mjtNum*, int>> values = {
+      {m->body_pos, 3 * m->nbody}, {m->body_quat, 4 * m->nbody},    {m->body_iquat, 4 * m->nbody},
+      {m->jnt_axis, 3 * m->njnt},  {m->geom_quat, 4 * m->ngeom},    {m->key_qpos, m->nkey * m->nq},
+      {m->qpos0, m->nq},           {m->eq_data, mjNEQDATA * m->neq}};
+  std::mt19937 rng(1);
+  const auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
+  int raised = 0;
+  constexpr int kTrials = 2000;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    std::vector<std::pair<int*, int>> kept_index;
+    std::vector<std::pair<mjtNum*, mjtNum>> kept_value;
+    for (int k = pick(3); k >= 0; --k)
+      if (pick(4) > 0) {
+        const auto [field, size] = indices[pick(indices.size())];
+        int* x = field + pick(size);
+        kept_index.push_back({x, *x});
+        const int choices[] = {-1, -2, size, size + 1, INT_MAX, INT_MIN, pick(100) - 50};
+        *x = choices[pick(7)];
+      } else {
+        const auto [field, size] = values[pick(values.size())];
+        mjtNum* x = field + pick(size);
+        kept_value.push_back({x, *x});
+        const mjtNum choices[] = {std::nan(""), INFINITY, -INFINITY, 0, 1e300};
+        *x = choices[pick(5)];
+      }
+    try {
+      ModelBuilder builder;
+      import_mujoco_model(builder, m.get());
+      builder.finalize();
+    } catch (const Error&) {
+      ++raised;
+    }
+    for (auto it = kept_index.rbegin(); it != kept_index.rend(); ++it) *it->first = it->second;
+    for (auto it = kept_value.rbegin(); it != kept_value.rend(); ++it) *it->first = it->second;
+  }
+  EXPECT_GT(raised, kTrials / 2);
 }
 
 }  // namespace
