@@ -134,6 +134,23 @@ class Defaults {
   std::map<std::string, XMLElement*> classes_;
 };
 
+// prints a document with each element on the line it was read from (an added one where it falls), so that
+// MuJoCo's messages give the file's own line numbers
+class LinePrinter : public tinyxml2::XMLPrinter {
+ public:
+  LinePrinter() : XMLPrinter(nullptr, true) {}
+
+  bool VisitEnter(const XMLElement& e, const tinyxml2::XMLAttribute* a) override {
+    const char* text = CStr();
+    for (const int size = CStrSize() - 1; scanned_ < size; ++scanned_) line_ += text[scanned_] == '\n';
+    for (; line_ < e.GetLineNum(); ++line_, ++scanned_) Putc('\n');
+    return XMLPrinter::VisitEnter(e, a);
+  }
+
+ private:
+  int line_ = 1, scanned_ = 0;  // the output's line, and how much of it was counted
+};
+
 class Translator {
  public:
   explicit Translator(TranslatedMjcf& out) : out_(out) {}
@@ -285,7 +302,7 @@ class Translator {
   }
 
   void add(const std::string& path, XMLDocument& doc) {
-    tinyxml2::XMLPrinter printer;
+    LinePrinter printer;
     doc.Print(&printer);
     const std::string name = std::filesystem::path(path).filename().string();
     if (mj_findFileVFS(out_.vfs.get(), name.c_str()) >= 0)

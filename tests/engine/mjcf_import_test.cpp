@@ -189,6 +189,21 @@ TEST(MjcfImport, UrdfGoesThroughTheSameParser) {
   std::filesystem::remove(path);
 }
 
+TEST(MjcfImport, AUrdfsNanOrBrokenXmlIsNamedLikeAnMjcfs) {
+  const std::string nan = test::write_temp_file("nan.urdf", R"(<robot name="r">
+  <link name="base"><inertial><origin xyz="0 nan 0"/><mass value="1"/>
+    <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+</robot>)");
+  const std::string broken = test::write_temp_file("broken.urdf", "<robot><link></robot>");
+  ModelBuilder builder;
+  EXPECT_NOVAPHY_ERROR(builder.add_urdf(nan),
+                       R"(nan.urdf line 2: <origin> xyz="0 nan 0": 'nan' is not a number (NaN))");
+  EXPECT_NOVAPHY_ERROR(builder.add_urdf(broken),
+                       "broken.urdf': XML parse error at line 1: a closing tag that does not");
+  std::filesystem::remove(nan);
+  std::filesystem::remove(broken);
+}
+
 // a compiled model whose indices and types are corrupted: each is named by its field, element and value before
 // the converter reads it (the same check guards the Python route, tests/python/test_mujoco_fuzz.py)
 TEST(MjcfImport, ACorruptCompiledModelIsNamedByItsField) {

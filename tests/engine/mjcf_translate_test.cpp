@@ -172,6 +172,23 @@ TEST(MjcfTranslate, AFileThatIsNotXmlOrADirectoryIsNamedInWords) {
   std::filesystem::remove(text);
 }
 
+// the translated file keeps each element on its line, so MuJoCo's parser and compiler name the file's own lines
+TEST(MjcfTranslate, MujocosMessagesGiveTheFilesOwnLines) {
+  const std::string path = test::write_temp_file("three_lines.xml", R"(<mujoco>
+  <worldbody>
+    <body name="b">
+      <joint name="j" type="hinge"/>
+
+      <geom type="capsule" size="0.1"/>
+      <unknownthing/>
+    </body>
+  </worldbody>
+</mujoco>)");
+  ModelBuilder builder;
+  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(path), "Element 'unknownthing', line 7");
+  std::filesystem::remove(path);
+}
+
 // MuJoCo 2.2.2 reads "nan 0 1" as 0 0 0 and a NaN mass as none given (MuJoCo 4 keeps both): each number that
 // 2.2.2 would misread is named as the file wrote it, with its element, attribute, file and line
 TEST(MjcfTranslate, ANanAnInfinityOrAZeroQuaternionIsNamedAsTheFileWroteIt) {
