@@ -80,7 +80,7 @@ std::string attribute(const std::string& path, const XMLElement* e, const tinyxm
   return s + " " + a->Name() + "=\"" + a->Value() + "\"";
 }
 
-// MuJoCo 2.2.2 reads a NaN as 0 or drops it, MuJoCo 4 keeps it: a NaN in a number is an Error, and so is an
+// MuJoCo 2.2.2 reads a NaN as 0, drops it or keeps it, MuJoCo 4 keeps it: a NaN in a number is an Error, and so is an
 // infinity outside a range (MJCF's range, ctrlrange, forcerange, ...; URDF's limits: both MuJoCos read "inf")
 // and a zero quaternion (which MuJoCo 4 rejects); `user` data, which NovaPhy does not read, is left alone.
 // `key`: the index in the file of a <key> element
