@@ -207,6 +207,10 @@ TEST(MjcfTranslate, ANanAnInfinityOrAZeroQuaternionIsNamedAsTheFileWroteIt) {
                        R"(line 2: <joint> axis="INF 0 0": 'INF' is infinite (only a range's bounds may be))");
   EXPECT_NOVAPHY_ERROR(load(R"(<body name="b" quat="0 0 0 0">)" + joint + "</body>"),
                        R"(line 2: <body name="b"> quat="0 0 0 0": a zero quaternion)");
+  // 2.2.2 compiles an inertial frame's zero quaternion into a body without inertia (a massless link when stepped)
+  EXPECT_NOVAPHY_ERROR(
+      load(R"(<body><joint/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1" quat="0 0 0 0"/></body>)"),
+      R"(line 2: <inertial> quat="0 0 0 0": a zero quaternion)");
   EXPECT_NOVAPHY_ERROR(load(R"(<body name="b">)" + joint + "</body>",
                             R"(<keyframe><key name="rest"/><key name="home" qpos="-nan"/></keyframe>)"),
                        R"(<key name="home"> (key 1 of the file) qpos="-nan": '-nan' is not a number (NaN))");
