@@ -19,6 +19,12 @@ mujoco = pytest.importorskip(
 )
 
 MODEL = os.path.join(os.path.dirname(__file__), "models", "fuzz.xml")
+ROBOTS = os.environ.get("MENAGERIE_ROOT") or os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "robots")
+# the fuzz model (every kind of element the converter reads) under four seeds, and two Menagerie robots where on disk
+FUZZED = [(MODEL, seed) for seed in range(4)] + [
+    (os.path.join(ROBOTS, "unitree_go1", "go1.xml"), 0),
+    (os.path.join(ROBOTS, "franka_emika_panda", "panda.xml"), 0),
+]
 
 # the integer fields the converter reads as indices, addresses, counts or types, and others beside them
 INDEX_FIELDS = (
@@ -83,10 +89,10 @@ def corrupt(model, rng):
     return (Corrupted(m, **replaced) if replaced else m), done
 
 
-def fuzz(seed, trials):
-    """`trials` corrupted copies of the fuzz model through from_mujoco; exits 1 on anything but ValueError."""
+def fuzz(path, seed, trials):
+    """`trials` corrupted copies of the model at `path` through from_mujoco; anything but ValueError escapes."""
     warnings.simplefilter("ignore")
-    model = mujoco.MjModel.from_xml_path(MODEL)
+    model = mujoco.MjModel.from_xml_path(path)
     rng = np.random.default_rng(seed)
     raised = 0
     for trial in range(trials):
@@ -99,10 +105,12 @@ def fuzz(seed, trials):
     print(f"{raised} of {trials} raised ValueError", flush=True)
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_corrupted_fields_raise_value_error_or_convert_never_crash(seed):
+@pytest.mark.parametrize("path, seed", FUZZED, ids=lambda x: os.path.basename(x) if isinstance(x, str) else str(x))
+def test_corrupted_fields_raise_value_error_or_convert_never_crash(path, seed):
+    if not os.path.exists(path):
+        pytest.skip(f"{path} is not on disk (set MENAGERIE_ROOT)")
     here = os.path.dirname(os.path.abspath(__file__))
-    code = f"import sys; sys.path.insert(0, {here!r}); import test_mujoco_fuzz as f; f.fuzz({seed}, 100)"
+    code = f"import sys; sys.path.insert(0, {here!r}); import test_mujoco_fuzz as f; f.fuzz({path!r}, {seed}, 100)"
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     last = run.stdout.strip().splitlines()[-3:]
     assert run.returncode == 0, f"exit {run.returncode} after:\n" + "\n".join(last) + "\n" + run.stderr[-2000:]
