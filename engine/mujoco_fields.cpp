@@ -148,7 +148,10 @@ class FieldCheck {
     }
     if (q != m_.nq) fail("MjModel nq: ", m_.nq, ", but the joints have ", q, " coordinates");
     if (d != m_.nv) fail("MjModel nv: ", m_.nv, ", but the joints have ", d, " dofs");
-    for (int i = 0; i < m_.nq; ++i) finite("qpos0", i, "", m_.qpos0 + i, 1);
+    for (int j = 0; j < m_.njnt; ++j)
+      for (int i = m_.jnt_qposadr[j]; i < m_.jnt_qposadr[j] + kJointCoords[m_.jnt_type[j]]; ++i)
+        if (!std::isfinite(m_.qpos0[i]))
+          fail("MjModel qpos0[", i, "]", who(MjKind::Joint, j), " is not finite: ", word(m_.qpos0[i]));
   }
 
   void geoms_and_meshes() const {

@@ -154,6 +154,7 @@ def model():
         ("key_qpos", (0, 11), np.nan, "MjModel key_qpos[0][11] (keyframe 'home') is not finite: nan"),
         ("body_pos", (2, 1), np.inf, "MjModel body_pos[2][1] (body 'upper') is not finite: inf"),
         ("geom_quat", 1, 0, "MjModel geom_quat[1] (geom 'torso') is a zero quaternion"),
+        ("qpos0", 11, -np.nan, "MjModel qpos0[11] (joint 'elbow') is not finite: nan"),
     ],
 )
 def test_each_corrupted_field_is_named_with_its_element_and_value(model, field, index, value, message):
