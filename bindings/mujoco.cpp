@@ -27,7 +27,7 @@ class MjModelFields {
                                {&f_.neq, "neq"},
                                {&f_.nexclude, "nexclude"},
                                {&f_.npair, "npair"}})
-      *count = attr(name).cast<int>();
+      *count = size(name);
     const py::object opt = attr("opt");
     f_.gravity = array<double>(opt.attr("gravity"), "opt.gravity", 1, 3);
     f_.timestep = opt.attr("timestep").cast<double>();
@@ -38,13 +38,14 @@ class MjModelFields {
     f_.clamp_ctrl = !(opt.attr("disableflags").cast<int>() & clamp);
     names_ = attr("names").cast<std::string>();
     f_.names = names_.c_str();
+    f_.nnames = static_cast<int>(names_.size());
     read_names();
     read_bodies_and_joints();
     read_geoms();
     read_tendons_and_actuators();
     read_equalities();
     for (auto [count, name] : {std::pair{&f_.nflex, "nflex"}, {&f_.nplugin, "nplugin"}})
-      if (py::hasattr(m_, name)) *count = m_.attr(name).cast<int>();
+      if (py::hasattr(m_, name)) *count = size(name);
   }
   const MujocoFields& fields() const { return f_; }
 
@@ -53,6 +54,18 @@ class MjModelFields {
     if (!py::hasattr(m_, name))
       fail("the MjModel has no field '", name, "' (NovaPhy reads compiled models of MuJoCo 3 and 4)");
     return m_.attr(name);
+  }
+  // a count (nq, nbody, ...): an int that fits a C int, not negative
+  int size(const char* name) const {
+    const py::object n = attr(name);
+    int count = 0;
+    try {
+      count = n.cast<int>();
+    } catch (const py::cast_error&) {
+      fail("the MjModel's count '", name, "' is not an int of 32 bits: ", py::repr(n).cast<std::string>());
+    }
+    if (count < 0) fail("the MjModel's count '", name, "' is negative: ", count);
+    return count;
   }
   // `name`'s data, which must hold count x width values of T (a copy where it is not C-contiguous)
   template <typename T>
@@ -87,7 +100,8 @@ class MjModelFields {
     f_.name_bodyadr = field<int>("name_bodyadr", f_.nbody);
     f_.name_jntadr = field<int>("name_jntadr", f_.njnt);
     f_.name_geomadr = field<int>("name_geomadr", f_.ngeom);
-    f_.name_meshadr = field<int>("name_meshadr", attr("nmesh").cast<int>());
+    f_.nmesh = size("nmesh");
+    f_.name_meshadr = field<int>("name_meshadr", f_.nmesh);
     f_.name_tendonadr = field<int>("name_tendonadr", f_.ntendon);
     f_.name_actuatoradr = field<int>("name_actuatoradr", f_.nu);
     f_.name_keyadr = field<int>("name_keyadr", f_.nkey);
@@ -144,10 +158,10 @@ class MjModelFields {
     f_.geom_friction = field<double>("geom_friction", ng, 3);
     f_.geom_margin = field<double>("geom_margin", ng);
     f_.geom_gap = field<double>("geom_gap", ng);
-    const int nmesh = attr("nmesh").cast<int>();
-    f_.mesh_vertadr = field<int>("mesh_vertadr", nmesh);
-    f_.mesh_vertnum = field<int>("mesh_vertnum", nmesh);
-    f_.mesh_vert = field<float>("mesh_vert", attr("nmeshvert").cast<int>(), 3);
+    f_.nmeshvert = size("nmeshvert");
+    f_.mesh_vertadr = field<int>("mesh_vertadr", f_.nmesh);
+    f_.mesh_vertnum = field<int>("mesh_vertnum", f_.nmesh);
+    f_.mesh_vert = field<float>("mesh_vert", f_.nmeshvert, 3);
     f_.exclude_signature = field<int>("exclude_signature", f_.nexclude);
     if (f_.nexclude > 0) f_.exclude_body_offset = exclude_body_offset();
   }
@@ -176,10 +190,10 @@ class MjModelFields {
     f_.tendon_frictionloss = field<double>("tendon_frictionloss", nt);
     f_.tendon_lengthspring = field_of_width<double>("tendon_lengthspring", nt, {1, 2}, &f_.tendon_lengthspring_width);
     f_.tendon_armature = newer_field<double>("tendon_armature", nt);
-    const int nwrap = attr("nwrap").cast<int>();
-    f_.wrap_type = field<int>("wrap_type", nwrap);
-    f_.wrap_objid = field<int>("wrap_objid", nwrap);
-    f_.wrap_prm = field<double>("wrap_prm", nwrap);
+    f_.nwrap = size("nwrap");
+    f_.wrap_type = field<int>("wrap_type", f_.nwrap);
+    f_.wrap_objid = field<int>("wrap_objid", f_.nwrap);
+    f_.wrap_prm = field<double>("wrap_prm", f_.nwrap);
     f_.actuator_trntype = field<int>("actuator_trntype", nu);
     f_.actuator_dyntype = field<int>("actuator_dyntype", nu);
     f_.actuator_gaintype = field<int>("actuator_gaintype", nu);

@@ -466,6 +466,7 @@ mjModel* load_mujoco_model(const std::string& path) {
   char error[1024] = "";
   // MJCF of MuJoCo >= 3 translated for 2.2.2's parser (engine/mjcf_translate.h); URDF as it is
   const bool urdf = std::filesystem::path(path).extension() == ".urdf";
+  if (urdf) check_urdf(path);
   const TranslatedMjcf translated = urdf ? TranslatedMjcf{} : translate_mjcf(path);
   mjModel* m = mj_loadXML(path.c_str(), translated.vfs.get(), error, sizeof(error));
   if (m == nullptr) fail("cannot load '", path, "': ", error);
@@ -479,6 +480,7 @@ mjModel* load_mujoco_model(const std::string& path) {
 }
 
 MujocoImport import_mujoco_fields(ModelBuilder& builder, const MujocoFields& m, const ImportOptions& options) {
+  check_mujoco_fields(m);
   return MjcfImporter(builder, m, options).run();
 }
 

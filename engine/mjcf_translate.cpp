@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "engine/error.h"
@@ -28,6 +29,80 @@ constexpr const char* kUntranslated[][2] = {{"position", "timeconst"},     {"int
 
 std::string where(const std::string& file, const XMLElement* e) {
   return file + " line " + std::to_string(e->GetLineNum()) + ": <" + e->Name() + ">";
+}
+
+// attributes whose values are names, files or words, never numbers (a body may be named "inf")
+const std::set<std::string> kTextAttributes = {
+    "name",      "class",    "childclass", "file",         "prefix",    "meshdir",  "texturedir", "assetdir",
+    "model",     "joint",    "joint1",     "joint2",       "body",      "body1",    "body2",      "site",
+    "site1",     "site2",    "geom",       "geom1",        "geom2",     "mesh",     "material",   "texture",
+    "hfield",    "tendon",   "tendon1",    "tendon2",      "target",    "objname",  "actuator",   "slidersite",
+    "cranksite", "refsite",  "sidesite",   "camera",       "light",     "flex",     "skin",       "plugin",
+    "instance",  "source",   "key",        "content_type", "fileright", "fileleft", "fileup",     "filedown",
+    "filefront", "fileback", "link",       "filename"};
+
+// a whole word strtod reads as a number
+bool number(const std::string& word, double* x) {
+  char* end = nullptr;
+  *x = std::strtod(word.c_str(), &end);
+  return !word.empty() && end == word.c_str() + word.size();
+}
+
+// why tinyxml2 could not read a file, in words
+std::string xml_error(const XMLDocument& doc) {
+  switch (doc.ErrorID()) {
+    case tinyxml2::XML_ERROR_FILE_NOT_FOUND:
+    case tinyxml2::XML_ERROR_FILE_COULD_NOT_BE_OPENED:
+    case tinyxml2::XML_ERROR_FILE_READ_ERROR: return "the file cannot be read";
+    case tinyxml2::XML_ERROR_EMPTY_DOCUMENT: return "the file is empty, not XML";
+    case tinyxml2::XML_ERROR_MISMATCHED_ELEMENT: return "a closing tag that does not match the element it closes";
+    case tinyxml2::XML_ERROR_PARSING_ELEMENT: return "an element that is malformed or not closed";
+    case tinyxml2::XML_ERROR_PARSING_ATTRIBUTE: return "a malformed attribute";
+    case tinyxml2::XML_ERROR_PARSING_TEXT: return "text outside any element (not an XML file?)";
+    default: return "not well-formed XML";
+  }
+}
+
+// the file as XML; Error naming the file and, in words, what is wrong with it
+std::unique_ptr<XMLDocument> read_xml(const std::string& path) {
+  if (std::filesystem::is_directory(path)) fail("cannot load '", path, "': a directory, not a file");
+  auto doc = std::make_unique<XMLDocument>();
+  if (doc->LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS || !doc->RootElement())
+    fail("cannot load '", path, "': XML parse error at line ", doc->ErrorLineNum(), ": ", xml_error(*doc));
+  return doc;
+}
+
+// "file line 3: <body name="b"> pos="nan 0 1"", a keyframe's key with its index in the file
+std::string attribute(const std::string& path, const XMLElement* e, const tinyxml2::XMLAttribute* a, int key) {
+  std::string s = where(path, e);
+  if (e->Attribute("name")) s.insert(s.size() - 1, std::string(" name=\"") + e->Attribute("name") + "\"");
+  if (std::strcmp(e->Name(), "key") == 0) s += " (key " + std::to_string(key) + " of the file)";
+  return s + " " + a->Name() + "=\"" + a->Value() + "\"";
+}
+
+// MuJoCo 2.2.2 reads a NaN as 0, drops it or keeps it, MuJoCo 4 keeps it: a NaN in a number is an Error, and so is an
+// infinity outside a range (MJCF's range, ctrlrange, forcerange, ...; URDF's limits: both MuJoCos read "inf")
+// and a zero quaternion (which MuJoCo 4 rejects); `user` data, which NovaPhy does not read, is left alone.
+// `key`: the index in the file of a <key> element
+void check_numbers(const std::string& path, const XMLElement* e, int key, bool urdf) {
+  for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
+    const std::string name = a->Name();
+    if (kTextAttributes.count(name) || name == "user") continue;
+    const bool range = (name.size() >= 5 && name.compare(name.size() - 5, 5, "range") == 0) ||
+                       (urdf && (name == "lower" || name == "upper" || name == "effort" || name == "velocity"));
+    std::istringstream words(a->Value());
+    bool zero = true;
+    int count = 0;
+    for (std::string word; words >> word; ++count) {
+      double x = 0;
+      if (!number(word, &x)) break;
+      zero = zero && x == 0;
+      if (std::isnan(x)) fail(attribute(path, e, a, key), ": '", word, "' is not a number (NaN)");
+      if (std::isinf(x) && !range)
+        fail(attribute(path, e, a, key), ": '", word, "' is infinite (only a range's bounds may be)");
+    }
+    if (name == "quat" && zero && count == 4) fail(attribute(path, e, a, key), ": a zero quaternion");
+  }
 }
 
 // every element below `e` (itself included), depth first
@@ -59,16 +134,31 @@ class Defaults {
   std::map<std::string, XMLElement*> classes_;
 };
 
-struct Unreadable {};  // a file that is not well-formed XML: MuJoCo's parser reports it
+// prints a document with each element on the line it was read from (an added one where it falls), so that
+// MuJoCo's messages give the file's own line numbers
+class LinePrinter : public tinyxml2::XMLPrinter {
+ public:
+  LinePrinter() : XMLPrinter(nullptr, true) {}
+
+  bool VisitEnter(const XMLElement& e, const tinyxml2::XMLAttribute* a) override {
+    const char* text = CStr();
+    for (const int size = CStrSize() - 1; scanned_ < size; ++scanned_) line_ += text[scanned_] == '\n';
+    for (; line_ < e.GetLineNum(); ++line_, ++scanned_) Putc('\n');
+    return XMLPrinter::VisitEnter(e, a);
+  }
+
+ private:
+  int line_ = 1, scanned_ = 0;  // the output's line, and how much of it was counted
+};
 
 class Translator {
  public:
   explicit Translator(TranslatedMjcf& out) : out_(out) {}
 
   void file(const std::string& path, bool main) {
-    auto doc = std::make_unique<XMLDocument>();
-    XMLElement* root = doc->LoadFile(path.c_str()) == tinyxml2::XML_SUCCESS ? doc->RootElement() : nullptr;
-    if (!root) throw Unreadable{};
+    auto doc = read_xml(path);
+    XMLElement* root = doc->RootElement();
+    keys_ = 0;
     const std::string dir = std::filesystem::path(path).parent_path().string();
     Defaults defaults(root);
     for_each_element(root, [&](XMLElement* e) { element(path, e, defaults); });
@@ -97,6 +187,8 @@ class Translator {
       note(path, e, "integrator=\"implicitfast\" -> \"implicit\"");
     }
     whitespace(path, e);
+    if (std::strcmp(e->Name(), "key") == 0) ++keys_;
+    check_numbers(path, e, keys_ - 1, false);
     if (std::strcmp(e->Name(), "joint") == 0)
       after_compiling(path, e, defaults, {"actuatorfrcrange", "actuatorfrclimited"}, out_.joint_force_range);
     if (std::strcmp(e->Name(), "position") == 0) {
@@ -210,7 +302,7 @@ class Translator {
   }
 
   void add(const std::string& path, XMLDocument& doc) {
-    tinyxml2::XMLPrinter printer;
+    LinePrinter printer;
     doc.Print(&printer);
     const std::string name = std::filesystem::path(path).filename().string();
     if (mj_findFileVFS(out_.vfs.get(), name.c_str()) >= 0)
@@ -225,6 +317,7 @@ class Translator {
   std::vector<std::pair<XMLElement*, const char*>> strip_;  // attributes of defaults dropped after the file
   std::string main_dir_;
   bool has_autolimits_ = false;
+  int keys_ = 0;  // the <key> elements of the file read so far
 };
 
 }  // namespace
@@ -299,12 +392,13 @@ TranslatedMjcf translate_mjcf(const std::string& path) {
                delete vfs;
              }};
   mj_defaultVFS(out.vfs.get());
-  try {
-    Translator(out).file(path, true);
-  } catch (const Unreadable&) {
-    return {};  // MuJoCo's own parser names what is wrong with the file
-  }
+  Translator(out).file(path, true);
   return out;
+}
+
+void check_urdf(const std::string& path) {
+  const auto doc = read_xml(path);
+  for_each_element(doc->RootElement(), [&](XMLElement* e) { check_numbers(path, e, -1, true); });
 }
 
 }  // namespace novaphy

@@ -38,8 +38,12 @@ void narrow_force_range(double lower, double upper, double gear, double* force_l
 void set_dampratio(mjModel* m);
 
 // reads `path` (MJCF) and its includes and translates them; throws Error for a MuJoCo >= 3 attribute without a
-// translation. A file that is not well-formed XML gives no file system (vfs null): MuJoCo's parser, reading the
-// files from disk, reports it
+// translation, for a file that is not well-formed XML or a directory (in words, not tinyxml2's codes), and for a
+// number MuJoCo 2.2.2 would misread: a NaN, an infinity outside a range, a zero quaternion (naming the file,
+// line, element and attribute, with the value as written)
 TranslatedMjcf translate_mjcf(const std::string& path);
+
+// the same checks of a URDF file, which is not translated (its limits may be infinite)
+void check_urdf(const std::string& path);
 
 }  // namespace novaphy

@@ -17,6 +17,7 @@ enum class MjKind { Body, Joint, Geom, Mesh, Tendon, Actuator, Key, Equality };
 
 struct MujocoFields {
   int nq = 0, nv = 0, nu = 0, nbody = 0, njnt = 0, ngeom = 0, ntendon = 0, nkey = 0, neq = 0, nexclude = 0, npair = 0;
+  int nnames = 0, nmesh = 0, nmeshvert = 0, nwrap = 0;  // the sizes of names, the mesh arrays, the wrap arrays
   // options
   const double *gravity = nullptr;  // [3]
   double timestep = 0.002, impratio = 1, density = 0, viscosity = 0;
@@ -72,9 +73,15 @@ struct MujocoFields {
                *tendon_armature = nullptr;
   int nflex = 0, nplugin = 0;  // deformables and engine plugins (MuJoCo >= 3)
 
-  // the name of object `id` of a kind, or "#id" for an unnamed one
+  // the name of object `id` of a kind, or "#id" for an unnamed one (its name address checked first)
   std::string name(MjKind kind, int id) const;
 };
+
+// throws Error where an index, address, count or type the converter reads is out of range or breaks MuJoCo's
+// layout (each body's joints and each joint's coordinates and dofs follow the previous ones), where a frame, a
+// quaternion or a keyframe value is not finite, and for a zero quaternion; the message names the field, the
+// element and the value: "MjModel jnt_qposadr[3] (joint 'hip'): 99 out of range [0, 19)"
+void check_mujoco_fields(const MujocoFields &m);
 
 // a view over a MuJoCo 2.2.2 model (which must outlive it)
 MujocoFields mujoco_fields(const mjModel *m);

@@ -152,12 +152,77 @@ TEST(MjcfTranslate, AnAttributeWithoutATranslationIsNamedWithItsFileAndLine) {
   std::filesystem::remove(path);
 }
 
-TEST(MjcfTranslate, AFileThatIsNotXmlIsLeftToMujocosParser) {
-  const std::string path = test::write_temp_file("three_broken.xml", "<mujoco><worldbody></mujoco>");
-  EXPECT_EQ(translate_mjcf(path).vfs, nullptr);
+TEST(MjcfTranslate, AFileThatIsNotXmlOrADirectoryIsNamedInWords) {
+  const std::string broken = test::write_temp_file("three_broken.xml", "<mujoco><worldbody></mujoco>");
+  const std::string text = test::write_temp_file("three_text.xml", "hello, not a model");
   ModelBuilder builder;
-  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(path), "XML parse error");
+  EXPECT_NOVAPHY_ERROR(
+      builder.add_mjcf(broken),
+      "three_broken.xml': XML parse error at line 1: a closing tag that does not match the element it closes");
+  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(text),
+                       "three_text.xml': XML parse error at line 1: text outside any element (not an XML file?)");
+  const std::string dir = std::filesystem::path(broken).parent_path().string();
+  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(dir), "cannot load '" + dir + "': a directory, not a file");
+  try {
+    builder.add_mjcf(text);
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find("XML_ERROR"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(broken);
+  std::filesystem::remove(text);
+}
+
+// the translated file keeps each element on its line, so MuJoCo's parser and compiler name the file's own lines
+TEST(MjcfTranslate, MujocosMessagesGiveTheFilesOwnLines) {
+  const std::string path = test::write_temp_file("three_lines.xml", R"(<mujoco>
+  <worldbody>
+    <body name="b">
+      <joint name="j" type="hinge"/>
+
+      <geom type="capsule" size="0.1"/>
+      <unknownthing/>
+    </body>
+  </worldbody>
+</mujoco>)");
+  ModelBuilder builder;
+  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(path), "Element 'unknownthing', line 7");
   std::filesystem::remove(path);
+}
+
+// MuJoCo 2.2.2 reads "nan 0 1" as 0 0 0 and a NaN mass as none given (MuJoCo 4 keeps both): each number that
+// 2.2.2 would misread is named as the file wrote it, with its element, attribute, file and line
+TEST(MjcfTranslate, ANanAnInfinityOrAZeroQuaternionIsNamedAsTheFileWroteIt) {
+  const auto load = [](const std::string& body, const std::string& rest = "") {
+    const std::string path = test::write_temp_file(
+        "three_numbers.xml", "<mujoco><worldbody>\n" + body + "\n</worldbody>" + rest + "</mujoco>");
+    ModelBuilder builder;
+    builder.add_mjcf(path);
+    std::filesystem::remove(path);
+    return builder;
+  };
+  const std::string joint = R"(<joint name="j" type="hinge"/><geom size="0.1"/>)";
+  EXPECT_NOVAPHY_ERROR(load(R"(<body name="b" pos="nan 0 1">)" + joint + "</body>"),
+                       R"(three_numbers.xml line 2: <body name="b"> pos="nan 0 1": 'nan' is not a number (NaN))");
+  EXPECT_NOVAPHY_ERROR(load(R"(<body pos="0 0 1"><joint axis="INF 0 0"/><geom size="0.1"/></body>)"),
+                       R"(line 2: <joint> axis="INF 0 0": 'INF' is infinite (only a range's bounds may be))");
+  EXPECT_NOVAPHY_ERROR(load(R"(<body name="b" quat="0 0 0 0">)" + joint + "</body>"),
+                       R"(line 2: <body name="b"> quat="0 0 0 0": a zero quaternion)");
+  // 2.2.2 compiles an inertial frame's zero quaternion into a body without inertia (a massless link when stepped)
+  EXPECT_NOVAPHY_ERROR(
+      load(R"(<body><joint/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1" quat="0 0 0 0"/></body>)"),
+      R"(line 2: <inertial> quat="0 0 0 0": a zero quaternion)");
+  EXPECT_NOVAPHY_ERROR(load(R"(<body name="b">)" + joint + "</body>",
+                            R"(<keyframe><key name="rest"/><key name="home" qpos="-nan"/></keyframe>)"),
+                       R"(<key name="home"> (key 1 of the file) qpos="-nan": '-nan' is not a number (NaN))");
+  // infinite bounds of a range load as MuJoCo reads them; a body may be named "inf"
+  const Model model =
+      load(
+          R"(<body name="inf"><joint name="j" type="hinge" range="-inf inf" limited="true"/><geom size="0.1"/></body>)",
+          R"(<actuator><motor joint="j" ctrlrange="-1 inf" ctrllimited="true"/></actuator>)")
+          .finalize();
+  EXPECT_EQ(model.body_name[0], "inf");
+  EXPECT_EQ(model.joint_limit_upper[0], std::numeric_limits<Scalar>::infinity());
+  EXPECT_EQ(model.actuator_ctrl_upper[0], std::numeric_limits<Scalar>::infinity());
 }
 
 }  // namespace

@@ -143,3 +143,42 @@ def test_a_mujoco_that_writes_exclusions_another_way_is_named(monkeypatch):
     monkeypatch.setattr(mujoco, "MjModel", Probe)
     with pytest.raises(ValueError, match="writes the exclusion of bodies 1 and 2 as exclude_signature 7"):
         novaphy.ModelBuilder().add_mujoco_model(m)
+
+
+@pytest.mark.parametrize(
+    "attribute, by_file, by_model",
+    [
+        (
+            'pos="nan 0 1"',
+            "<body name=\"b\"> pos=\"nan 0 1\": 'nan' is not a number (NaN)",
+            "body_pos[1][0] (body 'b') is not finite: nan",
+        ),
+        (
+            'pos="inf 0 1"',
+            "<body name=\"b\"> pos=\"inf 0 1\": 'inf' is infinite (only a range's bounds may be)",
+            "body_pos[1][0] (body 'b') is not finite: inf",
+        ),
+    ],
+)
+def test_a_value_not_finite_is_named_as_the_file_wrote_it_on_both_routes(tmp_path, attribute, by_file, by_model):
+    path = tmp_path / "bad.xml"
+    body = f'<body name="b" {attribute}><joint/><geom size="0.1"/></body>'
+    path.write_text(f"<mujoco><worldbody>{body}</worldbody></mujoco>")
+    with pytest.raises(ValueError) as raised:
+        novaphy.ModelBuilder().add_mjcf(str(path))
+    assert f"bad.xml line 1: {by_file}" in str(raised.value)
+    with pytest.raises(ValueError) as raised:
+        quiet(novaphy.from_mujoco, mujoco.MjModel.from_xml_path(str(path)))
+    assert f"MjModel {by_model}" in str(raised.value)
+
+
+def test_a_nan_keyframe_is_named_with_its_name_and_index(tmp_path):
+    path = tmp_path / "key.xml"
+    path.write_text(
+        '<mujoco><worldbody><body><joint name="j"/><geom size="0.1"/></body></worldbody>'
+        '<keyframe><key name="rest"/><key name="home" qpos="nan"/></keyframe></mujoco>'
+    )
+    with pytest.raises(ValueError, match=r"<key name=\"home\"> \(key 1 of the file\) qpos=\"nan\": 'nan' is not a"):
+        novaphy.ModelBuilder().add_mjcf(str(path))
+    with pytest.raises(ValueError, match=r"MjModel key_qpos\[1\]\[0\] \(keyframe 'home'\) is not finite: nan"):
+        quiet(novaphy.from_mujoco, mujoco.MjModel.from_xml_path(str(path)))
