@@ -162,7 +162,7 @@ def test_state_from_another_model_is_rejected():
     model = seed_pendulum_model()
     other = novaphy.ModelBuilder()
     other.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
-    with pytest.raises(ValueError, match="state from another model: made by model"):
+    with pytest.raises(ValueError, match="state or control from another model"):
         novaphy.eval_fk(model, other.finalize().state())
 
 

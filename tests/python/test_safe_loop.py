@@ -133,7 +133,7 @@ def test_world_view_refuses_arrays_that_are_not_per_world():
     with pytest.raises(ValueError, match="none of the model's per-world counts"):
         novaphy.world_view(model, np.zeros(6))
     with pytest.raises(ValueError, match="belongs to another model"):
-        other = novaphy.ModelBuilder()
+        other = novaphy.ModelBuilder(gravity=[0.0, 0.0, -1.0])  # the same counts, another gravity
         other.replicate(robot, 4)
         novaphy.world_view(model, other.finalize().state().joint_q)
     assert novaphy.world_view(model, model.shape_mu).shape == (4, 1)
