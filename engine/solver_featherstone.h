@@ -98,7 +98,8 @@ class SolverFeatherstone {
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
 
   // the state an articulation restarts from under on_divergence Reset: its joint_q and joint_qd (copied; by
-  // default joint_q0 at rest); throws Error where it is not the model's or not finite
+  // default the model's joint_q0 when the solver was made, at rest); throws Error where it is not the model's or
+  // not finite
   void set_reset_state(const State& state);
   // the reset state at the model's keyframe of that name (its coordinates and velocities)
   void set_reset_keyframe(const std::string& keyframe) { set_reset_state(model_.state(keyframe)); }

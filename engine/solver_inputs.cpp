@@ -144,8 +144,8 @@ void SolverFeatherstone::raise_bad_input(const StepContext& step) {
   auto body_world = [&](int k) { return model_.body_world[k / 6]; };
   auto actuator_world = [&](int u) {
     const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u];
-    const int dof = joint >= 0 ? model_.joint_qd_start[joint] : model_.tendon_dof[model_.tendon_start[tendon]];
-    return dof_world(dof);
+    if (joint < 0 && tendon < 0) return -1;  // (on nothing: check_step checked it)
+    return dof_world(joint >= 0 ? model_.joint_qd_start[joint] : model_.tendon_dof[model_.tendon_start[tendon]]);
   };
   bool drives = false;
   for (const Scalar* gains : {control.joint_target_ke.data(), control.joint_target_kd.data()})
