@@ -38,7 +38,9 @@ void bind_solver_featherstone(py::module_& m) {
   py::enum_<DivergencePolicy>(m, "DivergencePolicy", "What step does with an articulation that diverged.")
       .value("Raise", DivergencePolicy::Raise, "step raises and writes nothing")
       .value("Flag", DivergencePolicy::Flag, "the articulation keeps its previous state; solver.diverged marks it")
-      .value("Reset", DivergencePolicy::Reset, "the articulation restarts from the model's joint_q0 at rest");
+      .value("Reset", DivergencePolicy::Reset,
+             "the articulation restarts from the reset state (set_reset_state, set_reset_keyframe; else joint_q0 at "
+             "rest)");
   py::class_<Settings> settings(m, "SolverFeatherstoneSettings",
                                 "Every knob of SolverFeatherstone (docs/settings.md); checked at each step.");
   settings.def(py::init<>());
@@ -90,7 +92,12 @@ void bind_solver_featherstone(py::module_& m) {
       .def_readwrite("settings", &SolverFeatherstone::settings)
       .def("step", &SolverFeatherstone::step, py::arg("state_in"), py::arg("state_out"), py::arg("control"),
            py::arg("contacts"), py::arg("dt"), py::call_guard<py::gil_scoped_release>(),
-           "Advances state_in by dt into state_out (they may be the same State).")
+           "Advances state_in by dt into state_out (they may be the same State); one step at a time per solver "
+           "(another thread's raises).")
+      .def("set_reset_state", &SolverFeatherstone::set_reset_state, py::arg("state"),
+           "The state (its joint_q and joint_qd, copied) an articulation restarts from under on_divergence Reset.")
+      .def("set_reset_keyframe", &SolverFeatherstone::set_reset_keyframe, py::arg("keyframe"),
+           "The reset state at the model's keyframe of that name: its coordinates and velocities.")
       .def("joint_support", &SolverFeatherstone::joint_support)
       .def_property_readonly(
           "stage_seconds",

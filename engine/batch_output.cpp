@@ -17,13 +17,16 @@ IntLanes<T> block_integrate(const BatchGroup<T>& G, int b, const StepContext& st
     gather_lanes<T>(&G.qd_off[b * W], step.qd, nv, w.qd.data());
   }
   batch_integrate(G.topo, w.q.data(), w.qd.data(), static_cast<T>(step.dt), w.q_next.data());
+  // (x, the right-hand side of the dynamics, is free once they solved it: it takes the guard's weights)
+  gather_lanes<T>(&G.qd_off[b * W], step.energy_weight, nv, w.x.data());
   bool diverged[W];
-  divergence_test(w.q_next.data(), nq, w.qd.data(), nv, step.divergence_speed, diverged);
+  divergence_test(w.q_next.data(), nq, w.qd.data(), w.x.data(), nv, step.divergence_speed, step.divergence_energy,
+                  diverged);
   IntLanes<T> written{};
   for (int l = 0; l < G.lanes_in(b); ++l) {
     const int a = G.arts[b * W + l];
-    step.diverged[a] = diverged[l];
-    if (store && (diverged[l] || step.factor_failure[a] >= 0)) continue;
+    step.diverged[a] = diverged[l] || step.flagged[a];
+    if (store && (step.diverged[a] || step.factor_failure[a] >= 0)) continue;
     written[l] = -1;
   }
   scatter_lanes<T>(&G.q_off[b * W], w.q_next.data(), nq, written, store ? step.out->joint_q.data() : step.q_next);

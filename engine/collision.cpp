@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "engine/error.h"
+#include "engine/exclusive_call.h"
 #include "engine/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/lane_transpose.h"
@@ -185,13 +186,21 @@ bool CollisionPipeline::may_collide(int a, int b) const {
 }
 
 void CollisionPipeline::collide(const State& state, Contacts& contacts) {
+  const ExclusiveCall exclusive(busy_, "CollisionPipeline.collide");
   const std::int64_t start = options_.count_serial_time ? now_ns() : 0;
   model_.check(state);
-  if (!same_layout(contacts, model_) || contacts.contact_capacity != options_.contact_capacity)
+  if (!same_layout(contacts, model_))
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
+  const auto capacity = static_cast<size_t>(contacts.contact_capacity);
+#define NOVAPHY_CHECK_CONTACT_SIZE(T, name, count, width)                                                         \
+  if (contacts.name.size() != capacity * (width))                                                                 \
+    fail("contacts buffer: " #name " has ", contacts.name.size(), " entries, its capacity ", capacity, " needs ", \
+         capacity*(width));
+  NOVAPHY_CONTACT_FIELDS(NOVAPHY_CHECK_CONTACT_SIZE)
+#undef NOVAPHY_CHECK_CONTACT_SIZE
   // (a buffer not made by contacts() gets its warm-start bookkeeping here)
-  if (contacts.previous_match.size() != static_cast<size_t>(contacts.contact_capacity)) size_previous(contacts);
+  if (contacts.previous_match.size() != capacity) size_previous(contacts);
 
   // the poses of the planes on bodies and the boxes of the shapes of no world first: every world meets
   // them. Then per world, its shapes' boxes into the thread's scratch (in cache while used): its pairs
@@ -207,7 +216,6 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   const int threads = std::max({team(groups, kWorldsPerThread / kLanes<Scalar>), team(shared, kWorldsPerThread),
                                 team(planes, kWorldsPerThread), team(previous, kKeptPerThread)});
   if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
-  contacts.previous_count = previous;
   int found = 0;
   {
     const ParallelTimer timer(timed(threads), &serial_seconds_.parallel);
@@ -218,11 +226,27 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
       find_on_thread(state, contacts, &found);
     }
   }
+  if (found > contacts.contact_capacity && options_.on_overflow == ContactOverflow::Raise)
+    fail("contact capacity ", contacts.contact_capacity, " is too small: collide found ", found,
+         " contacts (make the pipeline with contact_capacity >= ", found,
+         ", or on_overflow Grow); the buffer is left as it was");
   contacts.contact_count = std::min(found, contacts.contact_capacity);
   contacts.contact_dropped = found - contacts.contact_count;
   if (!options_.count_serial_time) return;
   serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
   ++serial_seconds_.steps;
+}
+
+void Contacts::grow(int capacity) {
+  contact_capacity = capacity;
+#define NOVAPHY_GROW_CONTACT(T, name, count, width)                           \
+  retired.push_back(std::make_shared<const std::vector<T>>(std::move(name))); \
+  name.assign(static_cast<size_t>(capacity) * (width), T{});
+  NOVAPHY_CONTACT_FIELDS(NOVAPHY_GROW_CONTACT)
+#undef NOVAPHY_GROW_CONTACT
+  previous_key.resize(capacity);
+  previous_impulse.resize(6 * static_cast<size_t>(capacity));
+  previous_match.assign(capacity, -1);
 }
 
 void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, int* found) {
@@ -231,17 +255,8 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
   const int t = omp_get_thread_num(), n = omp_get_num_threads();
   Scratch& scratch = scratch_[t];
   scratch.found.clear();
-  const int previous = contacts.previous_count, groups = static_cast<int>(group_first_.size()) - 1;
+  const int previous = contacts.contact_count, groups = static_cast<int>(group_first_.size()) - 1;
   const int shared = static_cast<int>(shared_others_.size()), planes = static_cast<int>(planes_.size());
-  // the buffer's contacts, in their order, become the previous ones for warm starting
-#pragma omp for schedule(static) nowait
-  for (int c = 0; c < previous; ++c) {
-    contacts.previous_key[c] = contacts.key_of(c);
-    for (int i = 0; i < 3; ++i) {
-      contacts.previous_impulse[6 * c + i] = contacts.contact_impulse[3 * c + i];
-      contacts.previous_impulse[6 * c + 3 + i] = contacts.contact_spin_impulse[3 * c + i];
-    }
-  }
 #pragma omp for schedule(static) nowait
   for (int g = 0; g < groups; ++g) group_contacts(state, g, scratch);
   scratch.loop_end[0] = scratch.found.size();
@@ -256,8 +271,28 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
     against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), shared, scratch.found);
   scratch.loop_end[2] = scratch.found.size();
 #pragma omp barrier
+  std::size_t total = 0;
+  for (int u = 0; u < n; ++u) total += scratch_[u].loop_end[2];
+  if (t == 0) *found = static_cast<int>(total);
+  const bool overflow = total > static_cast<std::size_t>(contacts.contact_capacity);
+  if (overflow && options_.on_overflow == ContactOverflow::Raise) return;  // (every thread: collide throws)
+    // the buffer's contacts, in their order, become the previous ones for warm starting
+#pragma omp for schedule(static)
+  for (int c = 0; c < previous; ++c) {
+    contacts.previous_key[c] = contacts.key_of(c);
+    for (int i = 0; i < 3; ++i) {
+      contacts.previous_impulse[6 * c + i] = contacts.contact_impulse[3 * c + i];
+      contacts.previous_impulse[6 * c + 3 + i] = contacts.contact_spin_impulse[3 * c + i];
+    }
+  }
+  if (overflow && options_.on_overflow == ContactOverflow::Grow) {
+#pragma omp single
+    contacts.grow(
+        static_cast<int>(std::max<std::size_t>(total, 2 * static_cast<std::size_t>(contacts.contact_capacity))));
+  }
+  if (t == 0) contacts.previous_count = previous;
   // each loop's contacts after the loops' before, each thread's after the threads' before: the order of the loops
-  // and of i whatever the thread count; those beyond the capacity dropped
+  // and of i whatever the thread count; under Drop those beyond the capacity dropped
   std::size_t c = 0;
   for (int loop = 0; loop < 3; ++loop)
     for (int u = 0; u < n; ++u) {
@@ -276,7 +311,6 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
 #pragma omp for schedule(static)
   for (int r = 0; r < stretches; ++r)
     match_previous(contacts, r * kMatchStretch, std::min(kept, (r + 1) * kMatchStretch));
-  if (t == 0) *found = static_cast<int>(c);
 }
 
 void CollisionPipeline::write_contact(const Found& found, int c, Contacts& contacts) const {

@@ -3,7 +3,9 @@
 // writing into a Contacts buffer allocated once.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "engine/model.h"
@@ -26,17 +28,24 @@ namespace novaphy {
   X(Scalar, contact_impulse, contact_capacity, 3) \
   X(Scalar, contact_spin_impulse, contact_capacity, 3)
 
-// contacts of one collide(): the first contact_count entries of each array are valid.
+// contacts of one collide(): the first contact_count entries of each array are valid. A collide that finds more
+// than contact_capacity grows the arrays (CollisionOptions::on_overflow): the arrays it replaces are kept in
+// `retired` while the buffer lives, so a pointer into them (a numpy view fetched before) stays valid but reads
+// the old arrays; fetch views again after a collide.
 // normal points from shape a to shape b; depth > 0 is penetration; contact_impulse is the
 // impulse (world frame, on b) the solver applied, contact_spin_impulse the angular impulse of its torsional and
 // rolling rows (world frame, on b; 0 below condim 4), both kept for warm starting the next step
 struct Contacts : ModelCounts {
   int contact_capacity = 0;
   int contact_count = 0;
-  int contact_dropped = 0;  // contacts the last collide() found beyond the capacity
+  int contact_dropped = 0;  // contacts the last collide() found beyond the capacity and dropped (on_overflow Drop)
 #define NOVAPHY_DECLARE_CONTACT(T, name, count, width) std::vector<T> name;
   NOVAPHY_CONTACT_FIELDS(NOVAPHY_DECLARE_CONTACT)
 #undef NOVAPHY_DECLARE_CONTACT
+  std::vector<std::shared_ptr<const void>> retired;  // the arrays a growth replaced, kept alive
+
+  // the arrays zeroed at room for `capacity` contacts, the old ones retired
+  void grow(int capacity);
 
   // the previous collide()'s contacts in their order, with the impulses the solver applied to them, and
   // where each of this collide()'s contacts was among them (-1: a new contact)
@@ -61,8 +70,16 @@ struct Contacts : ModelCounts {
   }
 };
 
+// what collide does when it finds more contacts than the buffer holds
+enum class ContactOverflow : int {
+  Grow = 0,   // the buffer grows to hold them all (at least doubling)
+  Raise = 1,  // collide throws naming the capacity needed; the buffer is left as it was
+  Drop = 2,   // those beyond the capacity are dropped, the last worlds' first; contact_dropped counts them
+};
+
 struct CollisionOptions {
   int contact_capacity = 0;  // 0: 8 per shape, at least 64
+  ContactOverflow on_overflow = ContactOverflow::Grow;
   // contacts are made this far before touching (pairs of soft shapes: within their shape_margin, MuJoCo's rule);
   // the broad phase's bounds reach the larger of this and every shape_margin
   Scalar margin = 0.01;
@@ -77,7 +94,8 @@ class CollisionPipeline {
   explicit CollisionPipeline(const Model& model, const CollisionOptions& options = {});
 
   Contacts contacts() const;
-  // contacts between the shapes at the poses of state.body_q
+  // contacts between the shapes at the poses of state.body_q; throws Error where another thread's collide on this
+  // pipeline is running (one pipeline per thread)
   void collide(const State& state, Contacts& contacts);
 
   const CollisionOptions& options() const { return options_; }
@@ -204,10 +222,11 @@ class CollisionPipeline {
   void world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits);
   // world w's pairs by sweep and prune along x (a world of many shapes)
   void sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out);
-  // collide on thread t of the region it opened (or alone): the buffer's contacts and impulses kept as the previous
-  // ones, the thread's runs of groups of worlds, shared shapes and planes into its scratch, its contacts written into
-  // the buffer in the order of the loops and of i, whatever the thread count, and the buffer's contacts matched with
-  // the previous ones; *found: the contacts found, kept or not (thread 0 writes it)
+  // collide on thread t of the region it opened (or alone): the thread's runs of groups of worlds, shared shapes and
+  // planes into its scratch; then, unless they overflow the buffer under on_overflow Raise (nothing written), the
+  // buffer's contacts and impulses kept as the previous ones, the buffer grown where they overflow it under Grow,
+  // the thread's contacts written into it in the order of the loops and of i, whatever the thread count, and the
+  // buffer's contacts matched with the previous ones; *found: the contacts found, kept or not (thread 0 writes it)
   void find_on_thread(const State& state, Contacts& contacts, int* found);
   // contact c of the buffer from the narrow phase's
   void write_contact(const Found& found, int c, Contacts& contacts) const;
@@ -227,6 +246,7 @@ class CollisionPipeline {
 
   const Model& model_;
   CollisionOptions options_;
+  std::atomic<bool> busy_{false};  // a collide is running (ExclusiveCall)
   Scalar reach_;  // the broad phase's bounds' margin: the larger of options_.margin and every shape_margin
   SerialSeconds serial_seconds_;
   std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1

@@ -178,9 +178,9 @@ void DenseArticulations::integrate(int a, const StepContext& step) {
   const int q0 = art.q_begin(), qd0 = art.qd_begin();
   integrate_joints(art, step.in->joint_q.data() + q0, step.qd + qd0, step.dt, step.q_next + q0);
   bool diverged;
-  divergence_test<Scalar>(step.q_next + q0, art.coord_count(), step.qd + qd0, art.dof_count(), step.divergence_speed,
-                          &diverged);
-  step.diverged[a] = diverged;
+  divergence_test<Scalar>(step.q_next + q0, art.coord_count(), step.qd + qd0, step.energy_weight + qd0, art.dof_count(),
+                          step.divergence_speed, step.divergence_energy, &diverged);
+  step.diverged[a] = diverged || step.flagged[a];
 }
 
 void DenseArticulations::store(int a, const StepContext& step) {

@@ -15,6 +15,8 @@
 #include "engine/parallel.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/rows.h"
+#include "kernels/crba.h"
+#include "kernels/fk.h"
 #include "kernels/stream.h"
 
 namespace novaphy {
@@ -183,10 +185,40 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
              model.tendon_count,    model.equality_count};
   data_.allocate(counts_);
   std::fill(data_.factor_failure.begin(), data_.factor_failure.end(), -1);
+  reset_q_ = model.joint_q0;
+  reset_qd_.assign(model.joint_dof_count, 0);
+  weigh_energy();
   mark_constrained();
   step_bytes_ = static_cast<std::int64_t>(memory_bytes()) +
                 static_cast<std::int64_t>(sizeof(Scalar)) * (model.joint_coord_count + model.joint_dof_count +
                                                              (7 + 6 + 6) * static_cast<std::int64_t>(model.body_count));
+}
+
+void SolverFeatherstone::weigh_energy() {
+  // per dof H_kk at joint_q0 over its articulation's mass (its links' and welded bodies')
+  energy_weight_.assign(model_.joint_dof_count, 0);
+  std::vector<Scalar> mass(model_.articulation_count, 0);
+  for (int b = 0; b < model_.body_count; ++b)
+    if (index_.body_articulation[b] >= 0) mass[index_.body_articulation[b]] += model_.body_mass[b];
+  ArticulationScratch s;
+  for (int a = 0; a < model_.articulation_count; ++a) {
+    const ArticulationView& art = art_[a];
+    if (art.dof_count() == 0 || !(mass[a] > 0)) continue;
+    s.resize(art);
+    forward_kinematics(art, model_.joint_q0.data() + art.q_begin(), s);
+    crba(art, s);
+    for (int k = 0; k < art.dof_count(); ++k) energy_weight_[art.qd_begin() + k] = s.H(k, k) / mass[a];
+  }
+}
+
+void SolverFeatherstone::set_reset_state(const State& state) {
+  model_.check(state);
+  for (const std::vector<Scalar>* x : {&state.joint_q, &state.joint_qd})
+    for (size_t k = 0; k < x->size(); ++k)
+      if (!std::isfinite((*x)[k]))
+        fail("reset state: ", x == &state.joint_q ? "joint_q" : "joint_qd", "[", k, "] is not finite: ", (*x)[k]);
+  reset_q_ = state.joint_q;
+  reset_qd_ = state.joint_qd;
 }
 
 void SolverFeatherstone::group_actuators() {
@@ -300,6 +332,7 @@ int SolverFeatherstone::thread_count() const {
 // ---- the step
 
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
+  const ExclusiveCall exclusive(busy_, "SolverFeatherstone.step");
   const std::int64_t start = settings.count_serial_time ? now_ns() : 0;
   check_step(in, out, control, contacts, dt);
   plan();
@@ -370,6 +403,11 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.rows.restitution_threshold = settings.restitution_threshold;
   step.rows.use_warmstarting = settings.use_warmstarting;
   step.divergence_speed = settings.divergence_speed;
+  step.divergence_energy = settings.divergence_energy;
+  step.energy_weight = energy_weight_.data();
+  if (flagged_) std::fill(data_.flagged.begin(), data_.flagged.end(), 0);
+  flagged_ = 0;
+  step.flagged = data_.flagged.data();
   step.store_in_pass = settings.on_divergence != DivergencePolicy::Raise;
   step.stream = step_bytes_ > settings.stream_body_output_above;
   step.profile = settings.profile_stages;
@@ -434,9 +472,11 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
   {
     const ParallelTimer timer(timed, &serial_seconds_.parallel);
     touched = touch_articulations(contacts, threads);
+    const Scalar too_deep = settings.divergence_depth;
     parallel_for(threads, n, [&](int c) {
       const int o = owner(c);
       data_.contact_owner[c] = o;
+      if (contacts.contact_depth[c] > too_deep) flag_deep(contacts, c);
       if (o < 0 || (c > 0 && owner(c - 1) > o)) {
 #pragma omp atomic write
         unordered = 1;
@@ -465,6 +505,26 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
     for (int a = 0; a < articulations; ++a)
       if (data_.touched[a] && !constrained_[a] && route_[a] == batches_.get()) island_articulations_.push_back(a);
   step.split = !island_articulations_.empty() || !island_contacts_.empty();
+}
+
+void SolverFeatherstone::flag_deep(const Contacts& contacts, int c) {
+  for (const int body : {contacts.contact_body_a[c], contacts.contact_body_b[c]}) {
+    const int a = index_.moving(body);
+    if (a < 0) continue;
+#pragma omp atomic write
+    data_.flagged[a] = 1;
+  }
+#pragma omp atomic write
+  flagged_ = 1;
+}
+
+void SolverFeatherstone::flag_invalid(const int* arts, int count, const StepContext& step) {
+  for (int i = 0; i < count; ++i) {
+    if (input_valid(arts[i], step)) continue;
+    data_.flagged[arts[i]] = 1;
+#pragma omp atomic write
+    flagged_ = 1;
+  }
 }
 
 bool SolverFeatherstone::touch_articulations(const Contacts& contacts, int threads) {
@@ -515,10 +575,9 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
         } else {
           for (int i = 0; i < count; ++i) step.factor_failure[arts[i]] = -1;
           StepContext local = step;
-          if (u < blocks)
-            block_unit_notes(u, std::min(end, blocks), notes, local);
-          else
-            scan_unit(arts, count, local, nullptr);
+          const bool invalid = u < blocks ? block_unit_notes(u, std::min(end, blocks), notes, local)
+                                          : scan_unit(arts, count, local, nullptr);
+          if (invalid) flag_invalid(arts, count, step);
           actuate_unit(arts, count, local);
           route.run(r, from, to, local);
         }

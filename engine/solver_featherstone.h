@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -17,6 +18,7 @@
 #include "engine/articulation_batches.h"
 #include "engine/collision.h"
 #include "engine/dense_articulations.h"
+#include "engine/exclusive_call.h"
 #include "engine/island_rows.h"
 #include "engine/parallel.h"
 #include "engine/parts/actuator.h"
@@ -65,6 +67,7 @@ struct SolverCounts {
   X(Scalar, tendon_impulse, 2 * n.tendons, "the last step's tendon-limit impulses, the warm starts of their rows")  \
   X(std::uint8_t, pgs_converged, n.articulations, "1 where the last sweeps over its rows stopped at the tolerance") \
   X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                      \
+  X(std::uint8_t, flagged, n.articulations, "1 where an input or a contact too deep diverged it before its step")   \
   X(int, factor_failure, n.articulations, "the dof whose pivot failed this step, else -1")                          \
   X(std::uint8_t, touched, n.articulations, "1 where a contact joins it to another moving articulation this step")  \
   X(int, contact_start, n.articulations + 1, "where each articulation's contacts start in contact_list")            \
@@ -90,8 +93,16 @@ class SolverFeatherstone {
   // or Reset each world's new state is written as its unit steps it, so a non-finite input (joint_q, joint_qd,
   // body_f, the control: found from the world's output) or a mass matrix that is not positive definite in some
   // world (a massless leaf link, which no builder call makes) raises after the other worlds' states were
-  // written; that world is left as it was
+  // written; that world is left as it was. A negative PD gain in the control raises likewise. One step at a time:
+  // a step called while another thread's step of this solver runs throws Error (one solver per thread)
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
+
+  // the state an articulation restarts from under on_divergence Reset: its joint_q and joint_qd (copied; by
+  // default the model's joint_q0 when the solver was made, at rest); throws Error where it is not the model's or
+  // not finite
+  void set_reset_state(const State& state);
+  // the reset state at the model's keyframe of that name (its coordinates and velocities)
+  void set_reset_keyframe(const std::string& keyframe) { set_reset_state(model_.state(keyframe)); }
 
   JointSupportMatrix joint_support() const;
   // per articulation: 1 where the last step's divergence guard fired
@@ -118,26 +129,33 @@ class SolverFeatherstone {
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
   // per articulation what its step reads beside its coordinates and dofs: its bodies (body_f), actuators, tendons
   void index_inputs();
-  // notes in `local` whether these articulations have wrenches (a nonzero body_f) and drives (a nonzero PD gain);
-  // with `finite`, whether all they read is finite: their joint_q, joint_qd, body_f, actuator_ctrl and per-dof
-  // control (the PD targets where a gain is nonzero). A non-finite input reaches the step's output (a drive's
-  // gain or a wrench that is not finite is nonzero), so the pass scans only body_f and the gains; the guard and
+  // notes in `local` whether these articulations have wrenches (a nonzero body_f) and drives (a nonzero PD gain),
+  // and returns whether body_f, the gains or actuator_ctrl hold an entry not finite or a gain below 0 (an infinite
+  // command would be clamped to its control range: no output shows it); with `valid`, whether all they read is
+  // finite and their gains not negative: their joint_q, joint_qd, body_f, actuator_ctrl and per-dof control (the
+  // PD targets where a gain is nonzero). Any other non-finite input reaches the step's output (a drive's gain or a
+  // wrench that is not finite is nonzero), so the pass scans only body_f, the gains and the commands; the guard and
   // check_factors scan all of an articulation whose step went wrong
-  void scan_unit(const int* arts, int count, StepContext& local, bool* finite) const;
+  bool scan_unit(const int* arts, int count, StepContext& local, bool* valid) const;
   // scan_unit's notes of block units [begin, end), scanned back to back (each input array read as one stream, as
   // a pass over all of them would read it, rather than a short run a unit between the unit's other work)
   struct UnitNotes {
     static constexpr int kUnits = 8;
     int begin = 0, end = 0;
-    std::array<std::uint8_t, kUnits> drives, wrenches;
+    std::array<std::uint8_t, kUnits> drives, wrenches, invalid;
   };
   // local's notes for block unit u of a thread's run that ends at `run_end`, from `notes` or scanned into it
-  // with the units after u
-  void block_unit_notes(int u, int run_end, UnitNotes& notes, StepContext& local) const;
-  // whether all articulation a reads is finite
-  bool input_finite(int a, const StepContext& step) const;
-  // throws naming the first non-finite input (check_finite_step's message); the next step refactors
+  // with the units after u; returns scan_unit's
+  bool block_unit_notes(int u, int run_end, UnitNotes& notes, StepContext& local) const;
+  // whether all articulation a reads is finite, and its PD gains not negative
+  bool input_valid(int a, const StepContext& step) const;
+  // throws naming the first non-finite input or negative PD gain, its world and value; the next step refactors
   [[noreturn]] void raise_bad_input(const StepContext& step);
+  // the deepest contact of articulation a among the step's
+  Scalar deepest_contact(int a, const Contacts& contacts) const;
+  // per dof the divergence guard's energy weight (engine/parts/guard.h), from each articulation's mass matrix at
+  // joint_q0
+  void weigh_energy();
   // the actuators by dof and by tendon, the tendon entries by dof
   void group_actuators();
   // constrained_ and the articulations it marks touched
@@ -153,8 +171,13 @@ class SolverFeatherstone {
   // the joint forces of these articulations' dofs with their actuators' and tendons', and in `local` whether
   // some actuator has a position or velocity term (the step's implicit stiffness and damping)
   void actuate_unit(const int* arts, int count, StepContext& local);
-  // each contact to its articulation's unit, or to the islands with every row of the articulations it joins
+  // each contact to its articulation's unit, or to the islands with every row of the articulations it joins; the
+  // articulations a contact deeper than divergence_depth touches flagged
   void list_contacts(const Contacts& contacts, StepContext& step);
+  // the moving articulations contact c touches flagged (it is deeper than divergence_depth); on any thread
+  void flag_deep(const Contacts& contacts, int c);
+  // those of these articulations whose inputs are not valid (input_valid) flagged, on their unit's thread
+  void flag_invalid(const int* arts, int count, const StepContext& step);
   // data_.touched: the articulations a contact joins to another moving one (throws for a contact between
   // two worlds, which no CollisionPipeline makes); returns whether a contact touched any
   bool touch_articulations(const Contacts& contacts, int threads);
@@ -215,7 +238,11 @@ class SolverFeatherstone {
   int contact_dims_ = 3;  // the rows of a contact of the most, by the shapes' condim (ContactLists::dims)
   SolverCounts counts_;
   SolverData data_;
-  std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays
+  int flagged_ = 0;                         // 1 where some articulation is flagged this step (data_.flagged)
+  std::vector<Scalar> reset_q_, reset_qd_;  // the reset state's joint_q and joint_qd (set_reset_state)
+  std::vector<Scalar> energy_weight_;       // [dof] (weigh_energy)
+  std::atomic<bool> busy_{false};           // a step is running (ExclusiveCall)
+  std::int64_t step_bytes_ = 0;             // what a step touches: the solver's memory when made and the state's arrays
   int steps_since_factor_ = 0;
   int trouble_ = 0;  // 1 where a unit's world failed its factor or diverged this step (its units' passes mark it)
   bool factor_kept_ = false;  // the last step's factor kept for this one (its update_mass_matrix_interval > 1)

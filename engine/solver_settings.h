@@ -64,9 +64,18 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
     "Step articulations that share joints, frames and axes (replicated worlds) a SIMD block of worlds at a time in "  \
     "the model's precision; off: every articulation takes the dense route.")                                          \
   X(DivergencePolicy, on_divergence, DivergencePolicy::Flag, 0, 0, "",                                                \
-    "What step does with an articulation whose state went non-finite or too fast: Raise (nothing written), Flag "     \
-    "(it keeps its previous state; diverged() marks it) or Reset (it restarts from joint_q0 at rest).")               \
+    "What step does with an articulation that diverged (its state went non-finite, too fast or too energetic, or a "  \
+    "contact too deep): Raise (nothing written), Flag (it keeps its previous state; diverged() marks it) or Reset "   \
+    "(it restarts from the reset state: set_reset_state or set_reset_keyframe, else joint_q0 at rest).")              \
   X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A dof speed beyond which an articulation diverged.") \
+  X(Scalar, divergence_energy, 1e7, 0, kUnbounded, "J/kg",                                                            \
+    "A kinetic energy per kilogram of its mass beyond which an articulation diverged after its step (its energy "     \
+    "blew up): 1/2 sum_k H_kk qd_k^2 over its mass, H_kk the diagonal of its mass matrix at joint_q0 (1e5 J/kg: "     \
+    "about 4500 m/s).")                                                                                               \
+  X(Scalar, divergence_depth, 2, 0, kUnbounded, "m",                                                                  \
+    "A contact deeper than this among those a step is given (found at its input state, where the last step left "     \
+    "the bodies) marks the articulations it touches diverged: a step too large for the scene took them through a "    \
+    "surface.")                                                                                                       \
   X(std::int64_t, stream_body_output_above, std::int64_t{2} << 20, 0, std::numeric_limits<std::int64_t>::max(),       \
     "bytes",                                                                                                          \
     "The blocks write body_q and body_qd around the caches (non-temporal stores) when the step's data, the state's "  \

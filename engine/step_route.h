@@ -60,6 +60,10 @@ struct StepContext {
   ContactLists lists;
   const std::uint8_t* touched = nullptr;  // [articulation] 1: its rows are the islands' this step
   Scalar divergence_speed = 0;
+  Scalar divergence_energy = 0;           // J/kg
+  const Scalar* energy_weight = nullptr;  // [dof] the guard's energy weights (engine/parts/guard.h)
+  // [articulation] 1: diverged before its step's output is tested (an invalid input, a contact too deep)
+  const std::uint8_t* flagged = nullptr;
 
   // the schedule: `split`: a stage between two passes (the islands) reads the units' kinematics and
   // factors; `store_in_pass`: Store follows Integrate in its pass (each world written as it is stepped,

@@ -118,19 +118,53 @@ void expect_broad_phase_misses_no_pair(int shapes) {
 TEST(CollisionPipeline, BroadPhaseMissesNoPairInAWorldOfFewShapes) { expect_broad_phase_misses_no_pair(60); }
 TEST(CollisionPipeline, BroadPhaseMissesNoPairInAWorldOfManyShapes) { expect_broad_phase_misses_no_pair(90); }
 
-TEST(CollisionPipeline, CapacityOverflowIsCounted) {
+// 16 contacts (four boxes on the ground, four corners each) into a buffer of 10: by default it grows (the same
+// contacts as a large enough buffer, the arrays it replaced still readable); Raise throws naming the capacity
+// needed and leaves the buffer as it was; Drop keeps the first 10 and counts the rest
+TEST(CollisionPipeline, CapacityOverflowGrowsRaisesOrDrops) {
   ModelBuilder builder;
   builder.add_ground_plane();
   for (int k = 0; k < 4; ++k)
     builder.add_shape_box(builder.add_body(RigidBody(), Transform{Vec3(k, 0.1, 0)}), Vec3::Constant(0.2));
   const Model model = builder.finalize();
+  CollisionPipeline roomy(model);
+  Contacts all = roomy.contacts();
+  roomy.collide(model.state(), all);
+  ASSERT_EQ(all.contact_count, 16);
+
   CollisionOptions options;
   options.contact_capacity = 10;
-  CollisionPipeline pipeline(model, options);
-  Contacts contacts = pipeline.contacts();
-  pipeline.collide(model.state(), contacts);
-  EXPECT_EQ(contacts.contact_count, 10);
-  EXPECT_EQ(contacts.contact_dropped, 6);
+  CollisionPipeline growing(model, options);
+  Contacts contacts = growing.contacts();
+  contacts.contact_depth.assign(10, 7.0);
+  const Scalar* before = contacts.contact_depth.data();
+  growing.collide(model.state(), contacts);
+  EXPECT_EQ(contacts.contact_count, 16);
+  EXPECT_EQ(contacts.contact_dropped, 0);
+  EXPECT_EQ(contacts.contact_capacity, 20);
+  EXPECT_EQ(contacts.contact_depth.size(), 20u);
+  EXPECT_TRUE(std::equal(all.contact_depth.begin(), all.contact_depth.begin() + 16, contacts.contact_depth.begin()));
+  EXPECT_TRUE(std::equal(all.contact_point.begin(), all.contact_point.begin() + 48, contacts.contact_point.begin()));
+  EXPECT_EQ(before[9], 7.0);                 // the replaced array is kept (a numpy view of it stays valid)
+  growing.collide(model.state(), contacts);  // a grown buffer goes on with the same pipeline
+  EXPECT_EQ(contacts.contact_count, 16);
+
+  options.on_overflow = ContactOverflow::Raise;
+  CollisionPipeline raising(model, options);
+  Contacts small = raising.contacts();
+  EXPECT_NOVAPHY_ERROR(raising.collide(model.state(), small),
+                       "contact capacity 10 is too small: collide found 16 contacts (make the pipeline with "
+                       "contact_capacity >= 16, or on_overflow Grow); the buffer is left as it was");
+  EXPECT_EQ(small.contact_count, 0);
+  EXPECT_EQ(small.contact_capacity, 10);
+
+  options.on_overflow = ContactOverflow::Drop;
+  CollisionPipeline dropping(model, options);
+  Contacts dropped = dropping.contacts();
+  dropping.collide(model.state(), dropped);
+  EXPECT_EQ(dropped.contact_count, 10);
+  EXPECT_EQ(dropped.contact_dropped, 6);
+  EXPECT_EQ(dropped.contact_capacity, 10);
 }
 
 TEST(CollisionPipeline, PreviousImpulsesAreFoundByFeature) {
@@ -400,20 +434,23 @@ TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {
   ModelBuilder builder;
   builder.replicate(world, 40);
   const Model model = builder.finalize();
-  auto collide = [&](int threads, int capacity) {
+  auto collide = [&](int threads, int capacity, ContactOverflow overflow) {
     CollisionOptions options;
     options.num_threads = threads;
     options.contact_capacity = capacity;
+    options.on_overflow = overflow;
     CollisionPipeline pipeline(model, options);
     Contacts contacts = pipeline.contacts();
     pipeline.collide(model.state(), contacts);
     return contacts;
   };
-  for (const int capacity : {0, 300}) {
-    const Contacts one = collide(1, capacity);
+  // a roomy buffer, one that grows and one that drops
+  for (const auto& [capacity, overflow] : {std::pair{0, ContactOverflow::Grow}, std::pair{300, ContactOverflow::Grow},
+                                           std::pair{300, ContactOverflow::Drop}}) {
+    const Contacts one = collide(1, capacity, overflow);
     ASSERT_GT(one.contact_count, 200);
     for (const int threads : {2, 3}) {
-      const Contacts many = collide(threads, capacity);
+      const Contacts many = collide(threads, capacity, overflow);
       ASSERT_EQ(many.contact_count, one.contact_count) << threads << " threads";
       EXPECT_EQ(many.contact_dropped, one.contact_dropped);
       const int n = one.contact_count;
@@ -429,7 +466,8 @@ TEST(CollisionPipeline, ThreadsFindTheSameContactsInTheSameOrder) {
       EXPECT_TRUE(std::equal(one.contact_depth.begin(), one.contact_depth.begin() + n, many.contact_depth.begin()));
     }
   }
-  EXPECT_GT(collide(2, 300).contact_dropped, 0);
+  EXPECT_GT(collide(2, 300, ContactOverflow::Drop).contact_dropped, 0);
+  EXPECT_EQ(collide(2, 300, ContactOverflow::Grow).contact_count, collide(1, 0, ContactOverflow::Grow).contact_count);
 }
 
 // static shapes of no world meet every world's shapes, each world's in its pass: a box under 40 worlds'

@@ -1,16 +1,21 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "engine/builder.h"
 #include "engine/dynamics.h"
+#include "engine/exclusive_call.h"
+#include "engine/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "solver_test_support.h"
 #include "test_support_errors.h"
@@ -369,6 +374,240 @@ TEST(SolverFeatherstoneErrors, AContactBetweenWorldsIsNamed) {
   contacts.contact_normal[2] = 1;
   EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, contacts, kDt),
                        "contact 0 joins body 0 of world 0 and body 1 of world 1: worlds never touch");
+}
+
+// ---- one call at a time per object ----
+
+TEST(ExclusiveCall, ASecondCallThrowsAndTheFlagIsReleasedAlsoWhenTheCallThrows) {
+  std::atomic<bool> busy{false};
+  {
+    const ExclusiveCall first(busy, "Thing.run");
+    EXPECT_NOVAPHY_ERROR(ExclusiveCall(busy, "Thing.run"),
+                         "Thing.run called while another call of the same object runs on another thread (use one "
+                         "object per thread)");
+    EXPECT_TRUE(busy.load());  // (the refused call did not release the first's flag)
+  }
+  EXPECT_FALSE(busy.load());
+  auto throwing = [&] {
+    const ExclusiveCall call(busy, "Thing.run");
+    fail("inside");
+  };
+  EXPECT_NOVAPHY_ERROR(throwing(), "inside");
+  EXPECT_FALSE(busy.load());
+}
+
+// two threads stepping one solver and colliding with one pipeline, each its own state and contacts: every call
+// completes or throws the clear error (writing nothing), and each thread's state is bit for bit what a solver and
+// pipeline of its own make from the calls that completed, in the same order
+TEST(SolverFeatherstoneErrors, ConcurrentStepsOfOneSolverCompleteOrRaiseNeverCorrupt) {
+  ModelBuilder robot, worlds;
+  robot.add_ground_plane();
+  add_box(robot, Vec3(0, 0.25, 0));
+  worlds.replicate(robot, 256);
+  const Model model = worlds.finalize();
+  SolverFeatherstoneSettings settings;
+  settings.num_threads = 1;
+  CollisionOptions options;
+  options.num_threads = 1;
+  SolverFeatherstone solver(model, settings);
+  CollisionPipeline pipeline(model, options);
+  const Control control = model.control();
+  struct Run {
+    State state;
+    Contacts contacts;
+    std::string calls;  // 'c' a collide, 's' a step that completed, in order
+    int refused = 0;
+    std::vector<std::string> other_errors;
+  };
+  std::vector<Run> runs(2);
+  for (Run& r : runs) {
+    r.state = model.state();
+    r.contacts = pipeline.contacts();
+  }
+  auto refused = [](const Error& e, const char* call) {
+    return std::string(e.what()) ==
+           std::string(call) +
+               " called while another call of the same object runs on another thread (use one object "
+               "per thread)";
+  };
+  auto hammer = [&](Run& r) {
+    for (int k = 0; k < 80; ++k) {
+      try {
+        pipeline.collide(r.state, r.contacts);
+        r.calls += 'c';
+        solver.step(r.state, r.state, control, r.contacts, kDt);
+        r.calls += 's';
+      } catch (const Error& e) {
+        if (refused(e, "CollisionPipeline.collide") || refused(e, "SolverFeatherstone.step"))
+          ++r.refused;
+        else
+          r.other_errors.push_back(e.what());
+      }
+    }
+  };
+  std::thread first(hammer, std::ref(runs[0])), second(hammer, std::ref(runs[1]));
+  first.join();
+  second.join();
+  for (const Run& r : runs) {
+    EXPECT_TRUE(r.other_errors.empty()) << r.other_errors.front();
+    EXPECT_EQ(std::count(r.calls.begin(), r.calls.end(), 's') + r.refused, 80);
+    SolverFeatherstone own_solver(model, settings);
+    CollisionPipeline own_pipeline(model, options);
+    Contacts contacts = own_pipeline.contacts();
+    State state = model.state();
+    for (const char call : r.calls) {
+      if (call == 'c') own_pipeline.collide(state, contacts);
+      if (call == 's') own_solver.step(state, state, control, contacts, kDt);
+    }
+    EXPECT_EQ(r.state.joint_q, state.joint_q);
+    EXPECT_EQ(r.state.joint_qd, state.joint_qd);
+    EXPECT_EQ(r.state.body_q, state.body_q);
+    EXPECT_EQ(r.contacts.contact_count, contacts.contact_count);
+    EXPECT_EQ(r.contacts.contact_impulse, contacts.contact_impulse);
+  }
+}
+
+// ---- non-finite and negative controls ----
+
+// four worlds of a pendulum with a motor whose command is clamped to [-1, 1]: an infinite command raises naming
+// the entry, its world and value, as NaN does, the other worlds stepped and that one left as it was
+TEST(SolverFeatherstoneErrors, AnInfiniteCommandRaisesAsNanDoes) {
+  ModelBuilder robot, worlds;
+  const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions joint;
+  joint.dof.axis = Vec3::UnitZ();
+  joint.child_xform.p = Vec3(-0.25, 0, 0);
+  robot.add_motor(robot.add_joint_revolute(-1, link, joint), 1, -1, 1);
+  worlds.replicate(robot, 4);
+  for (const bool batched : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.use_batch_kernels = batched;
+    Scene scene(worlds, settings), calm(worlds, settings);
+    for (const Scalar bad :
+         {std::numeric_limits<Scalar>::infinity(), -std::numeric_limits<Scalar>::infinity(), std::nan("")}) {
+      scene.state = scene.model.state();
+      scene.control.actuator_ctrl[2] = bad;
+      std::ostringstream expected;
+      expected << "actuator_ctrl[2] is not finite: " << bad << " (world 2)";
+      EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                           expected.str());
+      calm.state = calm.model.state();
+      calm.solver.step(calm.state, calm.state, calm.control, calm.contacts, kDt);
+      for (const int w : {0, 1, 3}) EXPECT_EQ(scene.state.joint_qd[w], calm.state.joint_qd[w]);
+      EXPECT_EQ(scene.state.joint_q[2], scene.model.joint_q0[2]);  // left as it was
+      EXPECT_EQ(scene.state.joint_qd[2], 0);
+    }
+  }
+}
+
+// a negative PD gain written into the control raises naming the entry, its world and value, as the builder refuses
+// it; the other worlds step
+TEST(SolverFeatherstoneErrors, ANegativeGainInTheControlRaises) {
+  for (const bool batched : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.use_batch_kernels = batched;
+    Scene scene(pendulum_worlds(Precision::Float64), settings);
+    scene.control.joint_target_ke[1] = -5;
+    EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                         "joint_target_ke[1] must be >= 0 (as the builder's gains), got -5 (world 1)");
+    EXPECT_NE(scene.state.joint_q[0], scene.model.joint_q0[0]);  // the others stepped
+    EXPECT_EQ(scene.state.joint_q[1], scene.model.joint_q0[1]);
+    scene.control.joint_target_ke[1] = 0;
+    scene.control.joint_target_kd[3] = -0.5;
+    settings.on_divergence = DivergencePolicy::Raise;
+    scene.solver.settings = settings;
+    const State before = scene.state;
+    EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, kDt),
+                         "joint_target_kd[3] must be >= 0 (as the builder's gains), got -0.5 (world 3)");
+    EXPECT_EQ(scene.state.joint_q, before.joint_q);  // under Raise nothing is written
+  }
+}
+
+// ---- the guard's depth and energy, and the reset state ----
+
+// the quadruped at dt = 1 s falls through the floor in its first step (no contact yet: nothing to see); the next
+// step's contacts are metres deep: it diverged, by each policy
+TEST(DivergenceGuard, AContactTooDeepMarksItsWorldDiverged) {
+  ModelBuilder builder;
+  import_mjcf(builder, NOVAPHY_SCENE_DIR "/quadruped.xml");
+  builder.add_keyframe("crouch", builder.finalize().joint_q0);
+  for (const DivergencePolicy policy : {DivergencePolicy::Raise, DivergencePolicy::Flag, DivergencePolicy::Reset}) {
+    SolverFeatherstoneSettings settings;
+    settings.on_divergence = policy;
+    Scene scene(builder, settings);
+    scene.run(1, 1);
+    EXPECT_EQ(scene.solver.diverged()[0], 0);
+    const State fallen = scene.state;
+    scene.pipeline.collide(scene.state, scene.contacts);
+    const Scalar deepest = *std::max_element(scene.contacts.contact_depth.begin(),
+                                             scene.contacts.contact_depth.begin() + scene.contacts.contact_count);
+    ASSERT_GT(deepest, 1);
+    if (policy == DivergencePolicy::Raise) {
+      std::ostringstream expected;
+      expected.precision(17);
+      expected << "step diverged in articulation 0: a contact " << deepest
+               << " m deep, beyond divergence_depth 2 m (the last step's dt too large for the scene?)";
+      EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1),
+                           expected.str());
+      EXPECT_EQ(scene.state.joint_q, fallen.joint_q);
+      continue;
+    }
+    scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1);
+    EXPECT_EQ(scene.solver.diverged()[0], 1);
+    EXPECT_EQ(scene.state.joint_q, policy == DivergencePolicy::Flag ? fallen.joint_q : scene.model.joint_q0);
+  }
+}
+
+// four pendulums; world 2 is driven by a torque that gives it, in one step, far more kinetic energy per kilogram
+// than divergence_energy, at a speed below divergence_speed: it alone diverged
+TEST(DivergenceGuard, AnEnergyBlowUpMarksItsWorldDiverged) {
+  for (const Precision precision : {Precision::Float32, Precision::Float64}) {
+    Scene calm(pendulum_worlds(precision)), wild(pendulum_worlds(precision));
+    wild.control.joint_f[2] = 1e6;  // 1e5 rad/s after one step: below 1e6 rad/s, beyond 1e7 J/kg
+    calm.run(kDt);
+    wild.run(kDt);
+    EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+    EXPECT_EQ(wild.state.joint_qd[2], 0);  // kept as it was
+    for (const int w : {0, 1, 3}) EXPECT_EQ(wild.state.joint_qd[w], calm.state.joint_qd[w]);
+    wild.solver.settings.divergence_energy = kUnbounded;  // the speed alone passes it
+    wild.run(kDt);
+    EXPECT_EQ(wild.solver.diverged()[2], 0);
+    EXPECT_GT(std::abs(wild.state.joint_qd[2]), 1e4);
+    EXPECT_LT(std::abs(wild.state.joint_qd[2]), 1e6);
+    EXPECT_GT(0.5 * 0.0842 * wild.state.joint_qd[2] * wild.state.joint_qd[2], 1e7);  // (H_00 / m: 0.0842 m^2)
+  }
+}
+
+// under Reset a diverged world comes back exactly at the keyframe the user names: its coordinates and velocities
+TEST(DivergenceGuard, ResetRestartsFromTheKeyframeTheUserNames) {
+  ModelBuilder robot, worlds;
+  const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions joint;
+  joint.dof.axis = Vec3::UnitZ();
+  joint.child_xform.p = Vec3(-0.25, 0, 0);
+  robot.add_joint_revolute(-1, link, joint);
+  robot.add_keyframe("swing", {0.7}, {-1.5});
+  worlds.replicate(robot, 4);
+  for (const bool batched : {true, false}) {
+    SolverFeatherstoneSettings settings;
+    settings.on_divergence = DivergencePolicy::Reset;
+    settings.use_batch_kernels = batched;
+    Scene scene(worlds, settings);
+    scene.solver.set_reset_keyframe("swing");
+    scene.run(0.5);
+    scene.state.joint_qd[2] = 2e6;
+    scene.run(kDt);
+    EXPECT_EQ(scene.solver.diverged()[2], 1);
+    EXPECT_EQ(scene.state.joint_q[2], 0.7);
+    EXPECT_EQ(scene.state.joint_qd[2], -1.5);
+    const State key = scene.model.state("swing");
+    for (int k = 0; k < 7; ++k) EXPECT_EQ(scene.state.body_q[7 * 2 + k], key.body_q[7 * 2 + k]);
+    EXPECT_NE(scene.state.joint_q[1], 0.7);  // the others went on swinging
+    EXPECT_NOVAPHY_ERROR(scene.solver.set_reset_keyframe("stand"), "stand");
+    State bad = scene.model.state();
+    bad.joint_qd[3] = std::nan("");
+    EXPECT_NOVAPHY_ERROR(scene.solver.set_reset_state(bad), "reset state: joint_qd[3] is not finite: nan");
+  }
 }
 
 }  // namespace

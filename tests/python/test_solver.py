@@ -1,9 +1,14 @@
 """SolverFeatherstone and CollisionPipeline through the binding."""
 
+import pathlib
+import re
+
 import numpy as np
 import pytest
 
 import novaphy
+
+SCENES = pathlib.Path(__file__).resolve().parents[2] / "bench" / "scenes"
 
 SEED_SOLVER_EXAMPLE = '''
 import numpy as np
@@ -355,3 +360,142 @@ def test_mujocos_friction_rule_from_python():
     assert list(model.shape_priority) == [1, 0] and list(model.shape_condim) == [1, 3]
     with pytest.raises(ValueError, match="condim must be 1, 3, 4 or 6, got 5"):
         builder.add_shape_sphere(bodies[1], 0.1, condim=5)
+
+
+def box_worlds(worlds=64):
+    robot = novaphy.ModelBuilder()
+    robot.add_ground_plane()
+    box = robot.add_body(novaphy.RigidBody.from_box(1.0, [0.2, 0.2, 0.2]), xform=novaphy.Transform([0.0, 0.19, 0.0]))
+    robot.add_shape_box(box, [0.2, 0.2, 0.2])
+    builder = novaphy.ModelBuilder()
+    builder.replicate(robot, worlds)
+    return builder.finalize()
+
+
+def test_threads_sharing_one_solver_and_pipeline_complete_or_raise():
+    import threading
+    model = box_worlds(256)
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.num_threads = 1
+    pipeline = novaphy.CollisionPipeline(model, num_threads=1)
+    control = model.control()
+    runs = [{"state": model.state(), "contacts": pipeline.contacts(), "calls": "", "refused": 0, "other": []}
+            for _ in range(2)]
+    busy = re.compile(r"^(SolverFeatherstone\.step|CollisionPipeline\.collide) called while another call of the same "
+                      r"object runs on another thread \(use one object per thread\)$")
+
+    def hammer(run):
+        for _ in range(60):
+            try:
+                pipeline.collide(run["state"], run["contacts"])
+                run["calls"] += "c"
+                solver.step(run["state"], run["state"], control, run["contacts"], 1.0 / 120.0)
+                run["calls"] += "s"
+            except ValueError as e:
+                if busy.match(str(e)):
+                    run["refused"] += 1
+                else:
+                    run["other"].append(str(e))
+
+    threads = [threading.Thread(target=hammer, args=(run,)) for run in runs]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for run in runs:
+        assert run["other"] == []
+        assert run["calls"].count("s") + run["refused"] == 60
+        # the calls that completed, replayed on a solver and pipeline of its own: the same bits
+        own_solver = novaphy.solvers.SolverFeatherstone(model)
+        own_pipeline = novaphy.CollisionPipeline(model)
+        state, contacts = model.state(), own_pipeline.contacts()
+        for call in run["calls"]:
+            if call == "c":
+                own_pipeline.collide(state, contacts)
+            else:
+                own_solver.step(state, state, control, contacts, 1.0 / 120.0)
+        np.testing.assert_array_equal(run["state"].joint_q, state.joint_q)
+        np.testing.assert_array_equal(run["state"].joint_qd, state.joint_qd)
+
+
+def test_a_contact_buffer_too_small_grows_raises_or_drops():
+    model = box_worlds(4)  # 16 contacts: four corners a box
+    pipeline = novaphy.CollisionPipeline(model, contact_capacity=10)
+    contacts, state = pipeline.contacts(), model.state()
+    old_view = contacts.contact_depth
+    pipeline.collide(state, contacts)
+    assert (contacts.contact_count, contacts.contact_capacity, contacts.contact_dropped) == (16, 20, 0)
+    assert old_view.shape == (0,)  # an old view stays valid (its memory kept), showing what it showed
+    np.testing.assert_allclose(contacts.contact_depth, 0.01)
+    raising = novaphy.CollisionPipeline(model, contact_capacity=10, on_overflow=novaphy.ContactOverflow.Raise)
+    small = raising.contacts()
+    with pytest.raises(ValueError, match=r"contact capacity 10 is too small: collide found 16 contacts \(make the "
+                                         r"pipeline with contact_capacity >= 16, or on_overflow Grow\)"):
+        raising.collide(state, small)
+    assert small.contact_count == 0
+    dropping = novaphy.CollisionPipeline(model, contact_capacity=10, on_overflow=novaphy.ContactOverflow.Drop)
+    dropped = dropping.contacts()
+    dropping.collide(state, dropped)
+    assert (dropped.contact_count, dropped.contact_dropped) == (10, 6)
+
+
+def motor_worlds():
+    robot = novaphy.ModelBuilder()
+    link = robot.add_body(novaphy.RigidBody.from_box(1.0, [0.05, 0.25, 0.05]))
+    joint = robot.add_joint_revolute(-1, link, axis=[0, 0, 1], child_xform=novaphy.Transform([-0.25, 0.0, 0.0]))
+    robot.add_motor(joint, gear=1.0, ctrl_lower=-1.0, ctrl_upper=1.0)
+    robot.add_keyframe("swing", [0.7], [-1.5])
+    builder = novaphy.ModelBuilder()
+    builder.replicate(robot, 4)
+    return builder.finalize()
+
+
+def test_non_finite_commands_and_negative_gains_raise_naming_entry_world_and_value():
+    model = motor_worlds()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    contacts = novaphy.CollisionPipeline(model).contacts()
+    for bad, text in [(np.inf, "inf"), (-np.inf, "-inf"), (np.nan, "nan")]:
+        state, control = model.state(), model.control()
+        control.actuator_ctrl[2] = bad
+        with pytest.raises(ValueError, match=rf"actuator_ctrl\[2\] is not finite: {text} \(world 2\)"):
+            solver.step(state, state, control, contacts, 1.0 / 120.0)
+        assert state.joint_q[2] == 0.0 and state.joint_q[1] != 0.0  # that world left as it was, the others stepped
+    state, control = model.state(), model.control()
+    control.joint_target_kd[3] = -2.0
+    with pytest.raises(ValueError, match=r"joint_target_kd\[3\] must be >= 0 \(as the builder's gains\), got -2 "
+                                         r"\(world 3\)"):
+        solver.step(state, state, control, contacts, 1.0 / 120.0)
+
+
+def test_reset_restarts_a_diverged_world_at_the_named_keyframe():
+    model = motor_worlds()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.on_divergence = novaphy.solvers.DivergencePolicy.Reset
+    solver.set_reset_keyframe("swing")
+    state, control = model.state(), model.control()
+    contacts = novaphy.CollisionPipeline(model).contacts()
+    for _ in range(10):
+        solver.step(state, state, control, contacts, 1.0 / 120.0)
+    state.joint_qd[2] = 5e6
+    solver.step(state, state, control, contacts, 1.0 / 120.0)
+    np.testing.assert_array_equal(solver.diverged, [0, 0, 1, 0])
+    assert state.joint_q[2] == 0.7 and state.joint_qd[2] == -1.5
+    with pytest.raises(ValueError, match="stand"):
+        solver.set_reset_keyframe("stand")
+
+
+def test_the_quadruped_at_one_second_steps_is_flagged_once_its_contacts_are_too_deep():
+    builder = novaphy.ModelBuilder()
+    builder.add_mjcf(str(SCENES / "quadruped.xml"))
+    model = builder.finalize()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.on_divergence = novaphy.solvers.DivergencePolicy.Raise
+    pipeline = novaphy.CollisionPipeline(model)
+    state, control, contacts = model.state(), model.control(), pipeline.contacts()
+    pipeline.collide(state, contacts)
+    solver.step(state, state, control, contacts, 1.0)  # through the floor: no contact showed it coming
+    pipeline.collide(state, contacts)
+    assert contacts.contact_depth.max() > solver.settings.divergence_depth
+    with pytest.raises(ValueError, match=r"step diverged in articulation 0: a contact .* m deep, beyond "
+                                         r"divergence_depth 2 m"):
+        solver.step(state, state, control, contacts, 1.0)
