@@ -70,9 +70,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A dof speed beyond which an articulation diverged.") \
   X(Scalar, divergence_energy, 1e7, 0, kUnbounded, "J/kg",                                                            \
     "A kinetic energy per kilogram of its mass beyond which an articulation diverged after its step (its energy "     \
-    "blew up): 1/2 sum_k H_kk qd_k^2 over its mass, H_kk the diagonal of its mass matrix at joint_q0 (1e5 J/kg: "     \
+    "blew up): 1/2 sum_k H_kk qd_k^2 over its mass, H_kk the diagonal of its mass matrix at joint_q0 (1e7 J/kg: "     \
     "about 4500 m/s).")                                                                                               \
-  X(Scalar, divergence_depth, 2, 0, kUnbounded, "m",                                                                  \
+  X(Scalar, divergence_depth, 0.5, 0, kUnbounded, "m",                                                                \
     "A contact deeper than this among those a step is given (found at its input state, where the last step left "     \
     "the bodies) marks the articulations it touches diverged: a step too large for the scene took them through a "    \
     "surface.")                                                                                                       \
