@@ -481,7 +481,7 @@ void CollisionPipeline::match_previous(Contacts& contacts, int begin, int end) c
 }
 
 int CollisionPipeline::thread_count() const {
-  return options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads();
+  return team_choice().threads(options_.num_threads > 0 ? options_.num_threads : omp_get_max_threads());
 }
 
 int CollisionPipeline::team(int count, int grain) const {

@@ -230,7 +230,8 @@ class CollisionPipeline {
   void find_on_thread(const State& state, Contacts& contacts, int* found);
   // contact c of the buffer from the narrow phase's
   void write_contact(const Found& found, int c, Contacts& contacts) const;
-  // threads collide may take: options.num_threads, or OpenMP's default
+  // threads collide may take: options.num_threads, or OpenMP's default; one while team_choice() finds a team does
+  // not pay
   int thread_count() const;
   // threads for a loop of `count` items, at least `grain` items each
   int team(int count, int grain) const;

@@ -1,18 +1,123 @@
-// The engine's loops over worlds, blocks, articulations and contacts on OpenMP threads.
+// The engine's loops over worlds, blocks, articulations and contacts on OpenMP threads, and how many threads
+// they wake while other processes keep the cores busy.
 #pragma once
 
 #include <omp.h>
+#include <time.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <mutex>
 
 namespace novaphy {
 
 inline std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
+}
+
+// the CPU time the calling thread has run, in ns
+inline std::int64_t thread_cpu_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return std::int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec;
+}
+
+// Whether a region's team pays on this machine now. OpenMP's threads wait at a region's end by spinning, so while
+// other processes keep the cores busy a waiting thread holds a core its partner needs, and a thread off its core
+// holds the others at the barrier: N threads can step slower than one. Now and then a window of regions is timed:
+// the CPU time their threads spent on the work over the regions' wall time, the cores' worth of work a region gets
+// done a second (its rate). A team whose rate falls below nine tenths of one thread's (one core until one thread
+// has been measured) hands its regions to one thread; the team is tried again, one window, after a wait that
+// doubles each time it loses, and kept where it does at least as well as one thread did in the window before.
+// Which threads run what never changes a result (the engine's loops give the same bits on any team)
+class TeamChoice {
+ public:
+  // times in ns: a window is at least kWindow of measured regions' wall time and kWindowRegions regions; a team
+  // kept is measured again kPeriod after its last window; a team handed over is tried again after kFirstWait,
+  // doubling up to kLongestWait while it loses
+  static constexpr std::int64_t kWindow = 10'000'000, kPeriod = 200'000'000;
+  static constexpr std::int64_t kFirstWait = 100'000'000, kLongestWait = 3'200'000'000;
+  static constexpr int kWindowRegions = 4;
+
+  // the threads a region asking for `requested` runs on, and whether its times go to record()
+  struct Plan {
+    int threads = 1;
+    bool measured = false;
+  };
+
+  Plan plan(int requested, std::int64_t now) {
+    if (requested <= 1) return {1, false};
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (!adapt_) return {requested, false};
+    if (phase_ == Phase::Wait) {
+      if (now < wait_until_) return {one_ ? 1 : requested, false};
+      phase_ = Phase::Measure;
+    }
+    return {team() ? requested : 1, true};
+  }
+
+  // a measured region's wall time and the CPU time its threads spent on its work, all of them together (ns)
+  void record(const Plan& plan, std::int64_t wall, std::int64_t cpu, std::int64_t now) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (phase_ == Phase::Wait || (plan.threads > 1) != team()) return;  // planned before the last window closed
+    wall_ += wall;
+    cpu_ += cpu;
+    if (++regions_ < kWindowRegions || wall_ < kWindow) return;
+    const double rate = static_cast<double>(cpu_) / static_cast<double>(wall_);
+    wall_ = cpu_ = 0;
+    regions_ = 0;
+    if (phase_ == Phase::Measure && one_) {  // one thread's rate, then the team's at once
+      one_rate_ = rate;
+      phase_ = Phase::Probe;
+      return;
+    }
+    const bool team_pays = phase_ == Phase::Probe ? rate >= one_rate_ : rate >= 0.9 * one_rate_;
+    if (team_pays) {
+      one_ = false;
+      wait_ = kFirstWait;
+      wait_until_ = now + kPeriod;
+    } else {
+      if (one_) wait_ = std::min(2 * wait_, kLongestWait);
+      one_ = true;
+      wait_until_ = now + wait_;
+    }
+    phase_ = Phase::Wait;
+  }
+
+  // the threads a region that is not measured runs on (the collision pipeline's)
+  int threads(int requested) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return !adapt_ || requested <= 1 || team() ? requested : 1;
+  }
+
+  // off: every region runs on the threads it asks for (tests of which thread runs what)
+  void adapt(bool on) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    adapt_ = on;
+  }
+
+ private:
+  enum class Phase { Wait, Measure, Probe };
+  bool team() const { return !one_ || phase_ == Phase::Probe; }
+
+  std::mutex mutex_;
+  bool adapt_ = true;
+  bool one_ = false;                 // regions run on one thread (else on the team they ask for)
+  Phase phase_ = Phase::Measure;     // the first regions are measured
+  std::int64_t wait_until_ = 0;      // (Wait) when the next window starts
+  std::int64_t wait_ = kFirstWait;   // how long one thread runs before the team is tried again
+  double one_rate_ = 1;              // one thread's rate, last measured
+  std::int64_t wall_ = 0, cpu_ = 0;  // the window so far
+  int regions_ = 0;
+};
+
+// the process's choice, which every parallel_runs and the collision pipeline follow
+inline TeamChoice& team_choice() {
+  static TeamChoice choice;
+  return choice;
 }
 
 // wall time of whole calls (a solver's steps, a pipeline's collides) and of their parallel work, accumulated while
@@ -39,7 +144,8 @@ class ParallelTimer {
   std::int64_t start_;
 };
 
-// run(begin, end) over runs of i covering [0, count) on `threads` threads, then done() once on each thread. The
+// run(begin, end) over runs of i covering [0, count) on `threads` threads (one while team_choice() finds the team
+// does not pay), then done() once on each thread. The
 // first seven eighths of i go as one run a thread (thread t runs the t-th: the same i, and their data in its
 // caches, at every call); the last eighth is dealt out to whichever thread is free, in runs that shrink as it
 // runs out (a share of what is left, down to one i), so that a thread the machine slows down does not keep the
@@ -52,27 +158,42 @@ struct NoScope {};
 
 template <typename Scope = NoScope, typename Run, typename Done>
 void parallel_runs(int threads, int count, Run&& run, Done&& done) {
-  if (threads > 1 || omp_in_parallel()) {
-    const int team = std::max(threads, 1), bulk = count - count / 8;
+  const bool nested = omp_in_parallel();
+  const TeamChoice::Plan plan = nested ? TeamChoice::Plan{threads, false} : team_choice().plan(threads, now_ns());
+  const std::int64_t start = plan.measured ? now_ns() : 0;
+  std::atomic<std::int64_t> cpu{0};
+  if (plan.threads > 1 || nested) {
+    const int team = std::max(plan.threads, 1), bulk = count - count / 8;
     std::atomic<int> next{bulk};
 #pragma omp parallel num_threads(team)
     {
-      [[maybe_unused]] const Scope scope;
-      const long t = omp_get_thread_num(), n = omp_get_num_threads();
-      run(static_cast<int>(bulk * t / n), static_cast<int>(bulk * (t + 1) / n));
-      for (;;) {
-        const int size = std::max(1, static_cast<int>((count - next.load(std::memory_order_relaxed)) / (2 * n)));
-        const int begin = next.fetch_add(size, std::memory_order_relaxed);
-        if (begin >= count) break;
-        run(begin, std::min(count, begin + size));
+      const std::int64_t cpu_start = plan.measured ? thread_cpu_ns() : 0;
+      {
+        [[maybe_unused]] const Scope scope;
+        const long t = omp_get_thread_num(), n = omp_get_num_threads();
+        run(static_cast<int>(bulk * t / n), static_cast<int>(bulk * (t + 1) / n));
+        for (;;) {
+          const int size = std::max(1, static_cast<int>((count - next.load(std::memory_order_relaxed)) / (2 * n)));
+          const int begin = next.fetch_add(size, std::memory_order_relaxed);
+          if (begin >= count) break;
+          run(begin, std::min(count, begin + size));
+        }
+        done();
       }
-      done();
+      if (plan.measured) cpu.fetch_add(thread_cpu_ns() - cpu_start, std::memory_order_relaxed);
     }
   } else {
-    [[maybe_unused]] const Scope scope;
-    run(0, count);
-    done();
+    const std::int64_t cpu_start = plan.measured ? thread_cpu_ns() : 0;
+    {
+      [[maybe_unused]] const Scope scope;
+      run(0, count);
+      done();
+    }
+    if (plan.measured) cpu.fetch_add(thread_cpu_ns() - cpu_start, std::memory_order_relaxed);
   }
+  if (!plan.measured) return;
+  const std::int64_t end = now_ns();
+  team_choice().record(plan, end - start, cpu.load(std::memory_order_relaxed), end);
 }
 
 // f(i) for i in [0, count), as parallel_runs runs them

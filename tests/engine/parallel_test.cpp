@@ -34,7 +34,14 @@ Runs record(int threads, int count) {
   return r;
 }
 
-TEST(ParallelRuns, CoverEachIOnceInRunsThenDoneOnceOnEachThread) {
+// the runs below on the threads asked for, whatever the machine's load
+class ParallelRuns : public ::testing::Test {
+ protected:
+  void SetUp() override { team_choice().adapt(false); }
+  void TearDown() override { team_choice().adapt(true); }
+};
+
+TEST_F(ParallelRuns, CoverEachIOnceInRunsThenDoneOnceOnEachThread) {
   for (const int threads : {1, 2, 3, 4})
     for (const int count : {0, 1, 7, 8, 9, 64, 100, 1000}) {
       const Runs r = record(threads, count);
@@ -50,7 +57,7 @@ TEST(ParallelRuns, CoverEachIOnceInRunsThenDoneOnceOnEachThread) {
     }
 }
 
-TEST(ParallelRuns, EachThreadRunsTheSameFirstSevenEighthsAtEveryCall) {
+TEST_F(ParallelRuns, EachThreadRunsTheSameFirstSevenEighthsAtEveryCall) {
   for (const int count : {9, 64, 1000}) {
     const Runs first = record(3, count), second = record(3, count);
     const int bulk = count - count / 8, n = first.done_team.front();
@@ -62,7 +69,7 @@ TEST(ParallelRuns, EachThreadRunsTheSameFirstSevenEighthsAtEveryCall) {
   }
 }
 
-TEST(ParallelRuns, TheLastEighthGoesInRunsOfHalfWhatIsLeftPerThreadDownToOne) {
+TEST_F(ParallelRuns, TheLastEighthGoesInRunsOfHalfWhatIsLeftPerThreadDownToOne) {
   // a call of one thread inside another region runs on a team of that thread alone: the runs of its last eighth
   // are then dealt in turn, each half of what is left (a team of n: a 2n-th), the last ones a single i
   const int count = 800, bulk = count - count / 8;
@@ -84,6 +91,84 @@ TEST(ParallelRuns, TheLastEighthGoesInRunsOfHalfWhatIsLeftPerThreadDownToOne) {
   const int n = two.done_team.front();
   for (const auto& [begin, end] : two.runs)
     EXPECT_TRUE(begin < bulk || end - begin <= std::max(1, (count - bulk) / (2 * n))) << begin << " to " << end;
+}
+
+std::pair<int, bool> of(const TeamChoice::Plan& plan) { return {plan.threads, plan.measured}; }
+
+// windows of regions of `threads` threads doing `rate` cores' worth of work a second, from time `now` (ms), each
+// region 5 ms long; returns the time after them
+std::int64_t run_windows(TeamChoice& choice, int windows, int requested, double one_rate, double team_rate,
+                         std::int64_t now) {
+  const std::int64_t region = 5'000'000;
+  for (int k = 0; k < windows * TeamChoice::kWindowRegions; ++k) {
+    const TeamChoice::Plan plan = choice.plan(requested, now);
+    EXPECT_TRUE(plan.measured);
+    const double rate = plan.threads > 1 ? team_rate : one_rate;
+    now += region;
+    choice.record(plan, region, static_cast<std::int64_t>(rate * region), now);
+  }
+  return now;
+}
+
+TEST(TeamChoice, KeepsATeamThatGetsMoreThanACoreOfWorkDone) {
+  TeamChoice choice;
+  EXPECT_EQ(choice.plan(1, 0).threads, 1);
+  EXPECT_FALSE(choice.plan(1, 0).measured);
+  std::int64_t now = run_windows(choice, 1, 2, 1.0, 1.9, 0);
+  // measured again only after a period, on the team all along
+  EXPECT_EQ(choice.plan(2, now).threads, 2);
+  EXPECT_FALSE(choice.plan(2, now + TeamChoice::kPeriod - 1).measured);
+  EXPECT_EQ(choice.threads(2), 2);
+  now = run_windows(choice, 1, 2, 1.0, 1.9, now + TeamChoice::kPeriod);
+  EXPECT_EQ(choice.plan(2, now).threads, 2);
+}
+
+TEST(TeamChoice, HandsTheRegionsToOneThreadWhileTheTeamLosesThenBackWhenItWins) {
+  TeamChoice choice;
+  // a team slowed by busy cores: one thread from then on, the collision pipeline's too
+  std::int64_t now = run_windows(choice, 1, 2, 0.67, 0.25, 0);
+  EXPECT_EQ(of(choice.plan(2, now)), std::make_pair(1, false));
+  EXPECT_EQ(choice.threads(4), 1);
+  EXPECT_EQ(choice.threads(1), 1);
+  // after the first wait: one thread measured, then the team, which loses again; the next wait is twice as long
+  now += TeamChoice::kFirstWait;
+  EXPECT_EQ(of(choice.plan(2, now)), std::make_pair(1, true));
+  now = run_windows(choice, 1, 2, 0.67, 0.25, now);
+  EXPECT_EQ(of(choice.plan(2, now)), std::make_pair(2, true));
+  EXPECT_EQ(choice.threads(2), 2);  // (a probe of the team takes the collision pipeline's regions too)
+  now = run_windows(choice, 1, 2, 0.67, 0.25, now);
+  EXPECT_EQ(of(choice.plan(2, now + 2 * TeamChoice::kFirstWait - 1)), std::make_pair(1, false));
+  // the waits double up to the longest
+  for (int k = 0; k < 8; ++k) now = run_windows(choice, 2, 2, 0.67, 0.25, now + TeamChoice::kLongestWait);
+  EXPECT_EQ(of(choice.plan(2, now + TeamChoice::kLongestWait - 1)), std::make_pair(1, false));
+  // the busy processes gone: the team wins its next try and is kept
+  now = run_windows(choice, 2, 2, 1.0, 1.9, now + TeamChoice::kLongestWait);
+  EXPECT_EQ(of(choice.plan(2, now)), std::make_pair(2, false));
+  EXPECT_EQ(choice.threads(2), 2);
+  // and handed over again only after its next window, with the first wait again
+  now = run_windows(choice, 1, 2, 1.0, 0.5, now + TeamChoice::kPeriod);
+  EXPECT_EQ(choice.plan(2, now + TeamChoice::kFirstWait - 1).threads, 1);
+  EXPECT_EQ(of(choice.plan(2, now + TeamChoice::kFirstWait)), std::make_pair(1, true));
+}
+
+TEST(TeamChoice, KeepsATeamWithinATenthOfOneThreadsRate) {
+  TeamChoice choice;
+  std::int64_t now = run_windows(choice, 1, 2, 1.0, 0.3, 0);  // one thread measured at 0.7 before the team wins
+  now = run_windows(choice, 1, 2, 0.7, 0.8, now + TeamChoice::kFirstWait);
+  now = run_windows(choice, 1, 2, 0.7, 0.8, now);
+  EXPECT_EQ(choice.plan(2, now).threads, 2);
+  now = run_windows(choice, 1, 2, 0.7, 0.65, now + TeamChoice::kPeriod);
+  EXPECT_EQ(choice.plan(2, now).threads, 2);
+  now = run_windows(choice, 1, 2, 0.7, 0.6, now + TeamChoice::kPeriod);
+  EXPECT_EQ(choice.plan(2, now).threads, 1);
+}
+
+TEST(TeamChoice, WithoutAdaptingEveryRegionRunsOnTheThreadsItAsks) {
+  TeamChoice choice;
+  run_windows(choice, 1, 2, 0.67, 0.25, 0);
+  choice.adapt(false);
+  EXPECT_EQ(of(choice.plan(3, 0)), std::make_pair(3, false));
+  EXPECT_EQ(choice.threads(3), 3);
 }
 
 }  // namespace
