@@ -189,7 +189,7 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   const ExclusiveCall exclusive(busy_, "CollisionPipeline.collide");
   const std::int64_t start = options_.count_serial_time ? now_ns() : 0;
   model_.check(state);
-  if (!same_layout(contacts, model_))
+  if (!same_layout(contacts, model_) || contacts.model_id != model_.model_id)
     fail("contacts buffer was not made by this pipeline (shape_count ", contacts.shape_count, ", capacity ",
          contacts.contact_capacity, "; expected ", model_.shape_count, ", ", options_.contact_capacity, ")");
   const auto capacity = static_cast<size_t>(contacts.contact_capacity);

@@ -21,7 +21,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
   model_.check(in);
   model_.check(out);
   model_.check(control);
-  if (!same_layout(contacts, model_))
+  if (!same_layout(contacts, model_) || contacts.model_id != model_.model_id)
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   bool loose_finite = true;

@@ -546,7 +546,7 @@ TEST(DivergenceGuard, AContactTooDeepMarksItsWorldDiverged) {
       std::ostringstream expected;
       expected.precision(17);
       expected << "step diverged in articulation 0: a contact " << deepest
-               << " m deep, beyond divergence_depth 2 m (the last step's dt too large for the scene?)";
+               << " m deep, beyond divergence_depth 0.5 m (the last step's dt too large for the scene?)";
       EXPECT_NOVAPHY_ERROR(scene.solver.step(scene.state, scene.state, scene.control, scene.contacts, 1),
                            expected.str());
       EXPECT_EQ(scene.state.joint_q, fallen.joint_q);

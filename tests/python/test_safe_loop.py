@@ -192,3 +192,19 @@ def test_arguments_that_do_not_convert_are_named_as_the_user_wrote_them():
     with pytest.raises(TypeError, match=r"from_numpy: field 'joint_q' must be a numeric array, got an array of dtype "
                                         r"<U1"):
         state.from_numpy({"joint_q": np.array(["a"])})
+
+
+def test_contacts_of_another_model_with_the_same_counts_are_refused():
+    def model(mass):
+        builder = novaphy.ModelBuilder()
+        link = builder.add_body(novaphy.RigidBody.from_sphere(mass, 0.1))
+        builder.add_joint_revolute(-1, link, axis=[0, 1, 0], child_xform=novaphy.Transform([0, 0, 0.5]))
+        builder.add_ground_plane(-1.0)
+        return builder.finalize()
+
+    a, b = model(1.0), model(2.0)
+    other = novaphy.CollisionPipeline(b).contacts()
+    with pytest.raises(ValueError, match="contacts buffer is from another model"):
+        novaphy.solvers.SolverFeatherstone(a).step(a.state(), a.state(), a.control(), other, 0.01)
+    with pytest.raises(ValueError, match="contacts buffer was not made by this pipeline"):
+        novaphy.CollisionPipeline(a).collide(a.state(), other)
