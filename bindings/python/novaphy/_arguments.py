@@ -16,7 +16,8 @@ import numpy as np
 INT32 = (-(2**31), 2**31 - 1)
 
 
-def _split_top_level(text):
+def split_top_level(text):
+    """Splits an argument list at the commas outside brackets (tools/make_stub.py reads signatures with it too)."""
     parts, depth, current = [], 0, ""
     for ch in text:
         depth += ch in "([{"
@@ -35,7 +36,7 @@ def _parameters(message):
     if len(overloads) != 1:
         return None
     parameters = []
-    for part in _split_top_level(overloads[0]):
+    for part in split_top_level(overloads[0]):
         if part == "*":
             continue
         head = part.split("=", 1)[0] if "=" in part.split(":", 1)[-1] else part
