@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <mutex>
 
 namespace novaphy {
@@ -25,22 +26,40 @@ inline std::int64_t thread_cpu_ns() {
   return std::int64_t{t.tv_sec} * 1'000'000'000 + t.tv_nsec;
 }
 
+// the time, in ns since boot, that some runnable thread of this machine has waited for a core (the "some" total
+// of Linux's CPU pressure, /proc/pressure/cpu); -1 where the system does not tell
+inline std::int64_t cpu_pressure_ns() {
+  std::FILE* file = std::fopen("/proc/pressure/cpu", "r");
+  if (!file) return -1;
+  unsigned long long total = 0;
+  const int read = std::fscanf(file, "some avg10=%*f avg60=%*f avg300=%*f total=%llu", &total);
+  std::fclose(file);
+  return read == 1 ? static_cast<std::int64_t>(total) * 1000 : -1;
+}
+
 // Whether a region's team pays on this machine now. OpenMP's threads wait at a region's end by spinning, so while
 // other processes keep the cores busy a waiting thread holds a core its partner needs, and a thread off its core
-// holds the others at the barrier: N threads can step slower than one. Now and then a window of regions is timed:
-// the CPU time their threads spent on the work over the regions' wall time, the cores' worth of work a region gets
-// done a second (its rate). A team whose rate falls below nine tenths of one thread's (one core until one thread
-// has been measured) hands its regions to one thread; the team is tried again, one window, after a wait that
-// doubles each time it loses, and kept where it does at least as well as one thread did in the window before.
+// holds the others at the barrier: N threads can step slower than one. The regions start on one thread. Now and
+// then a window of regions is timed: the CPU time their threads spent on the work over the regions' wall time, the
+// cores' worth of work a region gets done a second (its rate); one thread's window, then the team's. A team that
+// does at least as well as one thread is kept, and measured again now and then; one that falls below nine tenths of
+// one thread's rate hands its regions back to one thread, and the team is tried again after a wait that doubles each
+// time it loses. A try costs: on busy cores a team's region stalls for a time slice of the scheduler, so
+//  - a team window ends as soon as its regions, past kClearLossWall of wall time, get less than half of one
+//    thread's rate (a losing try costs about one such region, not a window of them);
+//  - no try is made while threads waited for a core for more than kBusy of the wait (the machine's CPU pressure):
+//    the wait doubles as if the team had lost, and only the longest wait ends in a try whatever the pressure.
 // Which threads run what never changes a result (the engine's loops give the same bits on any team)
 class TeamChoice {
  public:
   // times in ns: a window is at least kWindow of measured regions' wall time and kWindowRegions regions; a team
-  // kept is measured again kPeriod after its last window; a team handed over is tried again after kFirstWait,
-  // doubling up to kLongestWait while it loses
-  static constexpr std::int64_t kWindow = 10'000'000, kPeriod = 200'000'000;
+  // kept is measured again kPeriod after its last window; the first try waits kFirstLook; a team handed over is
+  // tried again after kFirstWait, doubling up to kLongestWait while it loses
+  static constexpr std::int64_t kWindow = 10'000'000, kPeriod = 200'000'000, kFirstLook = 20'000'000;
   static constexpr std::int64_t kFirstWait = 100'000'000, kLongestWait = 3'200'000'000;
+  static constexpr std::int64_t kClearLossWall = 1'000'000;
   static constexpr int kWindowRegions = 4;
+  static constexpr double kClearLoss = 0.5, kBusy = 0.25;
 
   // the threads a region asking for `requested` runs on, and whether its times go to record()
   struct Plan {
@@ -48,31 +67,37 @@ class TeamChoice {
     bool measured = false;
   };
 
+  // pressure: the machine's CPU pressure, as cpu_pressure_ns()
+  explicit TeamChoice(std::int64_t (*pressure)() = cpu_pressure_ns) : pressure_(pressure) {}
+
   Plan plan(int requested, std::int64_t now) {
     if (requested <= 1) return {1, false};
     const std::lock_guard<std::mutex> lock(mutex_);
     if (!adapt_) return {requested, false};
     if (phase_ == Phase::Wait) {
       if (now < wait_until_) return {one_ ? 1 : requested, false};
+      if (one_ && !try_team(now)) return {1, false};
       phase_ = Phase::Measure;
     }
     return {team() ? requested : 1, true};
   }
 
-  // a measured region's wall time and the CPU time its threads spent on its work, all of them together (ns)
-  void record(const Plan& plan, std::int64_t wall, std::int64_t cpu, std::int64_t now) {
+  // a measured region's wall time and the CPU time its threads spent on its work, all of them together (ns);
+  // whether it closed a window
+  bool record(const Plan& plan, std::int64_t wall, std::int64_t cpu, std::int64_t now) {
     const std::lock_guard<std::mutex> lock(mutex_);
-    if (phase_ == Phase::Wait || (plan.threads > 1) != team()) return;  // planned before the last window closed
+    if (phase_ == Phase::Wait || (plan.threads > 1) != team()) return false;  // planned before the last one closed
     wall_ += wall;
     cpu_ += cpu;
-    if (++regions_ < kWindowRegions || wall_ < kWindow) return;
     const double rate = static_cast<double>(cpu_) / static_cast<double>(wall_);
+    const bool clear_loss = team() && wall_ >= kClearLossWall && rate < kClearLoss * one_rate_;
+    if (!clear_loss && (++regions_ < kWindowRegions || wall_ < kWindow)) return false;
     wall_ = cpu_ = 0;
     regions_ = 0;
     if (phase_ == Phase::Measure && one_) {  // one thread's rate, then the team's at once
       one_rate_ = rate;
       phase_ = Phase::Probe;
-      return;
+      return true;
     }
     const bool team_pays = phase_ == Phase::Probe ? rate >= one_rate_ : rate >= 0.9 * one_rate_;
     if (team_pays) {
@@ -80,11 +105,11 @@ class TeamChoice {
       wait_ = kFirstWait;
       wait_until_ = now + kPeriod;
     } else {
-      if (one_) wait_ = std::min(2 * wait_, kLongestWait);
       one_ = true;
-      wait_until_ = now + wait_;
+      wait(now);
     }
     phase_ = Phase::Wait;
+    return true;
   }
 
   // the threads a region that is not measured runs on (the collision pipeline's)
@@ -103,12 +128,39 @@ class TeamChoice {
   enum class Phase { Wait, Measure, Probe };
   bool team() const { return !one_ || phase_ == Phase::Probe; }
 
+  // one thread from now for the next wait, the CPU pressure looked at as it starts
+  void wait(std::int64_t now) {
+    wait_until_ = now + wait_;
+    wait_ = std::min(2 * wait_, kLongestWait);
+    pressure_at_ = pressure_();
+    looked_at_ = now;
+  }
+
+  // (one thread, its wait over) whether the team is tried now; else the next wait
+  bool try_team(std::int64_t now) {
+    if (looked_at_ < 0) {  // the first call: a short look at the pressure first
+      pressure_at_ = pressure_();
+      looked_at_ = now;
+      wait_until_ = now + kFirstLook;
+      return false;
+    }
+    const std::int64_t pressure = pressure_(), waited = now - looked_at_;
+    const bool busy = pressure >= 0 && pressure_at_ >= 0 &&
+                      static_cast<double>(pressure - pressure_at_) > kBusy * static_cast<double>(waited);
+    if (!busy || waited >= kLongestWait) return true;
+    wait(now);
+    return false;
+  }
+
+  std::int64_t (*pressure_)();
   std::mutex mutex_;
   bool adapt_ = true;
-  bool one_ = false;                 // regions run on one thread (else on the team they ask for)
-  Phase phase_ = Phase::Measure;     // the first regions are measured
+  bool one_ = true;                  // regions run on one thread (else on the team they ask for)
+  Phase phase_ = Phase::Wait;        // until the first call's look at the pressure
   std::int64_t wait_until_ = 0;      // (Wait) when the next window starts
-  std::int64_t wait_ = kFirstWait;   // how long one thread runs before the team is tried again
+  std::int64_t wait_ = kFirstWait;   // the next wait: how long one thread runs before the team is tried again
+  std::int64_t pressure_at_ = -1;    // the CPU pressure when the wait began
+  std::int64_t looked_at_ = -1;      // when it began
   double one_rate_ = 1;              // one thread's rate, last measured
   std::int64_t wall_ = 0, cpu_ = 0;  // the window so far
   int regions_ = 0;
