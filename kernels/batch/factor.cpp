@@ -1,4 +1,4 @@
-#include "kernels/batch/ltl.h"
+#include "kernels/batch/factor.h"
 
 #include <algorithm>
 
