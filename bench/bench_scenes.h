@@ -3,7 +3,7 @@
 #pragma once
 
 #include "engine/mjcf_import.h"
-#include "engine/model.h"
+#include "engine/model/model.h"
 
 namespace novaphy {
 

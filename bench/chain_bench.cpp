@@ -4,7 +4,7 @@
 // Arguments: links, path (0 ABA, 1 CRBA + Cholesky). items_per_second is link-steps per second.
 #include <benchmark/benchmark.h>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 
 namespace novaphy {

@@ -5,8 +5,8 @@
 #include <optional>
 
 #include "bindings/bindings.h"
-#include "engine/error.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/error.h"
 
 namespace novaphy::python {
 

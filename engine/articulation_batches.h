@@ -13,7 +13,7 @@
 
 namespace novaphy {
 
-// a body welded into a link by a Fixed joint (engine/weld.h): where its state comes from
+// a body welded into a link by a Fixed joint (engine/model/weld.h): where its state comes from
 struct WeldedBody {
   int body = 0;
   int link = 0;

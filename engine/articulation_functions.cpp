@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "engine/dynamics.h"
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

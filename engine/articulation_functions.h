@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 
 namespace novaphy {
 

@@ -6,8 +6,8 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/error.h"
 #include "engine/exclusive_call.h"
+#include "engine/model/error.h"
 #include "engine/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/lane_transpose.h"

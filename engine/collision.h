@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "engine/model.h"
+#include "engine/model/model.h"
 #include "engine/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/convex.h"

@@ -10,7 +10,7 @@
 #include <unordered_map>
 
 #include "engine/articulation_batches.h"
-#include "engine/error.h"
+#include "engine/model/error.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/tendon.h"
 #include "kernels/aba.h"

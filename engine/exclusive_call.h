@@ -5,7 +5,7 @@
 
 #include <atomic>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

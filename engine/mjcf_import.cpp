@@ -5,8 +5,8 @@
 #include <map>
 #include <memory>
 
-#include "engine/error.h"
 #include "engine/mjcf_translate.h"
+#include "engine/model/error.h"
 #include "engine/mujoco_fields.h"
 
 namespace novaphy {

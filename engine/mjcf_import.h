@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 #include "engine/mujoco_fields.h"
 
 namespace novaphy {

@@ -12,7 +12,7 @@
 #include <set>
 #include <sstream>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

@@ -4,7 +4,7 @@
 
 #include <functional>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 
 namespace novaphy {
 

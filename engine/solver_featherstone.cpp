@@ -11,7 +11,7 @@
 #include <type_traits>
 
 #include "engine/dynamics.h"
-#include "engine/error.h"
+#include "engine/model/error.h"
 #include "engine/parallel.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/rows.h"

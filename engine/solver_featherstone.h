@@ -20,11 +20,11 @@
 #include "engine/dense_articulations.h"
 #include "engine/exclusive_call.h"
 #include "engine/island_rows.h"
+#include "engine/model/weld.h"
 #include "engine/parallel.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/rows.h"
 #include "engine/solver_settings.h"
-#include "engine/weld.h"
 
 namespace novaphy {
 

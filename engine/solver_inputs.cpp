@@ -7,7 +7,7 @@
 #include <functional>
 
 #include "engine/dynamics.h"
-#include "engine/error.h"
+#include "engine/model/error.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/tendon.h"
 #include "engine/solver_featherstone.h"

@@ -2,7 +2,7 @@
 
 #include <type_traits>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "engine/collision.h"
-#include "engine/model.h"
+#include "engine/model/model.h"
 #include "engine/parts/row_params.h"
 #include "kernels/lanes.h"
 

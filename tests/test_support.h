@@ -4,7 +4,7 @@
 #include <random>
 #include <string>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "kernels/convex.h"
 #include "kernels/hull.h"

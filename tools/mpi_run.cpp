@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 #include "engine/sharded_batch.h"
 #include "tools/progress.h"
 #include "tools/robot_grid.h"

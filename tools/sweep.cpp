@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "engine/dynamics.h"
-#include "engine/error.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/error.h"
 #include "engine/solver_featherstone.h"
 #include "tools/progress.h"
 #include "tools/robot_grid.h"

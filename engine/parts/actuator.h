@@ -10,7 +10,7 @@
 
 #include <algorithm>
 
-#include "engine/model.h"
+#include "engine/model/model.h"
 
 namespace novaphy {
 

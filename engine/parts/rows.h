@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/model.h"
+#include "engine/model/model.h"
 #include "engine/parts/number.h"
 #include "engine/parts/row_params.h"
 #include "kernels/batch/pgs.h"

@@ -4,7 +4,7 @@
 // implicit terms cannot.
 #pragma once
 
-#include "engine/model.h"
+#include "engine/model/model.h"
 
 namespace novaphy {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 
 int main() {

@@ -7,8 +7,8 @@
 #include <random>
 #include <set>
 
-#include "engine/builder.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "engine/parts/rows.h"
 #include "kernels/convex.h"
 #include "test_support.h"

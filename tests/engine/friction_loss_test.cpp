@@ -7,8 +7,8 @@
 #include <cstring>
 #include <vector>
 
-#include "engine/builder.h"
 #include "engine/dynamics.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 

@@ -8,7 +8,7 @@
 #include <memory>
 #include <random>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 #include "test_support.h"
 #include "test_support_errors.h"
 #include "tools/mujoco_oracle.h"

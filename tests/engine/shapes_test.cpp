@@ -11,9 +11,9 @@
 #include <sstream>
 #include <string>
 
-#include "engine/builder.h"
 #include "engine/collision.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "kernels/convex.h"
 #include "kernels/hull.h"
 #include "solver_test_support.h"

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/builder.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "engine/parts/rows.h"
 #include "solver_test_support.h"
 #include "test_support.h"

@@ -6,9 +6,9 @@
 #include <memory>
 #include <string>
 
-#include "engine/builder.h"
 #include "engine/dynamics.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "solver_test_support.h"
 #include "test_support_errors.h"
 

@@ -4,8 +4,8 @@
 #include <functional>
 #include <vector>
 
-#include "engine/builder.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "solver_test_support.h"
 

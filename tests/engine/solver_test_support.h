@@ -7,8 +7,8 @@
 #include <functional>
 #include <vector>
 
-#include "engine/builder.h"
 #include "engine/collision.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 
 namespace novaphy::solver_test {

@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <random>
 
-#include "engine/builder.h"
 #include "engine/dynamics.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 #include "test_support_errors.h"

@@ -11,8 +11,8 @@
 #include <string>
 
 #include "engine/dynamics.h"
-#include "engine/error.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/error.h"
 #include "engine/solver_featherstone.h"
 #include "fuzz_support.h"
 

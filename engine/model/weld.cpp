@@ -1,4 +1,4 @@
-#include "engine/weld.h"
+#include "engine/model/weld.h"
 
 namespace novaphy {
 

@@ -1,4 +1,4 @@
-#include "engine/weld.h"
+#include "engine/model/weld.h"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <cstring>
 #include <limits>
 
-#include "engine/builder.h"
 #include "engine/dynamics.h"
+#include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 

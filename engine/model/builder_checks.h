@@ -5,8 +5,8 @@
 #include <cmath>
 #include <string>
 
-#include "engine/builder.h"
-#include "engine/error.h"
+#include "engine/model/builder.h"
+#include "engine/model/error.h"
 #include "kernels/spatial.h"
 
 namespace novaphy {

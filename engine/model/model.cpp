@@ -1,11 +1,11 @@
-#include "engine/model.h"
+#include "engine/model/model.h"
 
 #include <algorithm>
 #include <cstddef>
 #include <cstring>
 
 #include "engine/dynamics.h"
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

@@ -3,9 +3,9 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/builder.h"
-#include "engine/builder_checks.h"
 #include "engine/dynamics.h"
+#include "engine/model/builder.h"
+#include "engine/model/builder_checks.h"
 
 namespace novaphy {
 

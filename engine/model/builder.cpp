@@ -1,13 +1,13 @@
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
-#include "engine/builder_checks.h"
 #include "engine/dynamics.h"
-#include "engine/error.h"
+#include "engine/model/builder_checks.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/model.h"
+#include "engine/model/model.h"
 #include "kernels/hull.h"
 
 namespace novaphy {

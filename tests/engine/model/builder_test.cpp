@@ -1,4 +1,4 @@
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 
 #include <gtest/gtest.h>
 

@@ -5,9 +5,9 @@
 
 #include <filesystem>
 
-#include "engine/builder.h"
 #include "engine/dynamics.h"
 #include "engine/mjcf_import.h"
+#include "engine/model/builder.h"
 #include "test_support.h"
 #include "test_support_errors.h"
 

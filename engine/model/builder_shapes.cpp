@@ -4,9 +4,9 @@
 #include <map>
 #include <memory>
 
-#include "engine/builder.h"
-#include "engine/builder_checks.h"
-#include "engine/error.h"
+#include "engine/model/builder.h"
+#include "engine/model/builder_checks.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 
