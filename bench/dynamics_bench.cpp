@@ -9,7 +9,7 @@
 #include <memory>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"

@@ -14,7 +14,7 @@
 #include <cmath>
 
 #include "bench/bench_scenes.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/shard.h"
 #include "engine/solver_featherstone.h"
 #include "tools/robot_grid.h"

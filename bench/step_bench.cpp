@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "bench/bench_scenes.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 
 namespace novaphy {

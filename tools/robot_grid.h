@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/shard.h"
 
 namespace novaphy {

@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "engine/collision.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/model/error.h"
 #include "engine/model/model.h"

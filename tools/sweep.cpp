@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/error.h"
 #include "engine/solver_featherstone.h"
 #include "tools/progress.h"

@@ -212,7 +212,7 @@ class ModelBuilder {
   void replicate(const ModelBuilder& other, int world_count, const Vec3& spacing = Vec3::Zero());
   int world_count() const { return world_count_; }
 
-  // MJCF / URDF import through MuJoCo's parser (engine/mjcf_import.cpp): returns the warnings
+  // MJCF / URDF import through MuJoCo's parser (engine/import/mjcf_import.cpp): returns the warnings
   // for everything in the file the engine does not model, by name
   std::vector<std::string> add_mjcf(const std::string& path, const ImportOptions& options = {});
   std::vector<std::string> add_urdf(const std::string& path, const ImportOptions& options = {}) {

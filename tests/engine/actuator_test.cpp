@@ -9,7 +9,7 @@
 #include <random>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 #include "tools/mujoco_oracle.h"

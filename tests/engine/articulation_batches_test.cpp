@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 

@@ -7,7 +7,7 @@
 #include <random>
 #include <set>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/parts/rows.h"
 #include "kernels/convex.h"

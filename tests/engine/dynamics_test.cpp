@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "test_support_errors.h"
 
 namespace novaphy {

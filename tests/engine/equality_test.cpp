@@ -10,7 +10,7 @@
 #include <random>
 
 #include "engine/collision.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"
 #include "test_support_errors.h"

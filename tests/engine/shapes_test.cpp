@@ -12,7 +12,7 @@
 #include <string>
 
 #include "engine/collision.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "kernels/convex.h"
 #include "kernels/hull.h"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/parts/rows.h"
 #include "solver_test_support.h"

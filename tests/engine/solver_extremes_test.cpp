@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "solver_test_support.h"

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "solver_test_support.h"
 #include "test_support_errors.h"

@@ -4,7 +4,7 @@
 #include <functional>
 #include <vector>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "solver_test_support.h"

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/error.h"
 #include "engine/solver_featherstone.h"
 #include "fuzz_support.h"

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "test_support.h"
 #include "test_support_errors.h"

@@ -1,6 +1,6 @@
-// MuJoCo >= 3 MJCF through MuJoCo 2.2.2's parser (engine/mjcf_translate.h): the translations, through an
+// MuJoCo >= 3 MJCF through MuJoCo 2.2.2's parser (engine/import/mjcf_translate.h): the translations, through an
 // <include>, give the model MuJoCo 3 would compile; an attribute without one is named with its file and line.
-#include "engine/mjcf_translate.h"
+#include "engine/import/mjcf_translate.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "test_support.h"
 #include "test_support_errors.h"
 

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/import/mujoco_fields.h"
 #include "engine/model/builder.h"
-#include "engine/mujoco_fields.h"
 
 namespace novaphy {
 

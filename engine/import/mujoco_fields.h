@@ -1,4 +1,4 @@
-// The fields of a compiled MuJoCo model that the import reads (engine/mjcf_import.cpp), under mjModel's own
+// The fields of a compiled MuJoCo model that the import reads (engine/import/mjcf_import.cpp), under mjModel's own
 // names: a view over MuJoCo 2.2.2's mjModel (mujoco_fields below) or over a compiled model of another MuJoCo
 // version (the Python binding fills it from a mujoco.MjModel's arrays). One converter reads either, so a file
 // compiled by 2.2.2 and the same file compiled by today's MuJoCo build the same NovaPhy model.

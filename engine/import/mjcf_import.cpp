@@ -1,13 +1,13 @@
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
 
-#include "engine/mjcf_translate.h"
+#include "engine/import/mjcf_translate.h"
+#include "engine/import/mujoco_fields.h"
 #include "engine/model/error.h"
-#include "engine/mujoco_fields.h"
 
 namespace novaphy {
 
@@ -327,7 +327,7 @@ class MjcfImporter {
   }
 
   // MuJoCo >= 3's limit on the total actuator force of the joint actuator u drives (jnt_actfrcrange), as the
-  // translation gives it to 2.2.2 (engine/mjcf_translate.h): the force range of the joint's one actuator
+  // translation gives it to 2.2.2 (engine/import/mjcf_translate.h): the force range of the joint's one actuator
   void joint_force_range(int u, const std::string& name, ActuatorOptions& a) const {
     if (!m_.jnt_actfrclimited || m_.actuator_trntype[u] != mjTRN_JOINT) return;
     const int j = m_.actuator_trnid[2 * u];
@@ -464,7 +464,7 @@ class MjcfImporter {
 mjModel* load_mujoco_model(const std::string& path) {
   if (!std::filesystem::exists(path)) fail("cannot load '", path, "': file does not exist");
   char error[1024] = "";
-  // MJCF of MuJoCo >= 3 translated for 2.2.2's parser (engine/mjcf_translate.h); URDF as it is
+  // MJCF of MuJoCo >= 3 translated for 2.2.2's parser (engine/import/mjcf_translate.h); URDF as it is
   const bool urdf = std::filesystem::path(path).extension() == ".urdf";
   if (urdf) check_urdf(path);
   const TranslatedMjcf translated = urdf ? TranslatedMjcf{} : translate_mjcf(path);

@@ -1,4 +1,4 @@
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 
 #include <gtest/gtest.h>
 

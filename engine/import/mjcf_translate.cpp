@@ -1,4 +1,4 @@
-#include "engine/mjcf_translate.h"
+#include "engine/import/mjcf_translate.h"
 
 #include <tinyxml2.h>
 

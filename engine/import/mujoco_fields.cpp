@@ -1,4 +1,4 @@
-#include "engine/mujoco_fields.h"
+#include "engine/import/mujoco_fields.h"
 
 #include <cmath>
 #include <cstring>
