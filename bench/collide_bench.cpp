@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/model/builder.h"
 
 namespace novaphy {

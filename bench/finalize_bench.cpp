@@ -6,7 +6,7 @@
 // is links (over all worlds) per second.
 #include <benchmark/benchmark.h>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "kernels/fk.h"

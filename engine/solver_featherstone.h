@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "engine/articulation_batches.h"
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/dense_articulations.h"
 #include "engine/exclusive_call.h"
 #include "engine/island_rows.h"

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/model/model.h"
 #include "engine/parts/row_params.h"
 #include "kernels/lanes.h"

@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/model/error.h"

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <random>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"

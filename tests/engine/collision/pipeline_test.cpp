@@ -1,4 +1,4 @@
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 

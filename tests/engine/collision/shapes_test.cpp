@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "kernels/convex.h"

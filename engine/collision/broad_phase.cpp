@@ -1,10 +1,10 @@
-// The broad phase of CollisionPipeline (engine/collision.h): shapes' bounds, and worlds alike stepped a
+// The broad phase of CollisionPipeline (engine/collision/pipeline.h): shapes' bounds, and worlds alike stepped a
 // group at a time in lanes (a world per lane): their grouping when the pipeline is made, their boxes, their
 // pairs' overlaps and their planes' reach at each collide.
 #include <algorithm>
 #include <numeric>
 
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
 #include "kernels/collide.h"
 #include "kernels/lane_transpose.h"
 
