@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/parts/drive.h"
 #include "engine/parts/guard.h"
 #include "engine/parts/rows.h"

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <type_traits>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/error.h"
 #include "engine/parallel.h"
 #include "engine/parts/actuator.h"

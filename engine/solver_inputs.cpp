@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <functional>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/error.h"
 #include "engine/parts/actuator.h"
 #include "engine/parts/tendon.h"

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 
 namespace novaphy {
 

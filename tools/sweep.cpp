@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/error.h"
 #include "engine/solver_featherstone.h"

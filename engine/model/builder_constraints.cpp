@@ -3,7 +3,7 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/model/builder_checks.h"
 

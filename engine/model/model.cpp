@@ -4,7 +4,7 @@
 #include <cstddef>
 #include <cstring>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/error.h"
 
 namespace novaphy {

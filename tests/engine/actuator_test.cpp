@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <random>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <vector>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/exclusive_call.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"

@@ -5,7 +5,7 @@
 #include <functional>
 #include <vector>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "solver_test_support.h"

@@ -3,7 +3,7 @@
 // a sanitizer report or any other exception is a finding.
 #include <cstdint>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/model/error.h"
 #include "engine/solver_featherstone.h"

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/error.h"
 #include "engine/solver_featherstone.h"

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "test_support.h"
 #include "test_support_errors.h"

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/solver_featherstone.h"
 #include "test_support_errors.h"
 

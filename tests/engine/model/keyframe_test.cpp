@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "test_support.h"

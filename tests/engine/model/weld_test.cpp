@@ -6,7 +6,7 @@
 #include <cstring>
 #include <limits>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/solver_featherstone.h"
 #include "test_support.h"

@@ -1,8 +1,8 @@
-#include "engine/articulation_functions.h"
+#include "engine/eval/articulation_functions.h"
 
 #include <memory>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "engine/model/error.h"
 
 namespace novaphy {

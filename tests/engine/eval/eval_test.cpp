@@ -1,7 +1,7 @@
-// ForwardDynamics (engine/dynamics.h): the step's batched kernels made once for a model, evaluated again and
+// ForwardDynamics (engine/eval/eval.h): the step's batched kernels made once for a model, evaluated again and
 // again, against the reference kernels' CRBA + Cholesky (eval_forward_dynamics) on MuJoCo's humanoid; and
 // set_body_invweight0's sharing of weights between replicas.
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The seed's free functions on one articulation given as lists: joints[i] attaches link i,
 // described by bodies[i], to link joints[i].parent (-1: the world). Each builds a Model through
-// ModelBuilder (so every argument is checked the same way) and calls engine/dynamics; forward_dynamics keeps
+// ModelBuilder (so every argument is checked the same way) and calls engine/eval/eval; forward_dynamics keeps
 // the last articulation's model and its ForwardDynamics (the step's batched kernels) per thread, so calls
 // about the same joints and bodies set nothing up again.
 #pragma once

@@ -1,8 +1,8 @@
-#include "engine/articulation_functions.h"
+#include "engine/eval/articulation_functions.h"
 
 #include <gtest/gtest.h>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "test_support_errors.h"
 
 namespace novaphy {

@@ -1,4 +1,4 @@
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 
 #include <omp.h>
 
