@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "engine/model/error.h"
-#include "engine/sharded_batch.h"
+#include "engine/mpi/sharded_batch.h"
 #include "tools/progress.h"
 #include "tools/robot_grid.h"
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "engine/import/mjcf_import.h"
-#include "engine/shard.h"
+#include "engine/mpi/shard.h"
 
 namespace novaphy {
 

@@ -1,5 +1,5 @@
 // Worlds split into shards: which contiguous range of the global worlds a rank owns, and the model
-// of such a range. Needs no MPI; engine/sharded_batch.h builds the MPI batch on it.
+// of such a range. Needs no MPI; engine/mpi/sharded_batch.h builds the MPI batch on it.
 #pragma once
 
 #include <functional>

@@ -1,4 +1,4 @@
-#include "engine/sharded_batch.h"
+#include "engine/mpi/sharded_batch.h"
 
 #include <string>
 

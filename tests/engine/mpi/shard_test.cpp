@@ -1,4 +1,4 @@
-#include "engine/shard.h"
+#include "engine/mpi/shard.h"
 
 #include <gtest/gtest.h>
 

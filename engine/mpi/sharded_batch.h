@@ -13,7 +13,7 @@
 #include <span>
 #include <vector>
 
-#include "engine/shard.h"
+#include "engine/mpi/shard.h"
 #include "engine/solver_featherstone.h"
 
 namespace novaphy {
