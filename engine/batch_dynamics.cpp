@@ -1,10 +1,10 @@
 // The Dynamics stage of one block: forward kinematics, bias forces with the applied wrenches, the
-// implicit dampers, springs and drives (engine/parts/drive.h), H and its factor, the unconstrained velocity.
+// implicit dampers, springs and drives (engine/solver/parts/drive.h), H and its factor, the unconstrained velocity.
 #include <type_traits>
 
 #include "engine/batch_blocks.h"
-#include "engine/parts/drive.h"
-#include "engine/parts/wrench.h"
+#include "engine/solver/parts/drive.h"
+#include "engine/solver/parts/wrench.h"
 #include "kernels/batch/lane_math.h"
 
 namespace novaphy {

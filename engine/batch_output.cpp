@@ -1,7 +1,7 @@
 // The Integrate and Store stages of one block: the coordinates stepped, the divergence guard's test
-// (engine/parts/guard.h), and the worlds' new state and body poses and velocities written out.
+// (engine/solver/parts/guard.h), and the worlds' new state and body poses and velocities written out.
 #include "engine/batch_blocks.h"
-#include "engine/parts/guard.h"
+#include "engine/solver/parts/guard.h"
 #include "kernels/batch/lane_math.h"
 #include "kernels/stream.h"
 

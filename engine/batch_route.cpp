@@ -9,7 +9,7 @@
 #include <numeric>
 
 #include "engine/batch_blocks.h"
-#include "engine/parts/rows.h"
+#include "engine/solver/parts/rows.h"
 
 namespace novaphy {
 

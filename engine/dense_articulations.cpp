@@ -3,10 +3,10 @@
 #include <algorithm>
 
 #include "engine/eval/eval.h"
-#include "engine/parts/drive.h"
-#include "engine/parts/guard.h"
-#include "engine/parts/rows.h"
-#include "engine/parts/wrench.h"
+#include "engine/solver/parts/drive.h"
+#include "engine/solver/parts/guard.h"
+#include "engine/solver/parts/rows.h"
+#include "engine/solver/parts/wrench.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"

@@ -6,8 +6,8 @@
 #include <numeric>
 
 #include "engine/parallel.h"
-#include "engine/parts/rows.h"
-#include "engine/parts/tendon.h"
+#include "engine/solver/parts/rows.h"
+#include "engine/solver/parts/tendon.h"
 
 namespace novaphy {
 

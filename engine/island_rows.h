@@ -1,7 +1,7 @@
 // The rows the blocks do not solve: those of the dense route's articulations, and every row of an
 // articulation a contact joins to another moving one this step. A row acts on the dofs of one or two
 // articulations through J and M^-1 J^T, each side's from the route that steps it; the contact and limit
-// rows are the parts of engine/parts/rows.h, as are the rows of equality constraints and tendon limits,
+// rows are the parts of engine/solver/parts/rows.h, as are the rows of equality constraints and tendon limits,
 // which the islands build for either route. Articulations joined by rows form islands, each swept by
 // kernels/pgs on one thread, the islands in parallel (the same bits as one sweep over all rows).
 #pragma once

@@ -22,8 +22,8 @@
 #include "engine/island_rows.h"
 #include "engine/model/weld.h"
 #include "engine/parallel.h"
-#include "engine/parts/actuator.h"
-#include "engine/parts/rows.h"
+#include "engine/solver/parts/actuator.h"
+#include "engine/solver/parts/rows.h"
 #include "engine/solver_settings.h"
 
 namespace novaphy {
@@ -153,7 +153,7 @@ class SolverFeatherstone {
   [[noreturn]] void raise_bad_input(const StepContext& step);
   // the deepest contact of articulation a among the step's
   Scalar deepest_contact(int a, const Contacts& contacts) const;
-  // per dof the divergence guard's energy weight (engine/parts/guard.h), from each articulation's mass matrix at
+  // per dof the divergence guard's energy weight (engine/solver/parts/guard.h), from each articulation's mass matrix at
   // joint_q0
   void weigh_energy();
   // the actuators by dof and by tendon, the tendon entries by dof

@@ -8,8 +8,8 @@
 
 #include "engine/eval/eval.h"
 #include "engine/model/error.h"
-#include "engine/parts/actuator.h"
-#include "engine/parts/tendon.h"
+#include "engine/solver/parts/actuator.h"
+#include "engine/solver/parts/tendon.h"
 #include "engine/solver_featherstone.h"
 
 namespace novaphy {
@@ -195,7 +195,7 @@ void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
 }
 
 Scalar SolverFeatherstone::tendon_force(int t, const State& in, const Control& control) const {
-  // its spring's, damper's and actuators' (engine/parts/tendon.h, engine/parts/actuator.h)
+  // its spring's, damper's and actuators' (engine/solver/parts/tendon.h, engine/solver/parts/actuator.h)
   const Scalar length = tendon_length(model_, t, in.joint_q.data());
   const Scalar velocity = tendon_velocity(model_, t, in.joint_qd.data());
   Scalar force = tendon_passive_force(model_, t, length, velocity);
@@ -243,8 +243,8 @@ void SolverFeatherstone::actuate_unit(const int* arts, int count, StepContext& l
 }
 
 void SolverFeatherstone::guard(const StepContext& step) {
-  // an articulation that diverged (engine/parts/guard.h, or flagged: a contact too deep, a bad input): where some
-  // input it read was not finite or a PD gain negative, it is left as it was (the pass wrote none of it) and the
+  // an articulation that diverged (engine/solver/parts/guard.h, or flagged: a contact too deep, a bad input): where
+  // some input it read was not finite or a PD gain negative, it is left as it was (the pass wrote none of it) and the
   // step raises naming the first such entry, after the others; else it is raised, kept as it was (Flag: the input
   // state is finite) or reset to the reset state (Reset). No unit marked the step's trouble: none did
   if (!trouble_) {

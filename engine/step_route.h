@@ -10,7 +10,7 @@
 
 #include "engine/collision/pipeline.h"
 #include "engine/model/model.h"
-#include "engine/parts/row_params.h"
+#include "engine/solver/parts/row_params.h"
 #include "kernels/lanes.h"
 
 namespace novaphy {
@@ -23,14 +23,14 @@ struct ShapeContacts;
 
 // the contacts whose rows an articulation's own unit solves (with static bodies or with itself), listed
 // per articulation in contact order; the unit reads each one's links, friction, restitution and softness from
-// the model (engine/parts/rows.h) as it builds its rows
+// the model (engine/solver/parts/rows.h) as it builds its rows
 struct ContactLists {
   const int* start = nullptr;  // [articulation + 1]: a's are list[start[a] .. start[a + 1])
   const int* list = nullptr;   // contact indices
   const Model* model = nullptr;
   const ArticulationIndex* index = nullptr;
   int dims = 3;  // the rows of a contact of the most: 3, 4 (torsional) or 6 (and rolling), by the shapes' condim
-  const ShapeContacts* shapes = nullptr;  // the shapes' contact numbers (engine/parts/rows.h)
+  const ShapeContacts* shapes = nullptr;  // the shapes' contact numbers (engine/solver/parts/rows.h)
 };
 
 struct StepContext {
@@ -61,7 +61,7 @@ struct StepContext {
   const std::uint8_t* touched = nullptr;  // [articulation] 1: its rows are the islands' this step
   Scalar divergence_speed = 0;
   Scalar divergence_energy = 0;           // J/kg
-  const Scalar* energy_weight = nullptr;  // [dof] the guard's energy weights (engine/parts/guard.h)
+  const Scalar* energy_weight = nullptr;  // [dof] the guard's energy weights (engine/solver/parts/guard.h)
   // [articulation] 1: diverged before its step's output is tested (an invalid input, a contact too deep)
   const std::uint8_t* flagged = nullptr;
 

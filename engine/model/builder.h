@@ -49,7 +49,7 @@ struct ShapeOptions {
   int priority = 0;  // FrictionRule::Mujoco: the shape of higher priority decides a contact's friction and condim
   int condim = 3;    // MuJoCo's: 1 frictionless, 3 sliding friction, 4 and torsional, 6 and rolling
   Scalar mu_torsion = 0.005, mu_rolling = 0.0001;  // (m) the torsional and rolling friction of condim 4 and 6
-  // MuJoCo's contact softness (model.h, engine/parts/rows.h): solref (0, 0) is a rigid contact (the solver's
+  // MuJoCo's contact softness (model.h, engine/solver/parts/rows.h): solref (0, 0) is a rigid contact (the solver's
   // erp and slop); (time constant > 0, damping ratio > 0) or (-stiffness < 0, -damping <= 0) a soft one. A pair
   // of equal priority mixes its shapes' as MuJoCo does, which leaves it rigid where one of them is
   std::array<Scalar, 2> solref = {0, 0};
@@ -150,7 +150,7 @@ class ModelBuilder {
   int add_mesh(const std::vector<Vec3>& vertices, const std::string& name = "");
   int add_shape_mesh(int body, int mesh, const ShapeOptions& options = {});
 
-  // an actuator on a Revolute or Prismatic joint, MuJoCo's affine one (engine/parts/actuator.h):
+  // an actuator on a Revolute or Prismatic joint, MuJoCo's affine one (engine/solver/parts/actuator.h):
   // force = clamp(gain clamp(ctrl, ctrl range) + bias[0] + bias[1] gear q + bias[2] gear qd, force range),
   // tau = gear force; its position and velocity terms are integrated implicitly
   int add_actuator(int joint, const ActuatorOptions& options = {});

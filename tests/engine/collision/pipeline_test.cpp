@@ -9,7 +9,7 @@
 
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
-#include "engine/parts/rows.h"
+#include "engine/solver/parts/rows.h"
 #include "kernels/convex.h"
 #include "test_support.h"
 #include "test_support_errors.h"

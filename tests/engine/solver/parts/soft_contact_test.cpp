@@ -1,4 +1,4 @@
-// MuJoCo's soft contacts (engine/parts/rows.h contact_softness): the weights they scale by, and where bodies
+// MuJoCo's soft contacts (engine/solver/parts/rows.h contact_softness): the weights they scale by, and where bodies
 // come to rest on them, against MuJoCo 2.2.2 on the same MJCF.
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
-#include "engine/parts/rows.h"
+#include "engine/solver/parts/rows.h"
 #include "solver_test_support.h"
 #include "test_support.h"
 #include "test_support_errors.h"
@@ -113,7 +113,7 @@ TEST(SoftContacts, BodiesRestAtMujocosDepth) {
 }
 
 // spheres each of its own solref, solimp, priority and solmix (more distinct materials than the step tables: each
-// contact's pair made as it is read, engine/parts/rows.h ShapeContacts) rest as deep as in MuJoCo
+// contact's pair made as it is read, engine/solver/parts/rows.h ShapeContacts) rest as deep as in MuJoCo
 TEST(SoftContacts, ManyMaterialsRestAtMujocosDepth) {
   constexpr int kSpheres = 40;
   static_assert(kSpheres + 1 > ShapeContacts::kPairTableMaterials);

@@ -1,4 +1,4 @@
-// The constraint rows of the step, each written once over the number type (engine/parts/number.h) and
+// The constraint rows of the step, each written once over the number type (engine/solver/parts/number.h) and
 // composed by both row builders (the blocks' lanes and the islands of articulations): their targets,
 // warm starts and the impulses kept for the next step. A row drives J qd towards its target; sweeps
 // (kernels/pgs, kernels/batch/pgs) clamp its impulse.
@@ -8,8 +8,8 @@
 #include <cmath>
 
 #include "engine/model/model.h"
-#include "engine/parts/number.h"
-#include "engine/parts/row_params.h"
+#include "engine/solver/parts/number.h"
+#include "engine/solver/parts/row_params.h"
 #include "kernels/batch/pgs.h"
 #include "kernels/pgs.h"
 

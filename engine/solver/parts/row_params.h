@@ -1,4 +1,4 @@
-// What every constraint row reads of the solver's settings (engine/parts/rows.h).
+// What every constraint row reads of the solver's settings (engine/solver/parts/rows.h).
 #pragma once
 
 #include "kernels/pgs.h"
