@@ -2,7 +2,7 @@
 // cholesky, aba, integrate). It steps what the blocks do not: articulations of aba_min_dofs dofs or
 // more (ABA's O(n) factor), every articulation while coriolis_implicitness > 0 (an LU of M + theta dt C)
 // or use_batch_kernels is off, and those without dofs (their bodies' poses). Its rows are the islands'
-// (engine/island_rows.h); the drives, the guard and the wrenches are the parts the blocks use.
+// (engine/solver/islands/rows.h); the drives, the guard and the wrenches are the parts the blocks use.
 #pragma once
 
 #include <Eigen/LU>

@@ -5,7 +5,7 @@
 // Every articulation goes through the same stages (engine/step_route.h), on one of two routes chosen
 // when the solver is made (and again when a setting that decides them changes): SIMD blocks of worlds
 // (engine/articulation_batches.h) or one articulation on the scalar kernels (engine/dense_articulations.h);
-// rows that join articulations are solved as islands (engine/island_rows.h). docs/step.md tells the step.
+// rows that join articulations are solved as islands (engine/solver/islands/rows.h). docs/step.md tells the step.
 #pragma once
 
 #include <array>
@@ -19,9 +19,9 @@
 #include "engine/collision/pipeline.h"
 #include "engine/dense_articulations.h"
 #include "engine/exclusive_call.h"
-#include "engine/island_rows.h"
 #include "engine/model/weld.h"
 #include "engine/parallel.h"
+#include "engine/solver/islands/rows.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver_settings.h"

@@ -1,4 +1,4 @@
-#include "engine/island_rows.h"
+#include "engine/solver/islands/rows.h"
 
 #include <algorithm>
 #include <cmath>
