@@ -1,4 +1,4 @@
-#include "engine/dense_articulations.h"
+#include "engine/solver/dense/dense.h"
 
 #include <algorithm>
 
