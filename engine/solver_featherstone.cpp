@@ -457,8 +457,8 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
   step.split = !island_articulations_.empty();
   if (n == 0 && listed_ == 0) return;  // the lists are empty already
   listed_ = n;
-  // each contact to the unit of the articulation it moves (its units read the rest, engine/batch_rows.cpp), else
-  // to the islands; a contact is owned in order where each owner's contacts follow the one before's, as the
+  // each contact to the unit of the articulation it moves (its units read the rest, engine/solver/blocks/rows.cpp),
+  // else to the islands; a contact is owned in order where each owner's contacts follow the one before's, as the
   // collision pipeline lists a robot's worlds (then the lists are the contacts in order, made in parallel)
   const int threads = std::min(thread_count(), std::max(1, n / kContactsPerThread));
   const bool timed = settings.count_serial_time && threads > 1;  // (on one thread the regions are serial work)

@@ -4,7 +4,7 @@
 //   joint-limit rows through M^-1 J^T -> semi-implicit integration -> forward kinematics
 // Every articulation goes through the same stages (engine/step_route.h), on one of two routes chosen
 // when the solver is made (and again when a setting that decides them changes): SIMD blocks of worlds
-// (engine/articulation_batches.h) or one articulation on the scalar kernels (engine/solver/dense/dense.h);
+// (engine/solver/blocks/blocks.h) or one articulation on the scalar kernels (engine/solver/dense/dense.h);
 // rows that join articulations are solved as islands (engine/solver/islands/rows.h). docs/step.md tells the step.
 #pragma once
 
@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "engine/articulation_batches.h"
 #include "engine/collision/pipeline.h"
 #include "engine/exclusive_call.h"
 #include "engine/model/weld.h"
 #include "engine/parallel.h"
+#include "engine/solver/blocks/blocks.h"
 #include "engine/solver/dense/dense.h"
 #include "engine/solver/islands/rows.h"
 #include "engine/solver/parts/actuator.h"

@@ -1,5 +1,5 @@
 // What one step's stages read and write, and the interface of a route: a way of stepping a set of
-// articulations unit by unit (a SIMD block of worlds, engine/articulation_batches.h, or one articulation
+// articulations unit by unit (a SIMD block of worlds, engine/solver/blocks/blocks.h, or one articulation
 // on the scalar kernels, engine/solver/dense/dense.h). The solver's scheduler runs every unit of every
 // route through the same stages, a unit's stages one after another on one thread (block-major) or each
 // stage over all units before the next (stage-major, for profiling): the same arithmetic either way.

@@ -9,8 +9,8 @@
 #include <string>
 #include <unordered_map>
 
-#include "engine/articulation_batches.h"
 #include "engine/model/error.h"
+#include "engine/solver/blocks/blocks.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/tendon.h"
 #include "kernels/aba.h"

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/articulation_batches.h"
+#include "engine/solver/blocks/blocks.h"
 
 namespace novaphy {
 

@@ -1,10 +1,11 @@
 // The Rows stage of one block: its worlds' joint-limit rows and contact rows (the parts of
 // engine/solver/parts/rows.h in lanes), swept by batch_pgs_solve, the impulses kept for the next step. A lane's
 // absent rows are masked, so a world's result does not depend on its block-mates.
+#include "engine/solver/parts/rows.h"
+
 #include <chrono>
 
-#include "engine/batch_blocks.h"
-#include "engine/solver/parts/rows.h"
+#include "engine/solver/blocks/block_data.h"
 
 namespace novaphy {
 

@@ -1,6 +1,6 @@
 // The Integrate and Store stages of one block: the coordinates stepped, the divergence guard's test
 // (engine/solver/parts/guard.h), and the worlds' new state and body poses and velocities written out.
-#include "engine/batch_blocks.h"
+#include "engine/solver/blocks/block_data.h"
 #include "engine/solver/parts/guard.h"
 #include "kernels/batch/lane_math.h"
 #include "kernels/stream.h"

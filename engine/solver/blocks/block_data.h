@@ -1,13 +1,13 @@
-// Inside the blocks route (engine/articulation_batches.h): a batch's layout in blocks of lanes, a
-// thread's scratch, and the stages of one block, each in its own file (batch_dynamics.cpp,
-// batch_rows.cpp, batch_output.cpp). Not installed for users: the solver and its tests see
+// Inside the blocks route (engine/solver/blocks/blocks.h): a batch's layout in blocks of lanes, a
+// thread's scratch, and the stages of one block, each in its own file (dynamics.cpp,
+// rows.cpp, integrate.cpp). Not installed for users: the solver and its tests see
 // ArticulationBatches.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
-#include "engine/articulation_batches.h"
+#include "engine/solver/blocks/blocks.h"
 #include "kernels/batch.h"
 #include "kernels/batch/lane_math.h"
 #include "kernels/batch/pgs.h"

@@ -2,7 +2,7 @@
 // implicit dampers, springs and drives (engine/solver/parts/drive.h), H and its factor, the unconstrained velocity.
 #include <type_traits>
 
-#include "engine/batch_blocks.h"
+#include "engine/solver/blocks/block_data.h"
 #include "engine/solver/parts/drive.h"
 #include "engine/solver/parts/wrench.h"
 #include "kernels/batch/lane_math.h"

@@ -1,4 +1,4 @@
-#include "engine/articulation_batches.h"
+#include "engine/solver/blocks/blocks.h"
 
 #include <gtest/gtest.h>
 

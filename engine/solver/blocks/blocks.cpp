@@ -1,5 +1,5 @@
-// The blocks route (engine/articulation_batches.h): the batches laid out in blocks of lanes, and each
-// unit (a block) run through the stages of engine/batch_blocks.h on its thread's scratch.
+// The blocks route (engine/solver/blocks/blocks.h): the batches laid out in blocks of lanes, and each
+// unit (a block) run through the stages of engine/solver/blocks/block_data.h on its thread's scratch.
 #include <omp.h>
 
 #include <algorithm>
@@ -8,7 +8,7 @@
 #include <map>
 #include <numeric>
 
-#include "engine/batch_blocks.h"
+#include "engine/solver/blocks/block_data.h"
 #include "engine/solver/parts/rows.h"
 
 namespace novaphy {
