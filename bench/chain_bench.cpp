@@ -5,7 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
 namespace {

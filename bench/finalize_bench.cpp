@@ -8,7 +8,7 @@
 
 #include "engine/collision/pipeline.h"
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "kernels/fk.h"
 #include "kernels/osim.h"
 

@@ -27,7 +27,7 @@
 
 #include "bench/bench_scenes.h"
 #include "engine/import/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "engine/collision/pipeline.h"
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy::solver_test {
 

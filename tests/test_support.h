@@ -5,7 +5,7 @@
 #include <string>
 
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "kernels/convex.h"
 #include "kernels/hull.h"
 

@@ -12,7 +12,7 @@
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
 #include "engine/model/error.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 using namespace novaphy;
 

@@ -37,7 +37,7 @@
 #include "engine/model/builder.h"
 #include "engine/model/error.h"
 #include "engine/model/model.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "tools/mujoco_oracle.h"
 #include "tools/picture.h"
 #include "tools/progress.h"

@@ -6,9 +6,9 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/exclusive_call.h"
 #include "engine/model/error.h"
-#include "engine/parallel.h"
+#include "engine/solver/exclusive_call.h"
+#include "engine/solver/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/lane_transpose.h"
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "engine/model/model.h"
-#include "engine/parallel.h"
+#include "engine/solver/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/convex.h"
 

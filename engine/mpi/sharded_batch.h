@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "engine/mpi/shard.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 int main() {
   using namespace novaphy;

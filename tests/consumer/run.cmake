@@ -23,7 +23,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/pre
 
 # the headers: the engine's and the kernels', the MPI component's where the package has that component
 set(include ${WORK}/prefix/include/novaphy)
-foreach(header engine/model/builder.h engine/import/mjcf_import.h engine/solver_featherstone.h kernels/lanes.h)
+foreach(header engine/model/builder.h engine/import/mjcf_import.h engine/solver/solver_featherstone.h kernels/lanes.h)
   if(NOT EXISTS ${include}/${header})
     message(FATAL_ERROR "the installed package lacks ${header}")
   endif()

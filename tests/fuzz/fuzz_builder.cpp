@@ -6,7 +6,7 @@
 #include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/model/error.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "fuzz_support.h"
 
 using namespace novaphy;

@@ -13,7 +13,7 @@
 #include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/error.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "fuzz_support.h"
 
 using namespace novaphy;

@@ -9,7 +9,7 @@
 #include <memory>
 #include <vector>
 
-#include "engine/step_route.h"
+#include "engine/solver/route.h"
 
 namespace novaphy {
 

@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "engine/step_route.h"
+#include "engine/solver/route.h"
 #include "kernels/pgs.h"
 
 namespace novaphy {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "engine/eval/eval.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "test_support_errors.h"
 
 namespace novaphy {

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "engine/import/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "test_support.h"
 
 namespace novaphy {

@@ -11,7 +11,7 @@
 
 #include "engine/collision/pipeline.h"
 #include "engine/import/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "test_support.h"
 #include "test_support_errors.h"
 #include "tools/mujoco_oracle.h"

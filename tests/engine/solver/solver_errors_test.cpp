@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "engine/eval/eval.h"
-#include "engine/exclusive_call.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/exclusive_call.h"
+#include "engine/solver/solver_featherstone.h"
 #include "solver_test_support.h"
 #include "test_support_errors.h"
 

@@ -1,4 +1,4 @@
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 //   forward kinematics -> RNEA bias forces -> CRBA mass matrix (+ implicit damping, springs and PD
 //   drives) -> its factor -> unconstrained velocity -> sequential-impulse PGS over contact and
 //   joint-limit rows through M^-1 J^T -> semi-implicit integration -> forward kinematics
-// Every articulation goes through the same stages (engine/step_route.h), on one of two routes chosen
+// Every articulation goes through the same stages (engine/solver/route.h), on one of two routes chosen
 // when the solver is made (and again when a setting that decides them changes): SIMD blocks of worlds
 // (engine/solver/blocks/blocks.h) or one articulation on the scalar kernels (engine/solver/dense/dense.h);
 // rows that join articulations are solved as islands (engine/solver/islands/rows.h). docs/step.md tells the step.
@@ -16,15 +16,15 @@
 #include <vector>
 
 #include "engine/collision/pipeline.h"
-#include "engine/exclusive_call.h"
 #include "engine/model/weld.h"
-#include "engine/parallel.h"
 #include "engine/solver/blocks/blocks.h"
 #include "engine/solver/dense/dense.h"
+#include "engine/solver/exclusive_call.h"
 #include "engine/solver/islands/rows.h"
+#include "engine/solver/parallel.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
-#include "engine/solver_settings.h"
+#include "engine/solver/settings.h"
 
 namespace novaphy {
 

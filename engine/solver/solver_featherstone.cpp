@@ -1,4 +1,4 @@
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 #include <omp.h>
 
@@ -12,7 +12,7 @@
 
 #include "engine/eval/eval.h"
 #include "engine/model/error.h"
-#include "engine/parallel.h"
+#include "engine/solver/parallel.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
 #include "kernels/crba.h"

@@ -1,4 +1,4 @@
-#include "engine/solver_settings.h"
+#include "engine/solver/settings.h"
 
 #include <type_traits>
 

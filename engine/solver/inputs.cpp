@@ -10,7 +10,7 @@
 #include "engine/model/error.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/tendon.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
 

@@ -6,7 +6,7 @@
 
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 #include "solver_test_support.h"
 
 namespace novaphy {

@@ -1,4 +1,4 @@
-#include "engine/parallel.h"
+#include "engine/solver/parallel.h"
 
 #include <gtest/gtest.h>
 
