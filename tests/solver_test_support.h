@@ -1,5 +1,6 @@
-// Shared helpers of the SolverFeatherstone tests (solver_*_test.cpp): a finalized scene with its
-// pipeline, contacts, solver, state and control, and the boxes, materials and settings they build on.
+// Shared helpers of the SolverFeatherstone tests (tests/engine/solver/, shapes_test.cpp, soft_contact_test.cpp): a
+// finalized scene with its pipeline, contacts, solver, state and control, and the boxes, materials and settings they
+// build on.
 #pragma once
 
 #include <algorithm>
