@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 #include "kernels/batch.h"
 
 namespace novaphy {

@@ -2,8 +2,8 @@
 // replicated robots' floating bases stand (whether the floor scenes' robots still stand).
 #pragma once
 
-#include "engine/mjcf_import.h"
-#include "engine/model.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/model/model.h"
 
 namespace novaphy {
 

@@ -4,8 +4,8 @@
 // Arguments: links, path (0 ABA, 1 CRBA + Cholesky). items_per_second is link-steps per second.
 #include <benchmark/benchmark.h>
 
-#include "engine/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/model/builder.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
 namespace {

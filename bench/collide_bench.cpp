@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/builder.h"
-#include "engine/collision.h"
+#include "engine/collision/pipeline.h"
+#include "engine/model/builder.h"
 
 namespace novaphy {
 namespace {

@@ -1,6 +1,6 @@
 // Forward dynamics of one robot, NovaPhy's reference kernels beside MuJoCo 2.2.2 on the same MJCF
 // (contacts and limits off): the single-world baseline the batched kernels are measured against.
-// BM_NovaPhyForwardDynamics: the same through ForwardDynamics (engine/dynamics.h: the step's batched kernels, the
+// BM_NovaPhyForwardDynamics: the same through ForwardDynamics (engine/eval/eval.h: the step's batched kernels, the
 // robot alone in a block made once; argument 2: precision, 0 float64, 1 float32), the input checks and the
 // control forces included as mj_forward includes them: what one robot costs on the step's own path.
 //   novaphy_bench_dynamics --benchmark_format=json
@@ -8,8 +8,8 @@
 
 #include <memory>
 
-#include "engine/dynamics.h"
-#include "engine/mjcf_import.h"
+#include "engine/eval/eval.h"
+#include "engine/import/mjcf_import.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"

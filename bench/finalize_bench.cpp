@@ -6,9 +6,9 @@
 // is links (over all worlds) per second.
 #include <benchmark/benchmark.h>
 
-#include "engine/builder.h"
-#include "engine/collision.h"
-#include "engine/solver_featherstone.h"
+#include "engine/collision/pipeline.h"
+#include "engine/model/builder.h"
+#include "engine/solver/solver_featherstone.h"
 #include "kernels/fk.h"
 #include "kernels/osim.h"
 

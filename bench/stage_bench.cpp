@@ -14,9 +14,9 @@
 #include <cmath>
 
 #include "bench/bench_scenes.h"
-#include "engine/mjcf_import.h"
-#include "engine/shard.h"
-#include "engine/solver_featherstone.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/mpi/shard.h"
+#include "engine/solver/solver_featherstone.h"
 #include "tools/robot_grid.h"
 
 namespace novaphy {

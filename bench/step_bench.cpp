@@ -26,8 +26,8 @@
 #include <vector>
 
 #include "bench/bench_scenes.h"
-#include "engine/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
 namespace {

@@ -6,7 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "engine/parallel.h"
+#include "engine/solver/parallel.h"
 
 namespace novaphy::python {
 

@@ -1,5 +1,5 @@
 // RigidBody, JointDofConfig and ModelBuilder with the seed's keyword arguments.
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 
 #include <cmath>
 #include <optional>

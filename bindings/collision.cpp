@@ -1,8 +1,7 @@
 // CollisionPipeline and Contacts: contact arrays are numpy views over the first contact_count entries; a view keeps
 // its Contacts alive, and with it the arrays a growth replaced (Contacts::retired), so an old view never dangles.
-#include "engine/collision.h"
-
 #include "bindings/bindings.h"
+#include "engine/collision/pipeline.h"
 
 namespace novaphy::python {
 

@@ -1,9 +1,8 @@
 // The seed's free functions on lists of Joint/RigidBody, and the same on a Model and State.
 // The GIL is released while the engine computes.
-#include "engine/dynamics.h"
-
 #include "bindings/bindings.h"
-#include "engine/articulation_functions.h"
+#include "engine/eval/articulation_functions.h"
+#include "engine/eval/eval.h"
 
 namespace novaphy::python {
 

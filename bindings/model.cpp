@@ -1,6 +1,6 @@
 // Model, State and Control: every field of the engine's field tables as a numpy view over the
 // engine's buffer (no copy). Model views are read-only; State and Control views are writable.
-#include "engine/model.h"
+#include "engine/model/model.h"
 
 #include <optional>
 

@@ -1,6 +1,6 @@
 // The pybind11 module novaphy._novaphy: thin wrappers over the engine; novaphy.Error -> ValueError.
 #include "bindings/bindings.h"
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 PYBIND11_MODULE(_novaphy, m) {
   namespace py = pybind11;

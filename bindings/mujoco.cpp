@@ -1,12 +1,12 @@
 // A compiled mujoco.MjModel of the user's own MuJoCo (PyPI 3.x or 4.x) read into the import's field view
-// (engine/mujoco_fields.h) and converted by the same converter as add_mjcf; the state maps both ways.
+// (engine/import/mujoco_fields.h) and converted by the same converter as add_mjcf; the state maps both ways.
 #include <algorithm>
 #include <initializer_list>
 #include <optional>
 
 #include "bindings/bindings.h"
-#include "engine/error.h"
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/model/error.h"
 
 namespace novaphy::python {
 

@@ -1,5 +1,5 @@
-// Worlds split into shards (engine/shard.h): the pieces novaphy.mpi builds its sharded batch from.
-#include "engine/shard.h"
+// Worlds split into shards (engine/mpi/shard.h): the pieces novaphy.mpi builds its sharded batch from.
+#include "engine/mpi/shard.h"
 
 #include <pybind11/functional.h>
 

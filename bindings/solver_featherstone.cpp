@@ -1,5 +1,5 @@
 // novaphy.solvers.SolverFeatherstone with the seed's keyword arguments mirrored into solver.settings.
-#include "engine/solver_featherstone.h"
+#include "engine/solver/solver_featherstone.h"
 
 #include <limits>
 #include <sstream>

@@ -4,8 +4,8 @@
 #pragma once
 
 #include "kernels/batch/crba.h"
+#include "kernels/batch/factor.h"
 #include "kernels/batch/fk.h"
 #include "kernels/batch/integrate.h"
-#include "kernels/batch/ltl.h"
 #include "kernels/batch/rnea.h"
 #include "kernels/batch/topology.h"

@@ -4,8 +4,8 @@
 #include <random>
 #include <string>
 
-#include "engine/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/model/builder.h"
+#include "engine/solver/solver_featherstone.h"
 #include "kernels/convex.h"
 #include "kernels/hull.h"
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 #define EXPECT_NOVAPHY_ERROR(statement, text)                                                    \
   do {                                                                                           \

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/error.h"
-#include "engine/sharded_batch.h"
+#include "engine/model/error.h"
+#include "engine/mpi/sharded_batch.h"
 #include "tools/progress.h"
 #include "tools/robot_grid.h"
 

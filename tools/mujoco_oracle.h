@@ -7,7 +7,7 @@
 #include <random>
 #include <string>
 
-#include "engine/mjcf_import.h"
+#include "engine/import/mjcf_import.h"
 
 namespace novaphy {
 

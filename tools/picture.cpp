@@ -9,7 +9,7 @@
 #include <limits>
 #include <utility>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 
 namespace novaphy {
 namespace {

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "engine/builder.h"
-#include "engine/collision.h"
-#include "engine/error.h"
-#include "engine/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/collision/pipeline.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/model/builder.h"
+#include "engine/model/error.h"
+#include "engine/solver/solver_featherstone.h"
 
 using namespace novaphy;
 

@@ -6,8 +6,8 @@
 
 #include <string>
 
-#include "engine/mjcf_import.h"
-#include "engine/shard.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/mpi/shard.h"
 
 namespace novaphy {
 

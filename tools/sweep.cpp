@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/dynamics.h"
-#include "engine/error.h"
-#include "engine/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/eval/eval.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/model/error.h"
+#include "engine/solver/solver_featherstone.h"
 #include "tools/progress.h"
 #include "tools/robot_grid.h"
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/error.h"
+#include "engine/model/error.h"
 #include "tools/mujoco_oracle.h"
 
 int main(int argc, char** argv) {

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "engine/builder.h"
-#include "engine/solver_featherstone.h"
+#include "engine/model/builder.h"
+#include "engine/solver/solver_featherstone.h"
 
 int main() {
   using namespace novaphy;

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "engine/sharded_batch.h"
+#include "engine/mpi/sharded_batch.h"
 
 int main(int argc, char** argv) {
   using namespace novaphy;

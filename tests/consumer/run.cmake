@@ -23,7 +23,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD} --prefix ${WORK}/pre
 
 # the headers: the engine's and the kernels', the MPI component's where the package has that component
 set(include ${WORK}/prefix/include/novaphy)
-foreach(header engine/builder.h engine/mjcf_import.h engine/solver_featherstone.h kernels/lanes.h)
+foreach(header engine/model/builder.h engine/import/mjcf_import.h engine/solver/solver_featherstone.h kernels/lanes.h)
   if(NOT EXISTS ${include}/${header})
     message(FATAL_ERROR "the installed package lacks ${header}")
   endif()
@@ -31,10 +31,10 @@ endforeach()
 file(GLOB_RECURSE targets_files ${WORK}/prefix/*/novaphyTargets.cmake)
 file(READ "${targets_files}" targets)
 string(FIND "${targets}" "novaphy::mpi" has_mpi)
-if((has_mpi GREATER -1) AND NOT EXISTS ${include}/engine/sharded_batch.h)
-  message(FATAL_ERROR "the installed package has novaphy::mpi but not engine/sharded_batch.h")
-elseif((has_mpi EQUAL -1) AND EXISTS ${include}/engine/sharded_batch.h)
-  message(FATAL_ERROR "the installed package has engine/sharded_batch.h but not novaphy::mpi")
+if((has_mpi GREATER -1) AND NOT EXISTS ${include}/engine/mpi/sharded_batch.h)
+  message(FATAL_ERROR "the installed package has novaphy::mpi but not engine/mpi/sharded_batch.h")
+elseif((has_mpi EQUAL -1) AND EXISTS ${include}/engine/mpi/sharded_batch.h)
+  message(FATAL_ERROR "the installed package has engine/mpi/sharded_batch.h but not novaphy::mpi")
 endif()
 
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE}/tests/consumer -B ${WORK}/build

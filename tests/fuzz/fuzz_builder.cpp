@@ -3,10 +3,10 @@
 // a sanitizer report or any other exception is a finding.
 #include <cstdint>
 
-#include "engine/builder.h"
-#include "engine/dynamics.h"
-#include "engine/error.h"
-#include "engine/solver_featherstone.h"
+#include "engine/eval/eval.h"
+#include "engine/model/builder.h"
+#include "engine/model/error.h"
+#include "engine/solver/solver_featherstone.h"
 #include "fuzz_support.h"
 
 using namespace novaphy;

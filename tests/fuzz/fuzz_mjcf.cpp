@@ -10,10 +10,10 @@
 #include <sstream>
 #include <string>
 
-#include "engine/dynamics.h"
-#include "engine/error.h"
-#include "engine/mjcf_import.h"
-#include "engine/solver_featherstone.h"
+#include "engine/eval/eval.h"
+#include "engine/import/mjcf_import.h"
+#include "engine/model/error.h"
+#include "engine/solver/solver_featherstone.h"
 #include "fuzz_support.h"
 
 using namespace novaphy;

@@ -4,7 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "test_support.h"
 
 namespace novaphy {

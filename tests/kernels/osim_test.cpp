@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "engine/builder.h"
+#include "engine/model/builder.h"
 #include "kernels/fk.h"
 #include "test_support.h"
 

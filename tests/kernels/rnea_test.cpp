@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/dynamics.h"
+#include "engine/eval/eval.h"
 #include "kernels/fk.h"
 #include "test_support.h"
 

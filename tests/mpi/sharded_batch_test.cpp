@@ -1,7 +1,7 @@
 // ShardedBatch under mpirun -np 2 (ctest runs it so): sharded worlds step bit-identically to the
 // same worlds in one process, per-world arrays travel between ranks, and an error on one rank is
 // raised on every rank without a hang.
-#include "engine/sharded_batch.h"
+#include "engine/mpi/sharded_batch.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>

@@ -1,0 +1,555 @@
+#include "engine/import/mjcf_import.h"
+
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+
+#include "engine/import/mjcf_translate.h"
+#include "engine/import/mujoco_fields.h"
+#include "engine/model/error.h"
+
+namespace novaphy {
+
+namespace {
+
+Vec3 vec3(const mjtNum* x) { return Vec3(x[0], x[1], x[2]); }
+Quat quat_wxyz(const mjtNum* x) { return Quat(x[0], x[1], x[2], x[3]); }
+Transform pose(const mjtNum* pos, const mjtNum* quat_wxyz_) {
+  Transform T;
+  T.p = vec3(pos);
+  T.q = quat_wxyz(quat_wxyz_).normalized();
+  return T;
+}
+
+// MuJoCo capsules and plane normals run along local Z, NovaPhy's along local Y: rotate Y onto Z
+Transform y_to_z() {
+  Transform T;
+  T.q = Quat(Eigen::AngleAxis<Scalar>(M_PI / 2, Vec3::UnitX()));
+  return T;
+}
+
+}  // namespace
+
+class MjcfImporter {
+ public:
+  MjcfImporter(ModelBuilder& builder, const MujocoFields& m, const ImportOptions& options)
+      : builder_(builder), m_(m), options_(options) {
+    static_pose_.assign(m_.nbody, options.xform);
+  }
+
+  MujocoImport run() {
+    out_.body_map.assign(m_.nbody, -1);
+    out_.nq = m_.nq;
+    out_.nv = m_.nv;
+    for (int j = 0; j < m_.njnt; ++j) out_.joints.push_back({m_.jnt_type[j], m_.jnt_qposadr[j], m_.jnt_dofadr[j]});
+    for (const auto& joint : builder_.joints_) {
+      out_.q_begin += joint_coord_count(joint.type);
+      out_.qd_begin += joint_dof_count(joint.type);
+    }
+    joint_index_.assign(m_.njnt, -1);
+    const int joint0 = builder_.joint_count();
+    builder_.take_gravity(vec3(m_.gravity), "the file's");
+    builder_.take_timestep(m_.timestep);
+    for (int b = 1; b < m_.nbody; ++b) add_body(b);
+    builder_.set_collision_filter(CollisionFilter::Mujoco);
+    builder_.set_friction_rule(FrictionRule::Mujoco);
+    builder_.set_impratio(m_.impratio);
+    geom_shape_.assign(m_.ngeom, -1);
+    for (int g = 0; g < m_.ngeom; ++g) add_geom(g);
+    add_exclusions();
+    tendon_index_.assign(m_.ntendon, -1);
+    for (int t = 0; t < m_.ntendon; ++t) add_tendon(t);
+    out_.actuator_map.assign(m_.nu, -1);
+    const int actuator0 = builder_.actuator_count();
+    for (int u = 0; u < m_.nu; ++u) add_actuator(u);
+    for (int k = 0; k < m_.nkey; ++k) add_keyframe(k, joint0, actuator0);
+    for (int e = 0; e < m_.neq; ++e) add_equality(e);
+    report_unmodelled();
+    return out_;
+  }
+
+ private:
+  bool is_static(int b) const { return b == 0 || out_.body_map[b] < 0; }
+
+  void add_body(int b) {
+    const int p = m_.body_parentid[b];
+    const Transform B = pose(m_.body_pos + 3 * b, m_.body_quat + 4 * b);
+    const std::string name = m_.name(MjKind::Body, b);
+    const RigidBody body = body_inertial(b);
+    const int jnt_count = m_.body_jntnum[b];
+
+    if (jnt_count == 0) {
+      add_welded_body(b, B, body, name);
+      return;
+    }
+
+    // one link per joint; the body frame moves through them (MuJoCo's mj_kinematics order)
+    int parent = out_.body_map[p];
+    const Transform P = is_static(p) ? static_pose_[p] * B : B;
+    for (int k = 0; k < jnt_count; ++k) {
+      const int j = m_.body_jntadr[b] + k;
+      const bool last = k == jnt_count - 1;
+      const std::string joint_name = m_.name(MjKind::Joint, j);
+      JointOptions options = joint_options(j, joint_name);
+      Transform body_xform = Transform::identity();
+      const JointType type = joint_frames(j, k, P, joint_name, options, body_xform);
+
+      RigidBody link = body;
+      if (!last) link = RigidBody{0, Vec3::Zero(), Mat3::Zero()};
+      const std::string link_name = last ? name : name + "/" + joint_name;
+      const int child = builder_.add_body_checked(link, body_xform, link_name, true);
+      joint_index_[j] = builder_.add_joint(type, parent, child, options);
+      parent = child;
+    }
+    out_.body_map[b] = parent;
+  }
+
+  // body b's mass, centre of mass and inertia in its body frame
+  RigidBody body_inertial(int b) const {
+    RigidBody body;
+    body.mass = m_.body_mass[b];
+    body.com = vec3(m_.body_ipos + 3 * b);
+    const Mat3 R = quat_wxyz(m_.body_iquat + 4 * b).normalized().toRotationMatrix();
+    body.inertia = R * vec3(m_.body_inertia + 3 * b).asDiagonal() * R.transpose();
+    return body;
+  }
+
+  // a body without joints (at B in its parent): static geometry where its parent is static, else a
+  // link on a Fixed joint to its parent
+  void add_welded_body(int b, const Transform& B, const RigidBody& body, const std::string& name) {
+    const int p = m_.body_parentid[b];
+    if (is_static(p)) {
+      static_pose_[b] = static_pose_[p] * B;
+      return;
+    }
+    const int child = builder_.add_body_checked(body, Transform::identity(), name, true);
+    JointOptions options;
+    options.parent_xform = B;
+    options.name = name + "_weld";
+    builder_.add_joint(JointType::Fixed, out_.body_map[p], child, options);
+    out_.body_map[b] = child;
+  }
+
+  // joint j's name, axis, armature, damping and (hinge and slide) limits
+  JointOptions joint_options(int j, const std::string& joint_name) const {
+    const int da = m_.jnt_dofadr[j];
+    JointOptions options;
+    options.name = joint_name;
+    JointDofConfig& dof = options.dof;
+    dof.axis = vec3(m_.jnt_axis + 3 * j);
+    dof.armature = m_.dof_armature[da];
+    dof.damping = m_.dof_damping[da];
+    dof.frictionloss = m_.dof_frictionloss[da];
+    if (m_.jnt_limited[j] && (m_.jnt_type[j] == mjJNT_HINGE || m_.jnt_type[j] == mjJNT_SLIDE)) {
+      dof.limit_lower = m_.jnt_range[2 * j];
+      dof.limit_upper = m_.jnt_range[2 * j + 1];
+    }
+    return options;
+  }
+
+  // joint j's type, its frames (the k-th joint of a body whose frame is P in its parent) and a Free
+  // joint's initial pose; warns of what it does not model
+  JointType joint_frames(int j, int k, const Transform& P, const std::string& joint_name, JointOptions& options,
+                         Transform& body_xform) {
+    const Vec3 anchor = vec3(m_.jnt_pos + 3 * j);
+    const int qa = m_.jnt_qposadr[j];
+    JointDofConfig& dof = options.dof;
+    JointType type = JointType::Fixed;
+    switch (m_.jnt_type[j]) {
+      case mjJNT_HINGE:
+      case mjJNT_SLIDE: {
+        const bool hinge = m_.jnt_type[j] == mjJNT_HINGE;
+        type = hinge ? JointType::Revolute : JointType::Prismatic;
+        dof.stiffness = m_.jnt_stiffness[j];
+        dof.q_ref = m_.qpos_spring[qa];
+        dof.q0 = m_.qpos0[qa];  // MuJoCo starts at qpos0 (a joint's ref)
+        // MuJoCo moves the joint by qpos - qpos0: fold -qpos0 into the parent joint frame
+        Transform ref;
+        const Vec3 axis = dof.axis.normalized();
+        if (hinge)
+          ref.q = Quat(Eigen::AngleAxis<Scalar>(-m_.qpos0[qa], axis));
+        else
+          ref.p = -m_.qpos0[qa] * axis;
+        options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor} * ref;
+        options.child_xform = Transform{anchor};
+        break;
+      }
+      case mjJNT_BALL:
+        type = JointType::Ball;
+        options.parent_xform = (k == 0 ? P : Transform::identity()) * Transform{anchor};
+        options.child_xform = Transform{anchor};
+        if (m_.jnt_limited[j]) warn_motion("joint '" + joint_name + "': ball joint limit (cone) is not modelled");
+        if (m_.jnt_stiffness[j] != 0) warn_motion("joint '" + joint_name + "': ball joint stiffness is not modelled");
+        break;
+      case mjJNT_FREE:
+        // a free joint places the body frame directly at qpos (MuJoCo ignores its pos)
+        type = JointType::Free;
+        body_xform = static_pose_[0] * pose(m_.qpos0 + qa, m_.qpos0 + qa + 3);
+        if (m_.jnt_stiffness[j] != 0) warn_motion("joint '" + joint_name + "': free joint stiffness is not modelled");
+        break;
+    }
+    return type;
+  }
+
+  // geom g as a shape of its body (or static), filtered by its contype and conaffinity (MuJoCo's rule); a
+  // geom of a type NovaPhy does not collide is reported unless it is visual only (both zero)
+  void add_geom(int g) {
+    const int b = m_.geom_bodyid[g];
+    const int body = out_.body_map[b];
+    if (body < 0 && !options_.static_shapes) return;
+    Transform G = pose(m_.geom_pos + 3 * g, m_.geom_quat + 4 * g);
+    if (body < 0) G = static_pose_[b] * G;
+    const mjtNum* size = m_.geom_size + 3 * g;
+    ShapeOptions options;
+    options.xform = G;
+    options.mu = m_.geom_friction[3 * g];
+    options.mu_torsion = m_.geom_friction[3 * g + 1];
+    options.mu_rolling = m_.geom_friction[3 * g + 2];
+    options.collision_group = m_.geom_contype[g];
+    options.collision_mask = m_.geom_conaffinity[g];
+    options.priority = m_.geom_priority[g];
+    options.condim = m_.geom_condim[g];
+    options.name = m_.name(MjKind::Geom, g);
+    std::copy_n(m_.geom_solref + mjNREF * g, 2, options.solref.begin());
+    std::copy_n(m_.geom_solimp + mjNIMP * g, 5, options.solimp.begin());
+    options.solmix = m_.geom_solmix[g];
+    options.margin = m_.geom_margin[g];
+    options.gap = m_.geom_gap[g];
+    ShapeOptions along_z = options;  // capsules and plane normals: MuJoCo's Z onto NovaPhy's Y
+    along_z.xform = G * y_to_z();
+    switch (m_.geom_type[g]) {
+      case mjGEOM_PLANE: geom_shape_[g] = builder_.add_shape(ShapeType::Plane, body, Vec3::Ones(), along_z); break;
+      case mjGEOM_SPHERE: geom_shape_[g] = builder_.add_shape_sphere(body, size[0], options); break;
+      case mjGEOM_CAPSULE: geom_shape_[g] = builder_.add_shape_capsule(body, size[0], size[1], along_z); break;
+      case mjGEOM_BOX: geom_shape_[g] = builder_.add_shape_box(body, vec3(size), options); break;
+      case mjGEOM_CYLINDER: geom_shape_[g] = builder_.add_shape_cylinder(body, size[0], size[1], along_z); break;
+      case mjGEOM_ELLIPSOID: geom_shape_[g] = builder_.add_shape_ellipsoid(body, vec3(size), options); break;
+      case mjGEOM_MESH:  // (a visual mesh is left out: only its mass counts)
+        if (options.collision_group != 0 || options.collision_mask != 0)
+          geom_shape_[g] = builder_.add_shape_mesh(body, mesh(g), options);
+        break;
+      default:
+        if (m_.geom_contype[g] != 0 || m_.geom_conaffinity[g] != 0)
+          warn_motion("geom '" + m_.name(MjKind::Geom, g) + "' of type " + std::to_string(m_.geom_type[g]) +
+                      (m_.geom_type[g] == mjGEOM_HFIELD ? " (height field)" : " (MuJoCo >= 3's SDF or later)") +
+                      " is not modelled for collision; its mass is kept");
+    }
+  }
+
+  // geom g's mesh as a builder mesh (each MuJoCo mesh once); its vertices are in the geom's frame
+  int mesh(int g) {
+    const int id = m_.geom_dataid[g];
+    if (const auto it = mesh_index_.find(id); it != mesh_index_.end()) return it->second;
+    std::vector<Vec3> vertices(m_.mesh_vertnum[id]);
+    const float* v = m_.mesh_vert + 3 * static_cast<size_t>(m_.mesh_vertadr[id]);
+    for (Vec3& x : vertices) x = Vec3(v[0], v[1], v[2]), v += 3;
+    const std::string name = "geom '" + m_.name(MjKind::Geom, g) + "' (mesh '" + m_.name(MjKind::Mesh, id) + "')";
+    return mesh_index_[id] = builder_.add_mesh(vertices, name);
+  }
+
+  // MuJoCo's <exclude> body pairs as pairs of their geoms' shapes
+  void add_exclusions() {
+    for (int e = 0; e < m_.nexclude; ++e) {
+      const int body1 = (m_.exclude_signature[e] >> 16) - m_.exclude_body_offset;
+      const int body2 = (m_.exclude_signature[e] & 0xffff) - m_.exclude_body_offset;
+      for (int a = 0; a < m_.ngeom; ++a)
+        for (int b = 0; b < m_.ngeom; ++b)
+          if (m_.geom_bodyid[a] == body1 && m_.geom_bodyid[b] == body2 && geom_shape_[a] >= 0 && geom_shape_[b] >= 0)
+            builder_.exclude_shapes(geom_shape_[a], geom_shape_[b]);
+    }
+  }
+
+  // a fixed tendon over hinges and slides (model.h); a spatial one, or one over other joints, is reported
+  void add_tendon(int t) {
+    const std::string name = m_.name(MjKind::Tendon, t);
+    std::vector<int> joints;
+    std::vector<Scalar> coefs;
+    for (int w = m_.tendon_adr[t]; w < m_.tendon_adr[t] + m_.tendon_num[t]; ++w) {
+      const int j = m_.wrap_objid[w];
+      if (m_.wrap_type[w] != mjWRAP_JOINT || (m_.jnt_type[j] != mjJNT_HINGE && m_.jnt_type[j] != mjJNT_SLIDE)) {
+        warn_motion("tendon '" + name +
+                    "' is spatial or spans a ball or free joint (fixed tendons over hinges and "
+                    "slides only): not modelled");
+        return;
+      }
+      joints.push_back(joint_index_[j]);
+      coefs.push_back(m_.wrap_prm[w]);
+    }
+    if (m_.tendon_frictionloss[t] != 0) warn_motion("tendon '" + name + "': frictionloss is not modelled");
+    TendonOptions options;
+    options.stiffness = m_.tendon_stiffness[t];
+    options.damping = m_.tendon_damping[t];
+    const double* spring = m_.tendon_lengthspring + m_.tendon_lengthspring_width * t;
+    if (m_.tendon_lengthspring_width == 2 && spring[1] != spring[0] && m_.tendon_stiffness[t] != 0)
+      warn_motion("tendon '" + name + "': a spring of a dead band (springlength, two values) is not modelled");
+    options.rest_length = spring[0];
+    if (m_.tendon_armature && m_.tendon_armature[t] != 0)
+      warn_motion("tendon '" + name + "': armature is not modelled");
+    if (m_.tendon_limited[t]) {
+      options.limit_lower = m_.tendon_range[2 * t];
+      options.limit_upper = m_.tendon_range[2 * t + 1];
+    }
+    options.name = name;
+    tendon_index_[t] = builder_.add_tendon(joints, coefs, options);
+  }
+
+  // MuJoCo's affine actuators (motor, position, velocity, general of fixed gain and affine or no bias) on a
+  // hinge, slide or fixed tendon without activation dynamics (engine/solver/parts/actuator.h); any other is reported
+  void add_actuator(int u) {
+    const std::string name = m_.name(MjKind::Actuator, u);
+    const std::string unsupported = unsupported_actuator(u);
+    if (!unsupported.empty()) {
+      warn_motion("actuator '" + name + "' " + unsupported + ": not modelled");
+      return;
+    }
+    constexpr Scalar inf = std::numeric_limits<Scalar>::infinity();
+    const bool ctrl_limited = m_.actuator_ctrllimited[u] && m_.clamp_ctrl;
+    const bool force_limited = m_.actuator_forcelimited[u];
+    ActuatorOptions a;
+    a.gear = m_.actuator_gear[6 * u];
+    a.gain = m_.actuator_gainprm[mjNGAIN * u];
+    if (m_.actuator_biastype[u] == mjBIAS_AFFINE) a.bias = vec3(m_.actuator_biasprm + mjNBIAS * u);
+    a.ctrl_lower = ctrl_limited ? m_.actuator_ctrlrange[2 * u] : -inf;
+    a.ctrl_upper = ctrl_limited ? m_.actuator_ctrlrange[2 * u + 1] : inf;
+    a.force_lower = force_limited ? m_.actuator_forcerange[2 * u] : -inf;
+    a.force_upper = force_limited ? m_.actuator_forcerange[2 * u + 1] : inf;
+    joint_force_range(u, name, a);
+    if (m_.actuator_damping && m_.actuator_damping[u] != 0)
+      warn_motion("actuator '" + name + "': damping is not modelled");
+    if (m_.actuator_armature && m_.actuator_armature[u] != 0)
+      warn_motion("actuator '" + name + "': armature is not modelled");
+    a.name = name;
+    const int target = m_.actuator_trnid[2 * u];
+    out_.actuator_map[u] = m_.actuator_trntype[u] == mjTRN_TENDON
+                               ? builder_.add_tendon_actuator(tendon_index_[target], a)
+                               : builder_.add_actuator(joint_index_[target], a);
+  }
+
+  // MuJoCo >= 3's limit on the total actuator force of the joint actuator u drives (jnt_actfrcrange), as the
+  // translation gives it to 2.2.2 (engine/import/mjcf_translate.h): the force range of the joint's one actuator
+  void joint_force_range(int u, const std::string& name, ActuatorOptions& a) const {
+    if (!m_.jnt_actfrclimited || m_.actuator_trntype[u] != mjTRN_JOINT) return;
+    const int j = m_.actuator_trnid[2 * u];
+    if (!m_.jnt_actfrclimited[j]) return;
+    for (int v = 0; v < m_.nu; ++v)
+      if (v != u && m_.actuator_trntype[v] == mjTRN_JOINT && m_.actuator_trnid[2 * v] == j)
+        fail("actuator '", name, "': joint '", m_.name(MjKind::Joint, j),
+             "' limits the force of its several actuators together (actuatorfrcrange): not modelled");
+    narrow_force_range(m_.jnt_actfrcrange[2 * j], m_.jnt_actfrcrange[2 * j + 1], a.gear, &a.force_lower,
+                       &a.force_upper);
+  }
+
+  // keyframe k over the joints and actuators this import added (from joint0 and actuator0): qpos and qvel
+  // in NovaPhy's coordinates, the commands of the actuators imported
+  void add_keyframe(int k, int joint0, int actuator0) {
+    std::vector<Scalar> q(out_.q_begin + m_.nq), qd(out_.qd_begin + m_.nv);
+    out_.to_joint_q(m_.key_qpos + k * m_.nq, q.data());
+    out_.to_joint_qd(m_.key_qpos + k * m_.nq, m_.key_qvel + k * m_.nv, qd.data());
+    std::vector<Scalar> ctrl(builder_.actuator_count() - actuator0);
+    for (int u = 0; u < m_.nu; ++u)
+      if (out_.actuator_map[u] >= 0) ctrl[out_.actuator_map[u] - actuator0] = m_.key_ctrl[k * m_.nu + u];
+    builder_.keyframes_.push_back({m_.name(MjKind::Key, k), joint0, builder_.joint_count(), actuator0,
+                                   std::vector<Scalar>(q.begin() + out_.q_begin, q.end()),
+                                   std::vector<Scalar>(qd.begin() + out_.qd_begin, qd.end()), ctrl});
+  }
+
+  // why actuator u is not one NovaPhy models ("" when it is)
+  std::string unsupported_actuator(int u) const {
+    const int target = m_.actuator_trnid[2 * u];
+    if (m_.actuator_trntype[u] == mjTRN_TENDON) {
+      if (tendon_index_[target] < 0) return "drives tendon '" + m_.name(MjKind::Tendon, target) + "', not modelled";
+    } else if (m_.actuator_trntype[u] != mjTRN_JOINT) {
+      return "drives a site or body (joints and fixed tendons only are modelled)";
+    } else if (m_.jnt_type[target] != mjJNT_HINGE && m_.jnt_type[target] != mjJNT_SLIDE) {
+      return "drives a ball or free joint (hinges and slides only)";
+    }
+    if (m_.actuator_dyntype[u] != mjDYN_NONE) return "has activation dynamics (dyntype)";
+    if (m_.actuator_gaintype[u] != mjGAIN_FIXED) return "has a gain that is not fixed (gaintype)";
+    if (m_.actuator_biastype[u] != mjBIAS_NONE && m_.actuator_biastype[u] != mjBIAS_AFFINE)
+      return "has a bias that is not affine (biastype)";
+    return "";
+  }
+
+  // MuJoCo's connect, weld and joint equalities, the active ones (model.h); tendon and distance are reported
+  void add_equality(int e) {
+    const std::string name = m_.name(MjKind::Equality, e);
+    const mjtNum* data = m_.eq_data + m_.eq_data_width * e;
+    if (!m_.eq_active[e]) return;
+    const int id1 = m_.eq_obj1id[e], id2 = m_.eq_obj2id[e];
+    if (m_.eq_objtype && (m_.eq_type[e] == mjEQ_CONNECT || m_.eq_type[e] == mjEQ_WELD) &&
+        m_.eq_objtype[e] != mjOBJ_BODY) {
+      warn_motion("equality constraint '" + name + "' joins sites (bodies only are modelled): not modelled");
+      return;
+    }
+    switch (m_.eq_type[e]) {
+      case mjEQ_CONNECT: {
+        // a body welded to the world is the world, its anchor moved into the world frame
+        Vec3 anchor[2] = {vec3(data), vec3(data + 3)};
+        int body[2] = {id1, id2 < 0 ? 0 : id2};
+        for (int k = 0; k < 2; ++k)
+          if (is_static(body[k])) {
+            anchor[k] = static_pose_[body[k]].apply(anchor[k]);
+            body[k] = -1;
+          } else {
+            body[k] = out_.body_map[body[k]];
+          }
+        if (body[0] < 0) {
+          std::swap(body[0], body[1]);
+          std::swap(anchor[0], anchor[1]);
+        }
+        if (body[0] < 0) return;  // two static bodies: nothing moves
+        builder_.add_connect(body[0], body[1], anchor[0], name, anchor[1]);
+        break;
+      }
+      case mjEQ_JOINT: {
+        std::array<Scalar, 5> poly;
+        std::copy_n(data, 5, poly.begin());
+        builder_.add_joint_coupling(joint_index_[id1], id2 < 0 ? -1 : joint_index_[id2], poly, name);
+        break;
+      }
+      case mjEQ_WELD: add_weld(e, name); break;
+      default: warn_motion("equality constraint '" + name + "' (tendon or distance) is not modelled");
+    }
+  }
+
+  // a weld: MuJoCo's data hold body2's anchor (its frame), that anchor in body1's frame and body2's orientation
+  // in body1's; a body welded to the world stands for the world, the held pose moved accordingly
+  void add_weld(int e, const std::string& name) {
+    const mjtNum* data = m_.eq_data + m_.eq_data_width * e;
+    if (data[10] == 0) {
+      warn_motion("equality constraint '" + name + "': a weld of torquescale 0 is not modelled");
+      return;
+    }
+    const int id1 = m_.eq_obj1id[e], id2 = m_.eq_obj2id[e] < 0 ? 0 : m_.eq_obj2id[e];
+    Transform relative;
+    relative.q = quat_wxyz(data + 6).normalized();
+    relative.p = vec3(data + 3) - relative.q * vec3(data);
+    Vec3 anchor = vec3(data);
+    if (is_static(id1)) relative = static_pose_[id1] * relative;
+    if (is_static(id2)) {
+      relative = relative * static_pose_[id2].inverse();
+      anchor = static_pose_[id2].apply(anchor);
+    }
+    const int body1 = is_static(id1) ? -1 : out_.body_map[id1], body2 = is_static(id2) ? -1 : out_.body_map[id2];
+    if (body1 < 0 && body2 < 0) return;  // two static bodies: nothing moves
+    builder_.add_weld(body1, body2, name, anchor, relative);
+  }
+
+  // what the import left out that changes the motion (sensors, cameras and lights do not)
+  void report_unmodelled() {
+    for (int b = 0; b < m_.nbody && m_.body_gravcomp; ++b)
+      if (m_.body_gravcomp[b] != 0)
+        warn_motion("body '" + m_.name(MjKind::Body, b) + "': gravity compensation (gravcomp) is not modelled");
+    if (m_.nflex > 0) warn_motion(std::to_string(m_.nflex) + " flex object(s) (deformables) are not modelled");
+    if (m_.nplugin > 0) warn_motion(std::to_string(m_.nplugin) + " engine plugin instance(s) are not modelled");
+    if (m_.npair > 0) warn_motion(std::to_string(m_.npair) + " explicit contact pair(s) are not modelled");
+    if (m_.density != 0 || m_.viscosity != 0) warn_motion("fluid forces (density, viscosity) are not modelled");
+  }
+
+  // a report entry for something left out that changes the motion
+  void warn_motion(const std::string& message) { out_.warnings.push_back(message + " (affects motion)"); }
+
+  ModelBuilder& builder_;
+  const MujocoFields& m_;
+  ImportOptions options_;
+  MujocoImport out_;
+  std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
+  std::vector<int> joint_index_;        // MuJoCo joint -> NovaPhy joint
+  std::vector<int> geom_shape_;         // MuJoCo geom -> NovaPhy shape (-1: none)
+  std::map<int, int> mesh_index_;       // MuJoCo mesh -> builder mesh
+  std::vector<int> tendon_index_;       // MuJoCo tendon -> NovaPhy tendon (-1: not modelled)
+};
+
+mjModel* load_mujoco_model(const std::string& path) {
+  if (!std::filesystem::exists(path)) fail("cannot load '", path, "': file does not exist");
+  char error[1024] = "";
+  // MJCF of MuJoCo >= 3 translated for 2.2.2's parser (engine/import/mjcf_translate.h); URDF as it is
+  const bool urdf = std::filesystem::path(path).extension() == ".urdf";
+  if (urdf) check_urdf(path);
+  const TranslatedMjcf translated = urdf ? TranslatedMjcf{} : translate_mjcf(path);
+  mjModel* m = mj_loadXML(path.c_str(), translated.vfs.get(), error, sizeof(error));
+  if (m == nullptr) fail("cannot load '", path, "': ", error);
+  try {
+    apply_translation(m, translated);
+  } catch (const Error& e) {
+    mj_deleteModel(m);
+    fail("cannot load '", path, "': ", e.what());
+  }
+  return m;
+}
+
+MujocoImport import_mujoco_fields(ModelBuilder& builder, const MujocoFields& m, const ImportOptions& options) {
+  check_mujoco_fields(m);
+  return MjcfImporter(builder, m, options).run();
+}
+
+MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m, const ImportOptions& options) {
+  return import_mujoco_fields(builder, mujoco_fields(m), options);
+}
+
+MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path, const ImportOptions& options) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
+  return import_mujoco_model(builder, m.get(), options);
+}
+
+std::vector<std::string> ModelBuilder::add_mjcf(const std::string& path, const ImportOptions& options) {
+  return import_mjcf(*this, path, options).warnings;
+}
+
+void MujocoImport::to_joint_q(const mjtNum* qpos, Scalar* joint_q) const {
+  Scalar* q = joint_q + q_begin;
+  for (const MujocoJoint& j : joints) {
+    const int a = j.qposadr;
+    switch (j.type) {
+      case mjJNT_HINGE:
+      case mjJNT_SLIDE: q[a] = qpos[a]; break;
+      case mjJNT_BALL: q[a] = qpos[a + 1], q[a + 1] = qpos[a + 2], q[a + 2] = qpos[a + 3], q[a + 3] = qpos[a]; break;
+      case mjJNT_FREE: pose(qpos + a, qpos + a + 3).to_array(q + a); break;
+    }
+  }
+}
+
+void MujocoImport::to_qpos(const Scalar* joint_q, mjtNum* qpos) const {
+  const Scalar* q = joint_q + q_begin;
+  for (const MujocoJoint& j : joints) {
+    const int a = j.qposadr;
+    switch (j.type) {
+      case mjJNT_HINGE:
+      case mjJNT_SLIDE: qpos[a] = q[a]; break;
+      case mjJNT_BALL:  // NovaPhy [x y z w], MuJoCo [w x y z]; Free: position, then the same
+      case mjJNT_FREE: {
+        const int p = j.type == mjJNT_FREE ? 3 : 0;
+        std::copy_n(q + a, p, qpos + a);
+        qpos[a + p] = q[a + p + 3];
+        std::copy_n(q + a + p, 3, qpos + a + p + 1);
+        break;
+      }
+    }
+  }
+}
+
+void MujocoImport::to_joint_qd(const mjtNum* qpos, const mjtNum* qvel, Scalar* joint_qd) const {
+  Eigen::Map<VecX>(joint_qd + qd_begin, nv) = velocity_map(qpos) * Eigen::Map<const VecX>(qvel, nv);
+}
+
+void MujocoImport::to_qvel(const mjtNum* qpos, const Scalar* joint_qd, mjtNum* qvel) const {
+  // the map's inverse is its transpose: each free joint's block is orthogonal
+  Eigen::Map<VecX>(qvel, nv) = velocity_map(qpos).transpose() * Eigen::Map<const VecX>(joint_qd + qd_begin, nv);
+}
+
+MatX MujocoImport::velocity_map(const mjtNum* qpos) const {
+  MatX T = MatX::Identity(nv, nv);
+  for (const MujocoJoint& j : joints) {
+    if (j.type != mjJNT_FREE) continue;
+    const int d = j.dofadr;
+    const Mat3 R = quat_wxyz(qpos + j.qposadr + 3).normalized().toRotationMatrix();
+    // [w_world; v] = [0 R; I 0] [v; w_body]
+    T.block(d, d, 6, 6).setZero();
+    T.block(d, d + 3, 3, 3) = R;
+    T.block(d + 3, d, 3, 3).setIdentity();
+  }
+  return T;
+}
+
+}  // namespace novaphy

@@ -1,0 +1,55 @@
+// MJCF and URDF import through MuJoCo's own parser (mj_loadXML), and the maps between the
+// coordinates of an imported mjModel and the NovaPhy model built from it.
+//   MuJoCo body with k joints -> a chain of k links, the first k-1 massless, the last with the mass
+//   body with no joint        -> a Fixed joint to its parent (static geometry when welded to the world)
+//   hinge / slide / ball / free -> Revolute / Prismatic / Ball / Free, q identical except quaternion
+//   order ([w x y z] -> [x y z w]) and the Free velocity ([v; w_body] -> [w_world; v])
+//   motor, position, velocity, general (fixed gain, affine bias) on a hinge or slide -> add_actuator,
+//   on a fixed tendon -> add_tendon_actuator
+//   connect, weld and joint equalities (active ones) -> add_connect, add_weld, add_joint_coupling
+//   fixed tendon over hinges and slides (stiffness, damping, springlength, range) -> add_tendon
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <string>
+#include <vector>
+
+#include "engine/import/mujoco_fields.h"
+#include "engine/model/builder.h"
+
+namespace novaphy {
+
+struct MujocoJoint {
+  int type = 0, qposadr = 0, dofadr = 0;  // MuJoCo's jnt_type, jnt_qposadr, jnt_dofadr
+};
+
+// what an import made, and the maps between the MuJoCo model's state and NovaPhy's (qpos and qvel of the
+// imported model alone; joint_q and joint_qd of the whole builder's model)
+struct MujocoImport {
+  std::vector<std::string> warnings;  // everything in the file that changes the motion and is not modelled, by name
+  std::vector<int> body_map;          // MuJoCo body id -> NovaPhy body (-1: the world or welded to it)
+  std::vector<int> actuator_map;      // MuJoCo actuator id -> NovaPhy motor (-1: not imported)
+  int q_begin = 0;                    // first NovaPhy coordinate / dof of the imported joints
+  int qd_begin = 0;
+  int nq = 0, nv = 0;               // the MuJoCo model's
+  std::vector<MujocoJoint> joints;  // the MuJoCo model's joints
+
+  // NovaPhy joint_q / joint_qd (entries q_begin.. / qd_begin..) from MuJoCo's qpos / qvel, and back
+  void to_joint_q(const mjtNum* qpos, Scalar* joint_q) const;
+  void to_joint_qd(const mjtNum* qpos, const mjtNum* qvel, Scalar* joint_qd) const;
+  void to_qpos(const Scalar* joint_q, mjtNum* qpos) const;
+  void to_qvel(const mjtNum* qpos, const Scalar* joint_qd, mjtNum* qvel) const;
+  // T (nv x nv) with qd = T qvel and qdd = T qacc; H_mujoco = T^T H T, bias_mujoco = T^T bias
+  MatX velocity_map(const mjtNum* qpos) const;
+};
+
+// loads an MJCF or URDF file; throws Error with MuJoCo's message when it does not exist or parse
+mjModel* load_mujoco_model(const std::string& path);
+
+// the one converter: a compiled model of any MuJoCo version, as a view of its fields
+MujocoImport import_mujoco_fields(ModelBuilder& builder, const MujocoFields& m, const ImportOptions& options = {});
+MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m, const ImportOptions& options = {});
+MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path, const ImportOptions& options = {});
+
+}  // namespace novaphy

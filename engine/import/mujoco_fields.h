@@ -1,0 +1,89 @@
+// The fields of a compiled MuJoCo model that the import reads (engine/import/mjcf_import.cpp), under mjModel's own
+// names: a view over MuJoCo 2.2.2's mjModel (mujoco_fields below) or over a compiled model of another MuJoCo
+// version (the Python binding fills it from a mujoco.MjModel's arrays). One converter reads either, so a file
+// compiled by 2.2.2 and the same file compiled by today's MuJoCo build the same NovaPhy model.
+// Enumerations (joint, geom, actuator, equality and wrap types) are MuJoCo's; their values agree from 2.2.2 to 4.
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <string>
+
+namespace novaphy {
+
+using MjByte = unsigned char;  // MuJoCo's mjtByte, numpy's bool
+
+enum class MjKind { Body, Joint, Geom, Mesh, Tendon, Actuator, Key, Equality };
+
+struct MujocoFields {
+  int nq = 0, nv = 0, nu = 0, nbody = 0, njnt = 0, ngeom = 0, ntendon = 0, nkey = 0, neq = 0, nexclude = 0, npair = 0;
+  int nnames = 0, nmesh = 0, nmeshvert = 0, nwrap = 0;  // the sizes of names, the mesh arrays, the wrap arrays
+  // options
+  const double *gravity = nullptr;  // [3]
+  double timestep = 0.002, impratio = 1, density = 0, viscosity = 0;
+  bool clamp_ctrl = true;  // mjDSBL_CLAMPCTRL not set (its bit differs between versions)
+
+  // names: the null-terminated names at each kind's addresses; an empty one reads "#id"
+  const char *names = nullptr;
+  const int *name_bodyadr = nullptr, *name_jntadr = nullptr, *name_geomadr = nullptr, *name_meshadr = nullptr,
+            *name_tendonadr = nullptr, *name_actuatoradr = nullptr, *name_keyadr = nullptr, *name_eqadr = nullptr;
+
+  const double *qpos0 = nullptr, *qpos_spring = nullptr;
+  const int *body_parentid = nullptr, *body_jntnum = nullptr, *body_jntadr = nullptr;
+  const double *body_pos = nullptr, *body_quat = nullptr, *body_mass = nullptr, *body_ipos = nullptr,
+               *body_iquat = nullptr, *body_inertia = nullptr;
+  const int *jnt_type = nullptr, *jnt_qposadr = nullptr, *jnt_dofadr = nullptr;
+  const MjByte *jnt_limited = nullptr;
+  const double *jnt_pos = nullptr, *jnt_axis = nullptr, *jnt_stiffness = nullptr, *jnt_range = nullptr;
+  const double *dof_armature = nullptr, *dof_damping = nullptr, *dof_frictionloss = nullptr;
+  const int *geom_type = nullptr, *geom_contype = nullptr, *geom_conaffinity = nullptr, *geom_condim = nullptr,
+            *geom_bodyid = nullptr, *geom_dataid = nullptr, *geom_priority = nullptr;
+  const double *geom_solmix = nullptr, *geom_solref = nullptr, *geom_solimp = nullptr, *geom_size = nullptr,
+               *geom_pos = nullptr, *geom_quat = nullptr, *geom_friction = nullptr, *geom_margin = nullptr,
+               *geom_gap = nullptr;
+  const int *mesh_vertadr = nullptr, *mesh_vertnum = nullptr;
+  const float *mesh_vert = nullptr;
+  const int *exclude_signature = nullptr;
+  // exclude_signature holds (body1 + offset) << 16 | (body2 + offset): 1 in 2.2.2, 0 in today's MuJoCo
+  int exclude_body_offset = 1;
+  const int *tendon_adr = nullptr, *tendon_num = nullptr;
+  const MjByte *tendon_limited = nullptr;
+  const double *tendon_range = nullptr, *tendon_stiffness = nullptr, *tendon_damping = nullptr,
+               *tendon_frictionloss = nullptr, *tendon_lengthspring = nullptr;
+  int tendon_lengthspring_width = 1;  // 2.2.2: the spring's length; MuJoCo >= 3: its dead band [lower, upper]
+  const int *wrap_type = nullptr, *wrap_objid = nullptr;
+  const double *wrap_prm = nullptr;
+  const int *actuator_trntype = nullptr, *actuator_dyntype = nullptr, *actuator_gaintype = nullptr,
+            *actuator_biastype = nullptr, *actuator_trnid = nullptr;
+  const MjByte *actuator_ctrllimited = nullptr, *actuator_forcelimited = nullptr;
+  const double *actuator_ctrlrange = nullptr, *actuator_forcerange = nullptr, *actuator_gear = nullptr,
+               *actuator_gainprm = nullptr, *actuator_biasprm = nullptr;
+  const double *key_qpos = nullptr, *key_qvel = nullptr, *key_ctrl = nullptr;
+  const int *eq_type = nullptr, *eq_obj1id = nullptr, *eq_obj2id = nullptr;
+  const MjByte *eq_active = nullptr;  // MuJoCo >= 3: eq_active0
+  const double *eq_data = nullptr;
+  int eq_data_width = mjNEQDATA;  // 11 in 2.2.2, 12 in MuJoCo 4 (the first 11 mean the same)
+
+  // MuJoCo >= 3 only (null where the model has none): a joint's limit on its actuators' total force, the
+  // objects an equality joins (bodies or sites), and what the import reports when it is not zero
+  const MjByte *jnt_actfrclimited = nullptr;
+  const double *jnt_actfrcrange = nullptr;
+  const int *eq_objtype = nullptr;
+  const double *body_gravcomp = nullptr, *actuator_damping = nullptr, *actuator_armature = nullptr,
+               *tendon_armature = nullptr;
+  int nflex = 0, nplugin = 0;  // deformables and engine plugins (MuJoCo >= 3)
+
+  // the name of object `id` of a kind, or "#id" for an unnamed one (its name address checked first)
+  std::string name(MjKind kind, int id) const;
+};
+
+// throws Error where an index, address, count or type the converter reads is out of range or breaks MuJoCo's
+// layout (each body's joints and each joint's coordinates and dofs follow the previous ones), where a frame, a
+// quaternion or a keyframe value is not finite, and for a zero quaternion; the message names the field, the
+// element and the value: "MjModel jnt_qposadr[3] (joint 'hip'): 99 out of range [0, 19)"
+void check_mujoco_fields(const MujocoFields &m);
+
+// a view over a MuJoCo 2.2.2 model (which must outlive it)
+MujocoFields mujoco_fields(const mjModel *m);
+
+}  // namespace novaphy

@@ -1,0 +1,79 @@
+// The checks ModelBuilder's calls make of their arguments, each failing with an Error that names the
+// item ("joint 3 ('knee')") and the argument. Internal to the builder's files (builder*.cpp).
+#pragma once
+
+#include <cmath>
+#include <string>
+
+#include "engine/model/builder.h"
+#include "engine/model/error.h"
+#include "kernels/spatial.h"
+
+namespace novaphy {
+
+inline std::string label(const char* kind, int index, const std::string& name) {
+  std::string s = std::string(kind) + " " + std::to_string(index);
+  if (!name.empty()) s += " ('" + name + "')";
+  return s;
+}
+
+inline void check_finite(const std::string& item, const char* what, Scalar x) {
+  if (!std::isfinite(x)) fail(item, ": ", what, " is not finite: ", x);
+}
+
+inline void check_finite(const std::string& item, const char* what, const Vec3& x) {
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(x[k])) fail(item, ": ", what, "[", k, "] is not finite: ", x[k]);
+}
+
+inline Transform checked_transform(const std::string& item, const char* what, const Transform& T) {
+  check_finite(item, what, T.p);
+  const Eigen::Vector4d q = T.q.coeffs();
+  for (int k = 0; k < 4; ++k)
+    if (!std::isfinite(q[k])) fail(item, ": ", what, " rotation[", k, "] is not finite: ", q[k]);
+  if (q.norm() < 1e-9) fail(item, ": ", what, " rotation quaternion has zero length");
+  Transform out = T;
+  out.q.normalize();
+  return out;
+}
+
+inline void check_nonnegative(const std::string& item, const char* what, Scalar x) {
+  if (!(x >= 0) || !std::isfinite(x)) fail(item, ": ", what, " must be finite and >= 0, got ", x);
+}
+
+inline void check_positive(const std::string& item, const char* what, Scalar x) {
+  if (!(x > 0) || !std::isfinite(x)) fail(item, ": ", what, " must be finite and > 0, got ", x);
+}
+
+// a range [lower, upper] (infinite ends allowed, NaN not)
+inline void check_range(const std::string& item, const char* what, Scalar lower, Scalar upper) {
+  if (std::isnan(lower) || std::isnan(upper) || lower > upper)
+    fail(item, ": ", what, " must satisfy lower <= upper, got [", lower, ", ", upper, "]");
+}
+
+inline void check_actuator(const std::string& item, const ActuatorOptions& options) {
+  check_finite(item, "gear", options.gear);
+  check_finite(item, "gain", options.gain);
+  for (int k = 0; k < 3; ++k) check_finite(item, "bias", options.bias[k]);
+  check_range(item, "control range", options.ctrl_lower, options.ctrl_upper);
+  check_range(item, "force range", options.force_lower, options.force_upper);
+}
+
+// a shape's solref, solimp, solmix, margin and gap within MuJoCo's ranges (ShapeOptions)
+inline void check_softness(const std::string& item, const ShapeOptions& o) {
+  const Scalar t = o.solref[0], r = o.solref[1];
+  if (!((t == 0 && r == 0) || (t > 0 && r > 0 && std::isfinite(t) && std::isfinite(r)) ||
+        (t < 0 && r <= 0 && std::isfinite(t) && std::isfinite(r))))
+    fail(item, ": solref must be (time constant > 0, damping ratio > 0), (-stiffness < 0, -damping <= 0) or (0, 0) ",
+         "for a rigid contact, got (", t, ", ", r, ")");
+  const auto& i = o.solimp;
+  if (!(i[0] >= 0 && i[0] <= 1 && i[1] >= 0 && i[1] <= 1 && i[2] >= 0 && std::isfinite(i[2]) && i[3] >= 0 &&
+        i[3] <= 1 && i[4] >= 1 && std::isfinite(i[4])))
+    fail(item, ": solimp must be (dmin, dmax in [0, 1], width >= 0, midpoint in [0, 1], power >= 1), got (", i[0], ", ",
+         i[1], ", ", i[2], ", ", i[3], ", ", i[4], ")");
+  check_nonnegative(item, "solmix", o.solmix);
+  check_nonnegative(item, "margin", o.margin);
+  check_nonnegative(item, "gap", o.gap);
+}
+
+}  // namespace novaphy

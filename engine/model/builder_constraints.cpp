@@ -1,0 +1,196 @@
+// ModelBuilder's fixed tendons, the actuators on them and equality constraints (model.h).
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "engine/eval/eval.h"
+#include "engine/model/builder.h"
+#include "engine/model/builder_checks.h"
+
+namespace novaphy {
+
+int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<Scalar>& coefs,
+                             const TendonOptions& options) {
+  const std::string item = label("tendon", tendon_count(), options.name);
+  if (joints.empty()) fail(item, ": a tendon needs at least one joint");
+  if (joints.size() != coefs.size())
+    fail(item, ": ", joints.size(), " joints but ", coefs.size(), " coefficients (one per joint)");
+  for (size_t i = 0; i < joints.size(); ++i) {
+    check_scalar_joint(item, "a fixed tendon spans Revolute or Prismatic joints", joints[i]);
+    check_finite(item, "coefficient", coefs[i]);
+  }
+  check_nonnegative(item, "stiffness", options.stiffness);
+  check_nonnegative(item, "damping", options.damping);
+  if (std::isinf(options.rest_length)) fail(item, ": rest_length is not finite: ", options.rest_length);
+  check_range(item, "limit range", options.limit_lower, options.limit_upper);
+  tendons_.push_back({joints, coefs, options});
+  return tendon_count() - 1;
+}
+
+int ModelBuilder::add_tendon_actuator(int tendon, const ActuatorOptions& options) {
+  const std::string item = label("actuator", actuator_count(), options.name);
+  if (tendon < 0 || tendon >= tendon_count())
+    fail(item, ": tendon index ", tendon, " out of range [0, ", tendon_count(), ")");
+  check_actuator(item, options);
+  actuators_.push_back({-1, options, tendon});
+  return actuator_count() - 1;
+}
+
+void ModelBuilder::join_tendon_articulations(std::vector<JointRecord>& joints, int& articulation_count) const {
+  // union-find over articulations, each group named by its smallest articulation
+  std::vector<int> root(articulation_count);
+  std::iota(root.begin(), root.end(), 0);
+  const auto find = [&root](int a) {
+    while (root[a] != a) a = root[a] = root[root[a]];
+    return a;
+  };
+  std::vector<char> floating(articulation_count, 0);
+  for (const JointRecord& joint : joints) floating[joint.articulation] |= joint.type == JointType::Free;
+  std::vector<int> joined_by(articulation_count, -1);  // by a group's root: the last tendon that joined it
+  bool joined = false;
+  for (int t = 0; t < tendon_count(); ++t) {
+    const TendonRecord& tendon = tendons_[t];
+    const int j0 = tendon.joints[0];
+    for (const int j : tendon.joints) {
+      const int a = find(joints[j0].articulation), b = find(joints[j].articulation);
+      if (a == b) continue;
+      const auto refuse = [&](const char* why) {
+        fail(label("tendon", t, tendon.options.name), ": its joints ", j0, " and ", j,
+             " are in different articulations, ", why);
+      };
+      if (std::min(a, b) < articulation_count_) refuse("one given by add_articulation");
+      if (floating[a] || floating[b]) refuse("one of them floating (a tendon joins articulations of fixed base only)");
+      root[std::max(a, b)] = std::min(a, b);
+      joined_by[std::min(a, b)] = t;
+      joined = true;
+    }
+  }
+  if (!joined) return;
+  // number the groups in order; a joined group must be one run of joints
+  std::vector<int> id(articulation_count, -1);
+  int count = 0;
+  for (int a = 0; a < articulation_count; ++a)
+    if (find(a) == a) id[a] = count++;
+  std::vector<char> ended(count, 0);
+  int previous = -1;
+  for (JointRecord& joint : joints) {
+    const int group = find(joint.articulation);
+    joint.articulation = id[group];
+    if (joint.articulation == previous) continue;
+    if (previous >= 0) ended[previous] = 1;
+    if (ended[joint.articulation] && joined_by[group] >= 0) {
+      const int t = joined_by[group];
+      fail(label("tendon", t, tendons_[t].options.name),
+           ": joins articulations whose joints are not one after another (add each one's joints after the other's)");
+    }
+    previous = joint.articulation;
+  }
+  articulation_count = count;
+}
+
+void ModelBuilder::lay_out_tendons(Model& model) const {
+  model.tendon_start.assign(1, 0);
+  for (const TendonRecord& tendon : tendons_) {
+    const int t = static_cast<int>(model.tendon_name.size());
+    const std::string item = label("tendon", t, tendon.options.name);
+    Scalar length = 0;
+    for (size_t i = 0; i < tendon.joints.size(); ++i) {
+      const int j = tendon.joints[i];
+      model.tendon_coord.push_back(model.joint_q_start[j]);
+      model.tendon_dof.push_back(model.joint_qd_start[j]);
+      model.tendon_coef.push_back(tendon.coefs[i]);
+      length += tendon.coefs[i] * model.joint_q0[model.joint_q_start[j]];
+    }
+    model.tendon_start.push_back(static_cast<int>(model.tendon_coef.size()));
+    const TendonOptions& o = tendon.options;
+    model.tendon_stiffness.push_back(o.stiffness);
+    model.tendon_damping.push_back(o.damping);
+    model.tendon_rest_length.push_back(std::isnan(o.rest_length) ? length : o.rest_length);
+    model.tendon_limit_lower.push_back(o.limit_lower);
+    model.tendon_limit_upper.push_back(o.limit_upper);
+    model.tendon_name.push_back(o.name);
+  }
+  model.tendon_count = tendon_count();
+  model.tendon_entry_count = static_cast<int>(model.tendon_coef.size());
+}
+
+int ModelBuilder::add_connect(int body1, int body2, const Vec3& anchor, const std::string& name, const Vec3& anchor2) {
+  const std::string item = label("equality", equality_count(), name) + " (connect)";
+  if (body1 < 0 || body1 >= body_count()) fail(item, ": body1 index ", body1, " out of range [0, ", body_count(), ")");
+  if (body2 < -1 || body2 >= body_count())
+    fail(item, ": body2 index ", body2, " out of range [-1, ", body_count(), ")");
+  if (body1 == body2) fail(item, ": connects body ", body1, " to itself");
+  check_finite(item, "anchor", anchor);
+  if (!anchor2.array().isNaN().all()) check_finite(item, "anchor2", anchor2);
+  EqualityRecord e{EqualityType::Connect, {body1, body2}, {}, name};
+  for (int k = 0; k < 3; ++k) e.data[k] = anchor[k], e.data[3 + k] = anchor2[k];
+  equalities_.push_back(e);
+  return equality_count() - 1;
+}
+
+int ModelBuilder::add_weld(int body1, int body2, const std::string& name, const Vec3& anchor,
+                           const std::optional<Transform>& relative) {
+  const std::string item = label("equality", equality_count(), name) + " (weld)";
+  for (const int b : {body1, body2})
+    if (b < -1 || b >= body_count()) fail(item, ": body index ", b, " out of range [-1, ", body_count(), ")");
+  if (body1 == body2) fail(item, ": welds body ", body1, " to itself");
+  check_finite(item, "anchor", anchor);
+  // data: the anchor in body1's frame (set by lay_out_equalities without `relative`), in body2's, the orientation
+  EqualityRecord e{EqualityType::Weld, {body1, body2}, {}, name};
+  std::fill(e.data, e.data + 10, std::numeric_limits<Scalar>::quiet_NaN());
+  for (int k = 0; k < 3; ++k) e.data[3 + k] = anchor[k];
+  if (relative) {
+    const Transform T = checked_transform(item, "relative", *relative);
+    const Vec3 p = T.apply(anchor);
+    for (int k = 0; k < 3; ++k) e.data[k] = p[k];
+    Eigen::Map<Eigen::Vector4d>(e.data + 6) = T.q.coeffs();
+  }
+  equalities_.push_back(e);
+  return equality_count() - 1;
+}
+
+int ModelBuilder::add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly,
+                                     const std::string& name) {
+  const std::string item = label("equality", equality_count(), name) + " (joint coupling)";
+  for (const int j : {joint1, joint2})
+    if (j != joint2 || j != -1) check_scalar_joint(item, "couples Revolute or Prismatic joints", j);
+  if (joint1 == joint2) fail(item, ": couples joint ", joint1, " to itself");
+  EqualityRecord e{EqualityType::JointCoupling, {joint1, joint2}, {}, name};
+  for (int k = 0; k < 5; ++k) {
+    check_finite(item, "poly", poly[k]);
+    e.data[k] = poly[k];
+  }
+  equalities_.push_back(e);
+  return equality_count() - 1;
+}
+
+void ModelBuilder::lay_out_equalities(Model& model) const {
+  const State initial = equalities_.empty() ? State{} : model.state();
+  for (const EqualityRecord& record : equalities_) {
+    EqualityRecord e = record;
+    if (e.type == EqualityType::Connect && std::isnan(e.data[3])) {
+      // body2's point that coincides with the anchor at the initial coordinates, in body2's frame
+      const Vec3 p = body_pose(initial, e.object[1])
+                         .inverse()
+                         .apply(body_pose(initial, e.object[0]).apply(Vec3(e.data[0], e.data[1], e.data[2])));
+      for (int k = 0; k < 3; ++k) e.data[3 + k] = p[k];
+    }
+    if (e.type == EqualityType::JointCoupling)
+      for (int k = 0; k < 2; ++k)
+        e.data[5 + k] = e.object[k] < 0 ? 0 : model.joint_q0[model.joint_q_start[e.object[k]]];
+    model.equality_type.push_back(static_cast<int>(e.type));
+    model.equality_object.insert(model.equality_object.end(), {e.object[0], e.object[1]});
+    if (e.type == EqualityType::Weld && std::isnan(e.data[6])) {
+      // body2's pose in body1's at the initial coordinates
+      const Transform relative = body_pose(initial, e.object[0]).inverse() * body_pose(initial, e.object[1]);
+      const Vec3 p = relative.apply(Vec3(e.data[3], e.data[4], e.data[5]));
+      for (int k = 0; k < 3; ++k) e.data[k] = p[k];
+      Eigen::Map<Eigen::Vector4d>(e.data + 6) = relative.q.coeffs();
+    }
+    model.equality_data.insert(model.equality_data.end(), e.data, e.data + 10);
+    model.equality_name.push_back(e.name);
+  }
+  model.equality_count = equality_count();
+}
+
+}  // namespace novaphy

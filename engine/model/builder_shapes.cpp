@@ -1,0 +1,152 @@
+// The builder's shapes: primitives, planes and convex meshes (their hulls, kernels/hull.h), and their tables in
+// the Model.
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include "engine/model/builder.h"
+#include "engine/model/builder_checks.h"
+#include "engine/model/error.h"
+
+namespace novaphy {
+
+void ModelBuilder::set_impratio(Scalar impratio) {
+  if (!(impratio > 0 && std::isfinite(impratio))) fail("impratio must be finite and > 0, got ", impratio);
+  impratio_ = impratio;
+}
+
+int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh) {
+  const std::string item = label("shape", shape_count(), options.name) + " (" + shape_type_name(type) + ")";
+  if (body < -1 || body >= body_count()) fail(item, ": body index ", body, " out of range [-1, ", body_count(), ")");
+  if (type != ShapeType::Plane)
+    for (int k = 0; k < 3; ++k) check_positive(item, "size", scale[k]);
+  check_nonnegative(item, "mu", options.mu);
+  check_nonnegative(item, "mu_torsion", options.mu_torsion);
+  check_nonnegative(item, "mu_rolling", options.mu_rolling);
+  if (options.condim != 1 && options.condim != 3 && options.condim != 4 && options.condim != 6)
+    fail(item, ": condim must be 1, 3, 4 or 6, got ", options.condim);
+  if (!(options.restitution >= 0 && options.restitution <= 1))
+    fail(item, ": restitution must be in [0, 1], got ", options.restitution);
+  check_softness(item, options);
+  ShapeRecord shape{type, body, scale, options, mesh};
+  shape.options.xform = checked_transform(item, "xform", options.xform);
+  shapes_.push_back(shape);
+  shape_world_.push_back(body < 0 ? -1 : body_world_[body]);
+  return shape_count() - 1;
+}
+
+int ModelBuilder::add_plane(const Vec3& normal, Scalar offset, const ShapeOptions& options) {
+  check_finite("plane", "normal", normal);
+  check_finite("plane", "offset", offset);
+  if (normal.norm() < 1e-9) fail("plane: normal has zero length");
+  const Vec3 n = normal.normalized();
+  // plane shapes are the local XZ plane, normal +Y
+  ShapeOptions plane = options;
+  plane.xform.q = Quat::FromTwoVectors(Vec3::UnitY(), n);
+  plane.xform.p = offset * n;
+  return add_shape(ShapeType::Plane, -1, Vec3::Ones(), plane);
+}
+
+int ModelBuilder::add_ground_plane(Scalar y, const ShapeOptions& options) {
+  return add_plane(Vec3::UnitY(), y, options);
+}
+
+int ModelBuilder::add_shape_box(int body, const Vec3& half_extents, const ShapeOptions& options) {
+  return add_shape(ShapeType::Box, body, half_extents, options);
+}
+
+int ModelBuilder::add_shape_sphere(int body, Scalar radius, const ShapeOptions& options) {
+  return add_shape(ShapeType::Sphere, body, Vec3::Constant(radius), options);
+}
+
+int ModelBuilder::add_shape_capsule(int body, Scalar radius, Scalar half_height, const ShapeOptions& options) {
+  return add_shape(ShapeType::Capsule, body, Vec3(radius, half_height, radius), options);
+}
+
+int ModelBuilder::add_shape_cylinder(int body, Scalar radius, Scalar half_height, const ShapeOptions& options) {
+  return add_shape(ShapeType::Cylinder, body, Vec3(radius, half_height, radius), options);
+}
+
+int ModelBuilder::add_shape_ellipsoid(int body, const Vec3& radii, const ShapeOptions& options) {
+  return add_shape(ShapeType::Ellipsoid, body, radii, options);
+}
+
+int ModelBuilder::add_mesh(const std::vector<Vec3>& vertices, const std::string& name) {
+  const std::string item = label("mesh", static_cast<int>(meshes_.size()), name);
+  auto hull = std::make_shared<ConvexHull>();
+  const std::string why = convex_hull(vertices, hull.get());
+  if (!why.empty()) fail(item, ": ", why);
+  // the hull centred on its vertices' mean (the shapes' frames move there), and its reach along each axis
+  MeshRecord mesh{nullptr, Vec3::Zero(), Vec3::Zero()};
+  for (const Vec3& v : hull->vertex) mesh.origin += v;
+  mesh.origin /= static_cast<Scalar>(hull->vertex.size());
+  for (Vec3& v : hull->vertex) v -= mesh.origin, mesh.reach = mesh.reach.cwiseMax(v.cwiseAbs());
+  for (int f = 0; f < hull->face_count(); ++f) hull->face_offset[f] -= hull->face_normal[f].dot(mesh.origin);
+  mesh.hull = std::move(hull);
+  meshes_.push_back(std::move(mesh));
+  return static_cast<int>(meshes_.size()) - 1;
+}
+
+int ModelBuilder::add_shape_mesh(int body, int mesh, const ShapeOptions& options) {
+  if (mesh < 0 || mesh >= static_cast<int>(meshes_.size()))
+    fail(label("shape", shape_count(), ""), " (Mesh): mesh index ", mesh, " out of range [0, ", meshes_.size(), ")");
+  ShapeOptions placed = options;
+  placed.xform = options.xform * Transform{meshes_[mesh].origin, Quat::Identity()};
+  return add_shape(ShapeType::Mesh, body, meshes_[mesh].reach, placed, mesh);
+}
+
+void ModelBuilder::lay_out_shapes(Model& model) const {
+  for (int s = 0; s < shape_count(); ++s) {
+    const ShapeRecord& shape = shapes_[s];
+    model.shape_type[s] = static_cast<int>(shape.type);
+    model.shape_body[s] = shape.body;
+    shape.options.xform.to_array(&model.shape_transform[7 * s]);
+    Eigen::Map<Vec3>(&model.shape_scale[3 * s]) = shape.scale;
+    model.shape_mu[s] = shape.options.mu;
+    model.shape_mu_torsion[s] = shape.options.mu_torsion;
+    model.shape_mu_rolling[s] = shape.options.mu_rolling;
+    model.shape_restitution[s] = shape.options.restitution;
+    model.shape_collision_group[s] = shape.options.collision_group;
+    model.shape_collision_mask[s] = shape.options.collision_mask;
+    model.shape_priority[s] = shape.options.priority;
+    model.shape_condim[s] = shape.options.condim;
+    std::copy(shape.options.solref.begin(), shape.options.solref.end(), &model.shape_solref[2 * s]);
+    std::copy(shape.options.solimp.begin(), shape.options.solimp.end(), &model.shape_solimp[5 * s]);
+    model.shape_solmix[s] = shape.options.solmix;
+    model.shape_margin[s] = shape.options.margin;
+    model.shape_gap[s] = shape.options.gap;
+    model.shape_name.push_back(shape.options.name);
+  }
+}
+
+void ModelBuilder::lay_out_meshes(Model& model) const {
+  // the hulls the shapes use, each once (a replicated robot's shapes share theirs)
+  std::map<const ConvexHull*, int> index;
+  model.mesh_vertex_start = {0};
+  model.mesh_face_start = {0};
+  model.mesh_corner_start = {0};
+  for (int s = 0; s < shape_count(); ++s) {
+    model.shape_mesh[s] = -1;
+    if (shapes_[s].mesh < 0) continue;
+    const ConvexHull* hull = meshes_[shapes_[s].mesh].hull.get();
+    const auto [it, added] = index.emplace(hull, static_cast<int>(index.size()));
+    model.shape_mesh[s] = it->second;
+    if (!added) continue;
+    for (const Vec3& v : hull->vertex) model.mesh_vertex.insert(model.mesh_vertex.end(), {v.x(), v.y(), v.z()});
+    for (int f = 0; f < hull->face_count(); ++f) {
+      const Vec3& n = hull->face_normal[f];
+      model.mesh_face_plane.insert(model.mesh_face_plane.end(), {n.x(), n.y(), n.z(), hull->face_offset[f]});
+      for (int c = hull->corner_start[f]; c < hull->corner_start[f + 1]; ++c)
+        model.mesh_corner.push_back(hull->corner[c]);
+      model.mesh_corner_start.push_back(static_cast<int>(model.mesh_corner.size()));
+    }
+    model.mesh_vertex_start.push_back(static_cast<int>(model.mesh_vertex.size() / 3));
+    model.mesh_face_start.push_back(static_cast<int>(model.mesh_face_plane.size() / 4));
+  }
+  model.mesh_count = static_cast<int>(index.size());
+  model.mesh_vertex_count = model.mesh_vertex_start.back();
+  model.mesh_face_count = model.mesh_face_start.back();
+  model.mesh_corner_count = static_cast<int>(model.mesh_corner.size());
+}
+
+}  // namespace novaphy

@@ -1,0 +1,213 @@
+#include "engine/model/model.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <cstring>
+
+#include "engine/eval/eval.h"
+#include "engine/model/error.h"
+
+namespace novaphy {
+
+const char* shape_type_name(ShapeType type) {
+  switch (type) {
+    case ShapeType::Plane: return "Plane";
+    case ShapeType::Sphere: return "Sphere";
+    case ShapeType::Box: return "Box";
+    case ShapeType::Capsule: return "Capsule";
+    case ShapeType::Cylinder: return "Cylinder";
+    case ShapeType::Ellipsoid: return "Ellipsoid";
+    case ShapeType::Mesh: return "Mesh";
+  }
+  return "Unknown";
+}
+
+const char* collision_filter_name(CollisionFilter filter) {
+  switch (filter) {
+    case CollisionFilter::GroupAndMask: return "GroupAndMask";
+    case CollisionFilter::Mujoco: return "Mujoco";
+  }
+  return "unknown";
+}
+
+const char* friction_rule_name(FrictionRule rule) {
+  switch (rule) {
+    case FrictionRule::GeometricMean: return "GeometricMean";
+    case FrictionRule::Mujoco: return "Mujoco";
+  }
+  return "unknown";
+}
+
+const char* precision_name(Precision precision) {
+  switch (precision) {
+    case Precision::Float64: return "float64";
+    case Precision::Float32: return "float32";
+  }
+  return "unknown";
+}
+
+bool same_layout(const ModelCounts& a, const ModelCounts& b) {
+  return a.world_count == b.world_count && a.body_count == b.body_count && a.joint_count == b.joint_count &&
+         a.joint_coord_count == b.joint_coord_count && a.joint_dof_count == b.joint_dof_count &&
+         a.articulation_count == b.articulation_count && a.shape_count == b.shape_count &&
+         a.actuator_count == b.actuator_count;
+}
+
+void State::assign(const State& other) {
+  if (!same_layout(*this, other))
+    fail("assign: the other state belongs to a model with ", other.body_count, " bodies and ", other.joint_dof_count,
+         " dofs, this one to ", body_count, " bodies and ", joint_dof_count, " dofs");
+  *this = other;
+}
+
+void Control::assign(const Control& other) {
+  if (!same_layout(*this, other))
+    fail("assign: the other control belongs to a model with ", other.joint_dof_count, " dofs and ",
+         other.actuator_count, " actuators, this one to ", joint_dof_count, " dofs and ", actuator_count);
+  *this = other;
+}
+
+void Model::allocate() {
+#define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_ALLOCATE)
+}
+
+namespace {
+
+// 64-bit words mixed into h (FNV-1a's prime over whole words; a tail shorter than a word padded with zeros)
+void mix(std::uint64_t& h, const void* data, size_t bytes) {
+  const unsigned char* p = static_cast<const unsigned char*>(data);
+  for (size_t k = 0; k < bytes; k += 8) {
+    std::uint64_t word = 0;
+    std::memcpy(&word, p + k, std::min<size_t>(8, bytes - k));
+    h = (h ^ word) * 0x100000001b3ull;
+    h ^= h >> 29;
+  }
+  h = (h ^ bytes) * 0x100000001b3ull;
+}
+
+}  // namespace
+
+void Model::set_model_id() {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  const ModelCounts& counts = *this;
+  mix(h, &counts.world_count,
+      offsetof(ModelCounts, mesh_corner_count) + sizeof(int) - offsetof(ModelCounts, world_count));
+  const int enums[] = {static_cast<int>(precision), static_cast<int>(collision_filter),
+                       static_cast<int>(friction_rule)};
+  mix(h, enums, sizeof(enums));
+  mix(h, gravity.data(), sizeof(Scalar) * 3);
+  mix(h, &impratio, sizeof(impratio));
+#define NOVAPHY_MIX_FIELD(T, name, count, width) mix(h, name.data(), name.size() * sizeof(T));
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_MIX_FIELD)
+#undef NOVAPHY_MIX_FIELD
+  model_id = h;
+}
+
+void Model::check_sizes() const {
+#define NOVAPHY_CHECK_SIZE(T, name, count, width)          \
+  if (name.size() != static_cast<size_t>(count) * (width)) \
+    fail("model field " #name " has ", name.size(), " entries, expected ", static_cast<size_t>(count) * (width));
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_CHECK_SIZE)
+}
+
+ArticulationView Model::articulation(int a) const {
+  if (a < 0 || a >= articulation_count) fail("articulation index ", a, " out of range [0, ", articulation_count, ")");
+  ArticulationView art;
+  art.joint_begin = articulation_start[a];
+  art.joint_end = articulation_start[a + 1];
+  art.joint_type = joint_type.data();
+  art.joint_ancestor = joint_ancestor.data();
+  art.joint_child = joint_child.data();
+  art.joint_q_start = joint_q_start.data();
+  art.joint_qd_start = joint_qd_start.data();
+  art.joint_X_p = joint_X_p.data();
+  art.joint_X_c = joint_X_c.data();
+  art.joint_axis = joint_axis.data();
+  art.joint_armature = joint_armature.data();
+  art.joint_damping = joint_damping.data();
+  art.joint_stiffness = joint_stiffness.data();
+  art.joint_q_ref = joint_q_ref.data();
+  art.body_mass = body_mass.data();
+  art.body_com = body_com.data();
+  art.body_inertia = body_inertia.data();
+  return art;
+}
+
+namespace {
+
+// a state of `model` at the coordinates q and velocities qd (nullptr: zero), body_q and body_qd from FK
+State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
+  State s;
+  static_cast<ModelCounts&>(s) = model;
+#define NOVAPHY_ALLOCATE_STATE(T, name, count, width) s.name.assign(static_cast<size_t>(model.count) * (width), T{});
+  NOVAPHY_STATE_FIELDS(NOVAPHY_ALLOCATE_STATE)
+#undef NOVAPHY_ALLOCATE_STATE
+  std::copy_n(q, model.joint_coord_count, s.joint_q.begin());
+  if (qd) std::copy_n(qd, model.joint_dof_count, s.joint_qd.begin());
+  eval_fk(model, s);
+  return s;
+}
+
+}  // namespace
+
+State Model::state() const { return state_at(*this, joint_q0.data(), nullptr); }
+
+int Model::keyframe(const std::string& name) const {
+  for (int k = 0; k < keyframe_count; ++k)
+    if (keyframe_name[k] == name) return k;
+  std::string names;
+  for (const std::string& n : keyframe_name) names += (names.empty() ? "'" : ", '") + n + "'";
+  fail("no keyframe '", name, "': the model has ", keyframe_count == 0 ? "none" : names);
+}
+
+State Model::state(const std::string& name) const {
+  const int k = keyframe(name);
+  return state_at(*this, keyframe_q.data() + static_cast<size_t>(k) * joint_coord_count,
+                  keyframe_qd.data() + static_cast<size_t>(k) * joint_dof_count);
+}
+
+Control Model::control(const std::string& name) const {
+  const int k = keyframe(name);
+  Control c = control();
+  std::copy_n(keyframe_ctrl.data() + static_cast<size_t>(k) * actuator_count, actuator_count, c.actuator_ctrl.begin());
+  return c;
+}
+
+Control Model::control() const {
+  Control s;
+  static_cast<ModelCounts&>(s) = *this;
+#define NOVAPHY_ALLOCATE_MEMBER(T, name, count, width) s.name.assign(static_cast<size_t>(count) * (width), T{});
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_ALLOCATE_MEMBER)
+#undef NOVAPHY_ALLOCATE_MEMBER
+  s.joint_target_ke = joint_target_ke;
+  s.joint_target_kd = joint_target_kd;
+  return s;
+}
+
+namespace {
+
+void check_model_id(const Model& model, const ModelCounts& made_by, const char* what) {
+  if (made_by.model_id != model.model_id)
+    fail(what, " from another model: made by model ", std::hex, made_by.model_id, ", this is model ", model.model_id,
+         " (make it with this model's ", what, "())");
+}
+
+}  // namespace
+
+void Model::check(const State& state) const {
+#define NOVAPHY_CHECK_ARRAY(T, name, count, width)                                                             \
+  if (state.name.size() != static_cast<size_t>(count) * (width))                                               \
+    fail(#name " has ", state.name.size(), " entries, the model needs ", static_cast<size_t>(count) * (width), \
+         " (state or control from another model?)");
+  NOVAPHY_STATE_FIELDS(NOVAPHY_CHECK_ARRAY)
+  check_model_id(*this, state, "state");
+}
+
+void Model::check(const Control& control) const {
+  const auto& state = control;
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_ARRAY)
+  check_model_id(*this, control, "control");
+}
+
+}  // namespace novaphy

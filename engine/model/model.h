@@ -1,0 +1,240 @@
+// Model (read-only after finalize), State and Control: flat structure-of-arrays buffers.
+// One field table per entity (the X-macros below) drives allocation, size checks and the
+// numpy views of the binding: adding a field is one line.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "kernels/articulation.h"
+
+namespace novaphy {
+
+// capsules and cylinders run along their frame's Y axis; a Mesh collides as the convex hull of mesh shape_mesh
+enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3, Cylinder = 4, Ellipsoid = 5, Mesh = 6 };
+
+// the precision the batched kernels step a model in (State, Control and Model arrays stay double;
+// with Float32 the stepped state is rounded to float each step)
+enum class EqualityType : int { Connect = 0, JointCoupling = 1, Weld = 2 };
+
+enum class Precision : int { Float64 = 0, Float32 = 1 };
+const char* precision_name(Precision precision);
+
+// which shape pairs may collide, from each shape's shape_collision_group and shape_collision_mask:
+// GroupAndMask (the builder's default): (group_a & mask_b) != 0 and (group_b & mask_a) != 0;
+// Mujoco (a model that imported MJCF), MuJoCo's contype/conaffinity: (group_a & mask_b) != 0 or
+// (group_b & mask_a) != 0. Either way a shape that can collide with no shape is visual only
+enum class CollisionFilter : int { GroupAndMask = 0, Mujoco = 1 };
+
+// a contact's friction coefficients (sliding shape_mu; with condim 4 torsional shape_mu_torsion, with 6 also
+// rolling shape_mu_rolling, both lengths) from its shapes': GeometricMean (the builder's default) sqrt(mu_a mu_b);
+// Mujoco (a model that imported MJCF), MuJoCo's rule: the shape of higher shape_priority decides, else the
+// larger mu; a contact whose condim (the deciding shape's, else the larger) is 1 is frictionless
+enum class FrictionRule : int { GeometricMean = 0, Mujoco = 1 };
+const char* friction_rule_name(FrictionRule rule);
+const char* collision_filter_name(CollisionFilter filter);
+const char* shape_type_name(ShapeType type);
+
+// X(type, name, count, width): `count` is an expression over the Model's counts.
+// A fixed tendon t is a linear combination of Revolute and Prismatic coordinates of one articulation:
+// length = sum of tendon_coef[e] joint_q[tendon_coord[e]] over its entries e in [tendon_start[t],
+// tendon_start[t + 1]); a force f along it is tendon_coef[e] f on dof tendon_dof[e]. An actuator drives
+// joint actuator_joint, or tendon actuator_tendon where actuator_joint is -1.
+// An equality constraint e (MuJoCo's, held by rows of the step) of equality_type Connect keeps the point
+// equality_data[0..3) of body equality_object[0] (its frame) on the point equality_data[3..6) of body
+// equality_object[1] (-1: the world frame); one of type JointCoupling keeps q1 - q1_0 = a0 + a1 x + a2 x^2 +
+// a3 x^3 + a4 x^4, x = q2 - q2_0, for joints q1, q2 (Revolute or Prismatic) of equality_object (joint 2 -1:
+// x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]; one of type Weld keeps, as a connect,
+// equality_data[0..3) on [3..6) and body 2's orientation in body 1's frame at the quaternion equality_data[6..10)
+// ([x, y, z, w]; body 1 -1: the world)
+// A contact is soft, as MuJoCo's (engine/solver/parts/rows.h), where its shapes' solref has a nonzero time constant:
+// shape_solref (time constant, damping ratio; or -stiffness, -damping), shape_solimp (dmin, dmax, width,
+// midpoint, power), shape_solmix (the weight of a shape's solref and solimp in a pair of equal priority),
+// shape_margin (a contact is active from this distance) and shape_gap (less this). body_invweight0 is
+// MuJoCo's: the mean of the diagonal of J M^-1 J^T at joint_q0 for the body's COM, translation then rotation.
+// A mesh m is a convex hull (kernels/hull.h): its vertices mesh_vertex[mesh_vertex_start[m] ..
+// mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the vertices' mean), its faces
+// [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
+// corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the mesh,
+// counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types.
+#define NOVAPHY_MODEL_FIELDS(X)                            \
+  X(Scalar, body_mass, body_count, 1)                      \
+  X(Scalar, body_com, body_count, 3)                       \
+  X(Scalar, body_inertia, body_count, 9)                   \
+  X(int, body_world, body_count, 1)                        \
+  X(Scalar, body_invweight0, body_count, 2)                \
+  X(int, joint_type, joint_count, 1)                       \
+  X(int, joint_parent, joint_count, 1)                     \
+  X(int, joint_child, joint_count, 1)                      \
+  X(int, joint_ancestor, joint_count, 1)                   \
+  X(int, joint_articulation, joint_count, 1)               \
+  X(int, joint_q_start, joint_count + 1, 1)                \
+  X(int, joint_qd_start, joint_count + 1, 1)               \
+  X(Scalar, joint_X_p, joint_count, 7)                     \
+  X(Scalar, joint_X_c, joint_count, 7)                     \
+  X(Scalar, joint_axis, joint_count, 3)                    \
+  X(Scalar, joint_q0, joint_coord_count, 1)                \
+  X(Scalar, joint_q_ref, joint_coord_count, 1)             \
+  X(Scalar, joint_armature, joint_dof_count, 1)            \
+  X(Scalar, joint_damping, joint_dof_count, 1)             \
+  X(Scalar, joint_frictionloss, joint_dof_count, 1)        \
+  X(Scalar, joint_stiffness, joint_dof_count, 1)           \
+  X(Scalar, joint_limit_lower, joint_dof_count, 1)         \
+  X(Scalar, joint_limit_upper, joint_dof_count, 1)         \
+  X(Scalar, joint_target_ke, joint_dof_count, 1)           \
+  X(Scalar, joint_target_kd, joint_dof_count, 1)           \
+  X(int, articulation_start, articulation_count + 1, 1)    \
+  X(int, shape_type, shape_count, 1)                       \
+  X(int, shape_body, shape_count, 1)                       \
+  X(Scalar, shape_transform, shape_count, 7)               \
+  X(Scalar, shape_scale, shape_count, 3)                   \
+  X(Scalar, shape_mu, shape_count, 1)                      \
+  X(Scalar, shape_mu_torsion, shape_count, 1)              \
+  X(Scalar, shape_mu_rolling, shape_count, 1)              \
+  X(Scalar, shape_restitution, shape_count, 1)             \
+  X(int, shape_collision_group, shape_count, 1)            \
+  X(int, shape_collision_mask, shape_count, 1)             \
+  X(int, shape_priority, shape_count, 1)                   \
+  X(int, shape_condim, shape_count, 1)                     \
+  X(Scalar, shape_solref, shape_count, 2)                  \
+  X(Scalar, shape_solimp, shape_count, 5)                  \
+  X(Scalar, shape_solmix, shape_count, 1)                  \
+  X(Scalar, shape_margin, shape_count, 1)                  \
+  X(Scalar, shape_gap, shape_count, 1)                     \
+  X(int, shape_world, shape_count, 1)                      \
+  X(int, shape_mesh, shape_count, 1)                       \
+  X(int, mesh_vertex_start, mesh_count + 1, 1)             \
+  X(Scalar, mesh_vertex, mesh_vertex_count, 3)             \
+  X(int, mesh_face_start, mesh_count + 1, 1)               \
+  X(Scalar, mesh_face_plane, mesh_face_count, 4)           \
+  X(int, mesh_corner_start, mesh_face_count + 1, 1)        \
+  X(int, mesh_corner, mesh_corner_count, 1)                \
+  X(int, exclude_shape, exclude_count, 2)                  \
+  X(int, tendon_start, tendon_count + 1, 1)                \
+  X(int, tendon_coord, tendon_entry_count, 1)              \
+  X(int, tendon_dof, tendon_entry_count, 1)                \
+  X(Scalar, tendon_coef, tendon_entry_count, 1)            \
+  X(Scalar, tendon_stiffness, tendon_count, 1)             \
+  X(Scalar, tendon_damping, tendon_count, 1)               \
+  X(Scalar, tendon_rest_length, tendon_count, 1)           \
+  X(Scalar, tendon_limit_lower, tendon_count, 1)           \
+  X(Scalar, tendon_limit_upper, tendon_count, 1)           \
+  X(int, equality_type, equality_count, 1)                 \
+  X(int, equality_object, equality_count, 2)               \
+  X(Scalar, equality_data, equality_count, 10)             \
+  X(int, actuator_joint, actuator_count, 1)                \
+  X(int, actuator_tendon, actuator_count, 1)               \
+  X(Scalar, actuator_gear, actuator_count, 1)              \
+  X(Scalar, actuator_gain, actuator_count, 1)              \
+  X(Scalar, actuator_bias, actuator_count, 3)              \
+  X(Scalar, actuator_ctrl_lower, actuator_count, 1)        \
+  X(Scalar, actuator_ctrl_upper, actuator_count, 1)        \
+  X(Scalar, actuator_force_lower, actuator_count, 1)       \
+  X(Scalar, actuator_force_upper, actuator_count, 1)       \
+  X(Scalar, keyframe_q, keyframe_count, joint_coord_count) \
+  X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)  \
+  X(Scalar, keyframe_ctrl, keyframe_count, actuator_count)
+
+#define NOVAPHY_STATE_FIELDS(X)            \
+  X(Scalar, joint_q, joint_coord_count, 1) \
+  X(Scalar, joint_qd, joint_dof_count, 1)  \
+  X(Scalar, body_q, body_count, 7)         \
+  X(Scalar, body_qd, body_count, 6)        \
+  X(Scalar, body_f, body_count, 6)
+
+// joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped);
+// PD drives per dof: tau = ke (target_pos - q) + kd (target_vel - qd), integrated implicitly by the
+// solver (ke acts on Revolute and Prismatic joints; ke/kd start at the model's joint_target_ke/kd)
+#define NOVAPHY_CONTROL_FIELDS(X)                 \
+  X(Scalar, joint_f, joint_dof_count, 1)          \
+  X(Scalar, actuator_ctrl, actuator_count, 1)     \
+  X(Scalar, joint_target_pos, joint_dof_count, 1) \
+  X(Scalar, joint_target_vel, joint_dof_count, 1) \
+  X(Scalar, joint_target_ke, joint_dof_count, 1)  \
+  X(Scalar, joint_target_kd, joint_dof_count, 1)
+
+// the counts every field's size is written in, and the model they were made by: model_id is a fingerprint of the
+// model as finalized (every field, gravity and the enums), so a state, control or contacts of another model is
+// refused even where its counts are the same, while models finalized alike (a scene rebuilt) share their states
+struct ModelCounts {
+  std::uint64_t model_id = 0;
+  int world_count = 1;
+  int body_count = 0;
+  int joint_count = 0;
+  int joint_coord_count = 0;
+  int joint_dof_count = 0;
+  int articulation_count = 0;
+  int shape_count = 0;
+  int actuator_count = 0;
+  int keyframe_count = 0;
+  int exclude_count = 0;
+  int tendon_count = 0;
+  int tendon_entry_count = 0;  // a tendon's joints, all tendons together
+  int equality_count = 0;
+  int mesh_count = 0;
+  int mesh_vertex_count = 0;  // all meshes' hull vertices together
+  int mesh_face_count = 0;
+  int mesh_corner_count = 0;  // all faces' corners together
+};
+
+bool same_layout(const ModelCounts& a, const ModelCounts& b);
+
+struct State : ModelCounts {
+#define NOVAPHY_DECLARE(T, name, count, width) std::vector<T> name;
+  NOVAPHY_STATE_FIELDS(NOVAPHY_DECLARE)
+  // copies every array of other (a checkpoint restored); throws Error unless both have one model's layout
+  void assign(const State& other);
+};
+
+struct Control : ModelCounts {
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_DECLARE)
+  void assign(const Control& other);
+};
+
+struct Model : ModelCounts {
+  Vec3 gravity = Vec3(0, -9.81, 0);
+  Precision precision = Precision::Float64;
+  CollisionFilter collision_filter = CollisionFilter::GroupAndMask;  // exclude_shape: pairs that never collide
+  FrictionRule friction_rule = FrictionRule::GeometricMean;
+  NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)
+#undef NOVAPHY_DECLARE
+  Scalar timestep = 0.002;  // (s) the step the scene was made for (MJCF's <option timestep>)
+  Scalar impratio = 1;      // MuJoCo's ratio of a soft contact's normal to frictional regularisation
+  std::vector<std::string> body_name;
+  std::vector<std::string> joint_name;
+  std::vector<std::string> shape_name;
+  std::vector<std::string> actuator_name;
+  std::vector<std::string> tendon_name;
+  std::vector<std::string> equality_name;
+  std::vector<std::string> keyframe_name;  // keyframe k's joint_q, joint_qd and actuator_ctrl: row k of keyframe_*
+
+  // sizes every field from the counts (fields are zero-filled)
+  void allocate();
+  // model_id from every field as it is now (the builder's last step)
+  void set_model_id();
+  // throws Error naming the first field whose size does not match the counts
+  void check_sizes() const;
+
+  ArticulationView articulation(int a) const;
+  // a state at the initial coordinates joint_q0 (or keyframe `keyframe`'s coordinates and velocities), with
+  // body_q/body_qd from forward kinematics
+  State state() const;
+  State state(const std::string& keyframe) const;
+  // a zeroed control with the model's PD gains (and keyframe `keyframe`'s actuator commands)
+  Control control() const;
+  Control control(const std::string& keyframe) const;
+  // the index of the keyframe of that name; throws Error listing the model's keyframes when there is none
+  int keyframe(const std::string& name) const;
+
+  // throws Error naming the array unless `state` / `control` was made for this model
+  void check(const State& state) const;
+  void check(const Control& control) const;
+};
+
+// body b's pose in the state (its frame in the world), the world frame for b = -1
+inline Transform body_pose(const State& state, int b) {
+  return b < 0 ? Transform::identity() : Transform::from_array(&state.body_q[7 * static_cast<size_t>(b)]);
+}
+
+}  // namespace novaphy

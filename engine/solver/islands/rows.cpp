@@ -1,0 +1,349 @@
+#include "engine/solver/islands/rows.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "engine/solver/parallel.h"
+#include "engine/solver/parts/rows.h"
+#include "engine/solver/parts/tendon.h"
+
+namespace novaphy {
+
+IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& art, const ArticulationIndex& index,
+                       const std::vector<int>& limited_joints, const std::vector<int>& limited_start,
+                       const std::vector<int>& limit_cell)
+    : model_(model),
+      art_(art),
+      index_(index),
+      limited_joints_(limited_joints),
+      limited_start_(limited_start),
+      limit_cell_(limit_cell) {
+  limit_row_.assign(2 * static_cast<size_t>(model.joint_dof_count), -1);
+  friction_row_.assign(model.joint_dof_count, -1);
+  equality_row_.assign(model.equality_count, -1);
+  tendon_row_.assign(2 * static_cast<size_t>(model.tendon_count), -1);
+}
+
+void IslandRows::begin(const std::vector<StepRoute*>& route) {
+  route_ = &route;
+  row_count_ = 0;
+  pool_size_ = 0;
+}
+
+int IslandRows::begin_row(int art_a, int art_b, RowKind kind, Scalar target) {
+  if (row_count_ == static_cast<int>(rows_.size())) rows_.resize(std::max<size_t>(64, 2 * rows_.size()));
+  PgsRow& row = rows_[row_count_];
+  row = PgsRow{};
+  row.kind = kind;
+  row.target = target;
+  row.side_count = 0;
+  for (const int a : {art_b, art_a}) {
+    if (a < 0 || (row.side_count == 1 && a == art_b)) continue;
+    const int s = row.side_count++;
+    row.dof_begin[s] = art_[a].qd_begin();
+    row.dof_count[s] = art_[a].dof_count();
+    row.pool[s] = pool_size_;
+    pool_size_ += row.dof_count[s];
+  }
+  if (pool_size_ > static_cast<int>(J_.size())) {
+    J_.resize(2 * pool_size_);
+    MinvJT_.resize(2 * pool_size_);
+  }
+  for (int s = 0; s < row.side_count; ++s) std::fill_n(J_.begin() + row.pool[s], row.dof_count[s], 0);
+  return row_count_++;
+}
+
+Scalar* IslandRows::row_jacobian(int r, int art) {
+  PgsRow& row = rows_[r];
+  for (int s = 0; s < row.side_count; ++s)
+    if (row.dof_begin[s] == art_[art].qd_begin()) return J_.data() + row.pool[s];
+  return nullptr;
+}
+
+int IslandRows::add_row(int body_a, int body_b, const Vec3* p, const Vec3& d, RowKind kind) {
+  const int art_a = index_.moving(body_a), art_b = index_.moving(body_b);
+  const int r = begin_row(art_a, art_b, kind, 0);
+  if (art_b >= 0) (*route_)[art_b]->point_jacobian(art_b, index_.body_link[body_b], p, d, 1, row_jacobian(r, art_b));
+  if (art_a >= 0) (*route_)[art_a]->point_jacobian(art_a, index_.body_link[body_a], p, d, -1, row_jacobian(r, art_a));
+  return r;
+}
+
+Scalar IslandRows::warm_share_of(int r, const StepContext& step) const {
+  bool converged = true;
+  for (int s = 0; s < rows_[r].side_count; ++s)
+    converged = converged && step.pgs_converged[index_.dof_articulation[rows_[r].dof_begin[s]]] != 0;
+  return warm_share<Scalar>(converged, step.rows);
+}
+
+void IslandRows::finish_row(int r, Scalar cfm) {
+  PgsRow& row = rows_[r];
+  Scalar W = 0;
+  for (int s = 0; s < row.side_count; ++s) {
+    Scalar* z = MinvJT_.data() + row.pool[s];
+    const Scalar* J = J_.data() + row.pool[s];
+    std::copy(J, J + row.dof_count[s], z);
+    const int a = index_.dof_articulation[row.dof_begin[s]];
+    (*route_)[a]->solve_mass(a, z);
+    for (int k = 0; k < row.dof_count[s]; ++k) W += J[k] * z[k];
+  }
+  row.inv_mass = W + (cfm + row.cfm) > 1e-12 ? 1 / (W + (cfm + row.cfm)) : 0;
+}
+
+void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>& articulations) {
+  const Scalar dt = step.dt;
+  for (const int a : articulations)
+    for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
+      const int r = friction_row_[g];
+      step.friction_impulse[g] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+    }
+  for (const int a : articulations)
+    for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
+      const int j = limited_joints_[m], g = model_.joint_qd_start[j];
+      const Scalar q = step.in->joint_q[model_.joint_q_start[j]];
+      for (int side = 0; side < 2; ++side) {
+        limit_row_[2 * g + side] = -1;
+        const Scalar sign = side == 0 ? 1 : -1;
+        const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
+        const Scalar gap = sign * (q - limit);
+        if (!std::isfinite(limit) || !limit_row_on(gap, sign * step.qd[g], dt)) continue;
+        const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, dt));
+        row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
+        rows_[r].lambda = warm_share_of(r, step) * step.limit_impulse[limit_cell_[2 * m + side]];
+        limit_row_[2 * g + side] = r;
+      }
+    }
+}
+
+void IslandRows::add_friction_rows(const StepContext& step, const std::vector<int>& articulations) {
+  for (const int a : articulations)
+    for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
+      friction_row_[g] = -1;
+      const Scalar loss = model_.joint_frictionloss[g];
+      if (!(loss > 0)) continue;
+      const int r = begin_row(a, -1, RowKind::Bounded, 0);
+      row_jacobian(r, a)[g - art_[a].qd_begin()] = 1;
+      rows_[r].bound = friction_loss_bound(loss, step.dt);
+      rows_[r].lambda = warm_share_of(r, step) * step.friction_impulse[g];
+      friction_row_[g] = r;
+    }
+}
+
+void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int>& contacts) {
+  const Contacts& C = *step.contacts;
+  if (static_cast<int>(contact_row_.size()) < C.contact_count) {
+    contact_row_.resize(C.contact_count);
+    contact_dims_.resize(C.contact_count);
+  }
+  const Scalar zero[6] = {};
+  ContactPair made;  // (a pair past the table: ShapeContacts::pair)
+  for (const int c : contacts) {
+    const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
+    const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
+    const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
+    Scalar d[9];
+    contact_frame(&C.contact_normal[3 * c], d);
+    const int rn = add_row(ba, bb, &p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
+    const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
+    add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
+    const ShapeContacts& shapes = *step.lists.shapes;
+    const ContactPair& pair = shapes.pair(sa, sb, &made);
+    const ContactFriction& f = pair.friction;
+    rows_[r1].normal = rn;
+    rows_[r1].mu = f.mu;
+    // the rows' velocities at the step's start; their targets and a soft contact's cfm
+    Scalar v[3];
+    for (int e = 0; e < 3; ++e) v[e] = row_velocity(rows_[rn + e], J_, step.in->joint_qd.data());
+    const Scalar depth = C.contact_depth[c];
+    const ContactSoftness soft =
+        contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], model_.impratio, depth);
+    if (soft.soft) {
+      rows_[rn].target = soft_normal_target(depth, v[0], soft.damping, soft.spring, soft.active_margin, step.dt);
+      rows_[rn].cfm = soft.cfm_normal;
+      for (int e = 1; e < 3; ++e) {
+        rows_[rn + e].target = soft_friction_target(v[e], soft.damping, step.dt);
+        rows_[rn + e].cfm = soft.cfm_friction;
+      }
+    } else {
+      rows_[rn].target = contact_normal_target(depth, v[0], pair.restitution, step.rows, step.dt);
+    }
+    Scalar warm[6];
+    const Scalar* previous = C.previous(c);
+    contact_warm_start(previous ? previous : zero, d, contact_warm_share<Scalar>(step.rows), warm);
+    for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
+    contact_row_[c] = rn;
+    // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents
+    const int dims = std::min(step.lists.dims, contact_row_count(f.condim));
+    contact_dims_[c] = dims;
+    for (int e = 3; e < dims; ++e) {
+      const Scalar* axis = d + 3 * (e == 3 ? 0 : e - 3);
+      const int r = add_row(ba, bb, nullptr, Vec3(axis[0], axis[1], axis[2]),
+                            e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair);
+      const Scalar mu = e == 3 ? f.torsion : f.rolling;
+      rows_[r].normal = rn;
+      rows_[r].mu = mu;
+      rows_[r].lambda = warm[e];
+      if (!soft.soft) continue;
+      rows_[r].target =
+          soft_friction_target(row_velocity(rows_[r], J_, step.in->joint_qd.data()), soft.damping, step.dt);
+      rows_[r].cfm = soft_spin_cfm(soft.cfm_friction, f.mu, mu);
+    }
+  }
+}
+
+void IslandRows::add_constraint_rows(const StepContext& step) {
+  for (int e = 0; e < model_.equality_count; ++e) {
+    if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::JointCoupling)
+      add_coupling_row(step, e);
+    else
+      add_body_rows(step, e);
+  }
+  for (int t = 0; t < model_.tendon_count; ++t) add_tendon_limit_rows(step, t);
+}
+
+void IslandRows::add_body_rows(const StepContext& step, int e) {
+  // the anchors in the world at the step's body poses; rows along x, y and z of the second's velocity less
+  // the first's at their midpoint, each driving its part of the gap p2 - p1 to zero; a weld's three more of
+  // their angular velocities, driving the rotation from body 2's held orientation to its own to zero
+  const int b1 = model_.equality_object[2 * e], b2 = model_.equality_object[2 * e + 1];
+  const Scalar* data = &model_.equality_data[10 * e];
+  const Transform X1 = body_pose(*step.in, b1), X2 = body_pose(*step.in, b2);
+  const Vec3 p1 = X1.apply(Vec3(data[0], data[1], data[2])), p2 = X2.apply(Vec3(data[3], data[4], data[5]));
+  const Vec3 mid = (p1 + p2) / 2;
+  Vec3 error[2] = {p2 - p1, Vec3::Zero()};
+  const bool weld = static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Weld;
+  if (weld) {
+    const Eigen::AngleAxis<Scalar> turn(X2.q * (X1.q * Quat(data[9], data[6], data[7], data[8])).inverse());
+    error[1] = turn.angle() * turn.axis();
+  }
+  equality_row_[e] = row_count_;
+  for (int k = 0; k < (weld ? 6 : 3); ++k) {
+    const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), RowKind::Bounded);
+    rows_[r].bound = std::numeric_limits<Scalar>::infinity();
+    rows_[r].target = equality_row_target(error[k / 3][k % 3], step.rows, step.dt);
+    rows_[r].lambda = warm_share_of(r, step) * step.equality_impulse[6 * e + k];
+  }
+}
+
+void IslandRows::add_coupling_row(const StepContext& step, int e) {
+  const int j1 = model_.equality_object[2 * e], j2 = model_.equality_object[2 * e + 1];
+  const int d1 = model_.joint_qd_start[j1], d2 = j2 < 0 ? -1 : model_.joint_qd_start[j2];
+  const Scalar* q = step.in->joint_q.data();
+  Scalar slope = 0;
+  const Scalar error =
+      joint_coupling_error(&model_.equality_data[10 * e], q[model_.joint_q_start[j1]],
+                           j2 < 0 ? model_.equality_data[10 * e + 6] : q[model_.joint_q_start[j2]], &slope);
+  const int a1 = index_.dof_articulation[d1], a2 = d2 < 0 ? -1 : index_.dof_articulation[d2];
+  const int r = begin_row(a1, a2 == a1 ? -1 : a2, RowKind::Bounded, equality_row_target(error, step.rows, step.dt));
+  row_jacobian(r, a1)[d1 - art_[a1].qd_begin()] += 1;
+  if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
+  rows_[r].bound = std::numeric_limits<Scalar>::infinity();
+  rows_[r].lambda = warm_share_of(r, step) * step.equality_impulse[6 * e];
+  equality_row_[e] = r;
+}
+
+void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
+  // as a joint's limit rows, over the tendon's length and velocity
+  const Scalar length = tendon_length(model_, t, step.in->joint_q.data());
+  const Scalar velocity = tendon_velocity(model_, t, step.qd);
+  const int first = model_.tendon_start[t], a = index_.dof_articulation[model_.tendon_dof[first]];
+  for (int side = 0; side < 2; ++side) {
+    tendon_row_[2 * t + side] = -1;
+    const Scalar sign = side == 0 ? 1 : -1;
+    const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
+    const Scalar gap = sign * (length - limit);
+    if (!std::isfinite(limit) || !limit_row_on(gap, sign * velocity, step.dt)) continue;
+    const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, step.dt));
+    Scalar* J = row_jacobian(r, a);
+    for (int e = first; e < model_.tendon_start[t + 1]; ++e)
+      J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
+    rows_[r].lambda = warm_share_of(r, step) * step.tendon_impulse[2 * t + side];
+    tendon_row_[2 * t + side] = r;
+  }
+}
+
+void IslandRows::keep_constraint_impulses(const StepContext& step) const {
+  for (int e = 0; e < model_.equality_count; ++e) {
+    const auto type = static_cast<EqualityType>(model_.equality_type[e]);
+    const int rows = type == EqualityType::Weld ? 6 : type == EqualityType::Connect ? 3 : 1;
+    for (int k = 0; k < rows; ++k)
+      step.equality_impulse[6 * e + k] = impulse_kept(rows_[equality_row_[e] + k].lambda, true);
+  }
+  for (int t = 0; t < 2 * model_.tendon_count; ++t) {
+    const int r = tendon_row_[t];
+    step.tendon_impulse[t] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+  }
+}
+
+void IslandRows::group_islands() {
+  // articulations joined by rows (union-find), then each island's rows in row order, a counting sort
+  const int n = static_cast<int>(art_.size());
+  island_parent_.resize(n);
+  std::iota(island_parent_.begin(), island_parent_.end(), 0);
+  auto find = [&](int a) {
+    while (island_parent_[a] != a) a = island_parent_[a] = island_parent_[island_parent_[a]];
+    return a;
+  };
+  auto art_of = [&](const PgsRow& row, int side) { return index_.dof_articulation[row.dof_begin[side]]; };
+  for (int r = 0; r < row_count_; ++r)
+    if (rows_[r].side_count == 2) {
+      const int x = find(art_of(rows_[r], 0)), y = find(art_of(rows_[r], 1));
+      island_parent_[std::max(x, y)] = std::min(x, y);
+    }
+  island_of_row_.resize(row_count_);
+  for (int r = 0; r < row_count_; ++r)
+    island_of_row_[r] = rows_[r].side_count > 0 ? find(art_of(rows_[r], 0)) : 0;  // a row of no dofs does nothing
+  island_start_.assign(n + 1, 0);
+  for (int r = 0; r < row_count_; ++r) ++island_start_[island_of_row_[r] + 1];
+  for (int i = 0; i < n; ++i) island_start_[i + 1] += island_start_[i];
+  fill_.assign(island_start_.begin(), island_start_.end() - 1);
+  island_rows_.resize(row_count_);
+  for (int r = 0; r < row_count_; ++r) island_rows_[fill_[island_of_row_[r]]++] = r;
+}
+
+void IslandRows::solve(const StepContext& step, const std::vector<int>& articulations, const std::vector<int>& contacts,
+                       int threads) {
+  if (row_count_ > 0) {
+    group_islands();
+    const int n = static_cast<int>(art_.size());
+    parallel_for(std::min(threads, n), n, [&](int island) {
+      const int begin = island_start_[island], count = island_start_[island + 1] - begin;
+      const int* order = island_rows_.data() + begin;
+      for (int k = 0; k < count; ++k) finish_row(order[k], step.rows.pgs.cfm);
+      for (int k = 0; k < count; ++k) apply_impulse(rows_[order[k]], MinvJT_, rows_[order[k]].lambda, step.qd);
+      bool converged = false;
+      pgs_solve(rows_, order, count, J_, MinvJT_, step.rows.pgs, step.qd, &converged);
+      for (int k = 0; k < count; ++k)
+        for (int s = 0; s < rows_[order[k]].side_count; ++s)
+          step.pgs_converged[index_.dof_articulation[rows_[order[k]].dof_begin[s]]] = converged;
+    });
+  }
+  // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
+  for (const int c : contacts) {
+    Scalar d[9], lambda[6] = {}, P[6];
+    contact_frame(&step.contacts->contact_normal[3 * c], d);
+    for (int e = 0; e < contact_dims_[c]; ++e) lambda[e] = rows_[contact_row_[c] + e].lambda;
+    contact_impulse_kept(lambda, d, P);
+    contact_impulse_kept(lambda + 3, d, P + 3);
+    std::copy_n(P, 3, &step.contacts->contact_impulse[3 * c]);
+    std::copy_n(P + 3, 3, &step.contacts->contact_spin_impulse[3 * c]);
+  }
+  keep_constraint_impulses(step);
+  for (const int a : articulations)
+    for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
+      const int g = model_.joint_qd_start[limited_joints_[m]];
+      for (int side = 0; side < 2; ++side) {
+        const int r = limit_row_[2 * g + side];
+        step.limit_impulse[limit_cell_[2 * m + side]] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+      }
+    }
+}
+
+std::size_t IslandRows::bytes() const {
+  return (J_.size() + MinvJT_.size()) * sizeof(Scalar) + rows_.size() * sizeof(PgsRow) +
+         (limit_row_.size() + friction_row_.size() + contact_row_.size() + equality_row_.size() + tendon_row_.size()) *
+             sizeof(int);
+}
+
+}  // namespace novaphy

@@ -1,0 +1,74 @@
+// Shared helpers of the SolverFeatherstone tests (tests/engine/solver/, shapes_test.cpp, soft_contact_test.cpp): a
+// finalized scene with its pipeline, contacts, solver, state and control, and the boxes, materials and settings they
+// build on.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <vector>
+
+#include "engine/collision/pipeline.h"
+#include "engine/model/builder.h"
+#include "engine/solver/solver_featherstone.h"
+
+namespace novaphy::solver_test {
+
+inline constexpr Scalar kDt = 1.0 / 120;
+
+// a finalized scene with its pipeline, contacts, solver, state and control
+struct Scene {
+  explicit Scene(const ModelBuilder& builder, const SolverFeatherstoneSettings& settings = {})
+      : model(builder.finalize()),
+        pipeline(model),
+        contacts(pipeline.contacts()),
+        solver(model, settings),
+        state(model.state()),
+        control(model.control()) {}
+
+  void run(Scalar seconds, Scalar dt = kDt, const std::function<void()>& after_step = {}) {
+    const int steps = static_cast<int>(std::lround(seconds / dt));
+    for (int k = 0; k < steps; ++k) {
+      pipeline.collide(state, contacts);
+      solver.step(state, state, control, contacts, dt);
+      if (after_step) after_step();
+    }
+  }
+  Vec3 position(int body) const { return Eigen::Map<const Vec3>(&state.body_q[7 * body]); }
+  Vec3 velocity(int body) const { return Eigen::Map<const Vec3>(&state.body_qd[6 * body]); }
+
+  Model model;
+  CollisionPipeline pipeline;
+  Contacts contacts;
+  SolverFeatherstone solver;
+  State state;
+  Control control;
+};
+
+inline ShapeOptions material(Scalar mu, Scalar restitution = 0) {
+  ShapeOptions options;
+  options.mu = mu;
+  options.restitution = restitution;
+  return options;
+}
+
+inline int add_box(ModelBuilder& builder, const Vec3& position, Scalar half = 0.2, Scalar mass = 1, Scalar mu = 0.5) {
+  const int body = builder.add_body(RigidBody::from_box(mass, Vec3::Constant(half)), Transform{position});
+  builder.add_shape_box(body, Vec3::Constant(half), material(mu));
+  return body;
+}
+
+inline SolverFeatherstoneSettings no_damping() {
+  SolverFeatherstoneSettings settings;
+  settings.angular_damping = 0;
+  return settings;
+}
+
+// largest |x[k] - y[k]|
+inline Scalar max_difference(const std::vector<Scalar>& x, const std::vector<Scalar>& y) {
+  Scalar d = 0;
+  for (size_t k = 0; k < x.size(); ++k) d = std::max(d, std::abs(x[k] - y[k]));
+  return d;
+}
+
+}  // namespace novaphy::solver_test
