@@ -6,7 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "engine/solver/parallel.h"
+#include "engine/threads/parallel.h"
 
 namespace novaphy::python {
 

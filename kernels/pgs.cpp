@@ -6,10 +6,11 @@
 namespace novaphy {
 
 void contact_tangents(const Vec3& n, Vec3* t1, Vec3* t2) {
-  const Scalar sign = std::copysign(Scalar(1), n.z());
-  const Scalar a = -1 / (sign + n.z()), b = n.x() * n.y() * a;
-  *t1 = Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
-  *t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
+  const Scalar normal[3] = {n.x(), n.y(), n.z()};
+  Scalar d[9];
+  contact_frame(normal, d);
+  *t1 = Vec3(d[3], d[4], d[5]);
+  *t2 = Vec3(d[6], d[7], d[8]);
 }
 
 Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scalar* qd) {
@@ -56,7 +57,7 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
         const Scalar unclamped = row.lambda + step(row);
         const Scalar bound = row.kind == RowKind::FrictionOne ? row.mu * rows[row.normal].lambda : row.bound;
         const Scalar lambda =
-            row.kind == RowKind::Unilateral ? std::max<Scalar>(0, unclamped) : std::clamp(unclamped, -bound, bound);
+            row.kind == RowKind::Unilateral ? project_unilateral(unclamped) : project_bounded(unclamped, bound);
         if (!std::isfinite(lambda) || lambda == row.lambda) continue;
         apply_impulse(row, MinvJT, lambda - row.lambda, qd);
         moving |= moved(row, lambda - row.lambda);
@@ -67,12 +68,8 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
       PgsRow& second = rows[r + 1];
       const Scalar limit = row.mu * rows[row.normal].lambda;
       const Scalar l1 = row.lambda + step(row), l2 = second.lambda + step(second);
-      const Scalar box1 = std::clamp(l1, -limit, limit), box2 = std::clamp(l2, -limit, limit);
-      // (not std::hypot: its guard against overflow costs more than the rest of the pair's update)
-      const Scalar norm = std::sqrt(l1 * l1 + l2 * l2);
-      const Scalar scale = norm > limit ? limit / norm : 1;
-      const Scalar s = settings.friction_smoothing;
-      const Scalar new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
+      Scalar new1, new2;
+      project_friction_pair(l1, l2, limit, settings.friction_smoothing, &new1, &new2);
       ++k;  // the second tangent
       if (!std::isfinite(new1) || !std::isfinite(new2)) continue;
       if (new1 != row.lambda) apply_impulse(row, MinvJT, new1 - row.lambda, qd);

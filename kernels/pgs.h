@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "kernels/number.h"
 #include "kernels/spatial.h"
 
 namespace novaphy {
@@ -39,8 +40,51 @@ struct PgsSettings {
   Scalar tolerance = 0;
 };
 
-// two unit tangents completing a contact normal n to a right-handed frame (Frisvad's construction)
+// a contact's frame d [9] from its unit normal n [3]: the normal, then two unit tangents t1 and t2 completing it to
+// a right-handed frame (Frisvad's construction), over the number type (kernels/number.h: one contact, or one a
+// lane). A lane with n = 0 gets finite numbers
+template <typename V>
+inline void contact_frame(const V* n, V* d) {
+  const V sign = unit_sign(n[2]);
+  const V a = Element<V>(-1) / (sign + n[2]), b = n[0] * n[1] * a;
+  for (int m = 0; m < 3; ++m) d[m] = n[m];
+  d[3] = 1 + sign * n[0] * n[0] * a;
+  d[4] = sign * b;
+  d[5] = -sign * n[0];
+  d[6] = b;
+  d[7] = sign + n[1] * n[1] * a;
+  d[8] = -n[1];
+}
+
+// contact_frame's tangents of the normal n
 void contact_tangents(const Vec3& n, Vec3* t1, Vec3* t2);
+
+// ---- a row's impulse projected onto its bounds in a sweep, over the number type: one row (pgs_solve) or a row
+// of a block's lanes (batch_pgs_solve). A NaN stays NaN or becomes a bound; the sweeps skip a non-finite impulse
+
+// Unilateral: at least 0
+template <typename V>
+inline V project_unilateral(const V& impulse) {
+  return select<V>(impulse > 0, impulse, V{});
+}
+
+// Bounded and FrictionOne: within [-bound, bound]
+template <typename V>
+inline V project_bounded(const V& impulse, const V& bound) {
+  return select<V>(impulse < -bound, -bound, select<V>(impulse > bound, bound, impulse));
+}
+
+// FrictionPair: the two tangents' impulses l1, l2 within limit (mu times the normal's impulse), *p1 and *p2: each
+// clamped to the limit (a box, smoothing 0), the pair scaled into the disk of that radius (1), or a blend
+template <typename V>
+inline void project_friction_pair(const V& l1, const V& l2, const V& limit, Element<V> smoothing, V* p1, V* p2) {
+  const V box1 = project_bounded(l1, limit), box2 = project_bounded(l2, limit);
+  // (not hypot: its guard against overflow costs more than the rest of the pair's update)
+  const V norm = root(l1 * l1 + l2 * l2);
+  const V scale = select<V>(norm > limit, limit / norm, splat<V>(1));
+  *p1 = (1 - smoothing) * box1 + smoothing * scale * l1;
+  *p2 = (1 - smoothing) * box2 + smoothing * scale * l2;
+}
 
 // J qd of one row
 Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scalar* qd);

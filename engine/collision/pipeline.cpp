@@ -7,8 +7,8 @@
 #include <numeric>
 
 #include "engine/model/error.h"
-#include "engine/solver/exclusive_call.h"
-#include "engine/solver/parallel.h"
+#include "engine/threads/exclusive_call.h"
+#include "engine/threads/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/lane_transpose.h"
 

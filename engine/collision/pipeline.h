@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "engine/model/model.h"
-#include "engine/solver/parallel.h"
+#include "engine/threads/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/convex.h"
 

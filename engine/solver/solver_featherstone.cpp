@@ -12,7 +12,7 @@
 
 #include "engine/eval/eval.h"
 #include "engine/model/error.h"
-#include "engine/solver/parallel.h"
+#include "engine/threads/parallel.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
 #include "kernels/crba.h"

@@ -104,10 +104,10 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
         const V<T> sum = lambda[r] + step(r);
         V<T> next;
         if (rows.kind[r] == RowKind::Unilateral) {
-          next = sum > 0 ? sum : V<T>{};
+          next = project_unilateral(sum);
         } else {
           const V<T> b = rows.kind[r] == RowKind::FrictionOne ? rows.mu[r] * lambda[rows.normal[r]] : rows.bound[r];
-          next = sum < -b ? -b : (sum > b ? b : sum);
+          next = project_bounded(sum, b);
         }
         const M<T> on = live & rows.active[r] & finite<T>(next) & (next != lambda[r]);
         if (!any_lane<T>(on)) continue;
@@ -123,11 +123,8 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
       V<T> v[2];
       row_velocities<2, T>(j, qd, rows.nonzero_begin[r], rows.nonzero_end[r], rows.zero_begin[r], rows.zero_end[r], v);
       const V<T> l1 = lambda[r] + step_at(r, v[0]), l2 = lambda[r2] + step_at(r2, v[1]);
-      const V<T> box1 = l1 < -limit ? -limit : (l1 > limit ? limit : l1);
-      const V<T> box2 = l2 < -limit ? -limit : (l2 > limit ? limit : l2);
-      const V<T> norm = lane_sqrt<T>(l1 * l1 + l2 * l2);
-      const V<T> scale = norm > limit ? limit / norm : V<T>{} + 1;
-      const V<T> new1 = (1 - s) * box1 + s * scale * l1, new2 = (1 - s) * box2 + s * scale * l2;
+      V<T> new1, new2;
+      project_friction_pair(l1, l2, limit, s, &new1, &new2);
       const M<T> on = live & rows.active[r] & finite<T>(new1) & finite<T>(new2);
       const M<T> on1 = on & (new1 != lambda[r]), on2 = on & (new2 != lambda[r2]);
       if (any_lane<T>(on1 | on2)) apply_pair<T>(z(r), new1 - lambda[r], on1, z(r2), new2 - lambda[r2], on2, n, qd);

@@ -34,23 +34,6 @@ struct BatchRows {
   Lanes<T>* lambda = nullptr;           // [row] in: the warm start (not yet applied); out: the impulse
 };
 
-// a contact frame per lane, contact_tangents' (its reference twin): from the unit normals n [3], d [9]
-// = the normal, then the two tangents t1 and t2, each [3]. A lane with n = 0 gets finite numbers
-template <typename T>
-inline void lane_tangents(const Lanes<T>* n, Lanes<T>* d) {
-  Lanes<T> sign;
-#pragma omp simd
-  for (int l = 0; l < kLanes<T>; ++l) sign[l] = std::copysign(T(1), n[2][l]);
-  const Lanes<T> a = T(-1) / (sign + n[2]), b = n[0] * n[1] * a;
-  for (int m = 0; m < 3; ++m) d[m] = n[m];
-  d[3] = 1 + sign * n[0] * n[0] * a;
-  d[4] = sign * b;
-  d[5] = -sign * n[0];
-  d[6] = b;
-  d[7] = sign + n[1] * n[1] * a;
-  d[8] = -n[1];
-}
-
 // the rows' effective masses, the warm start applied to qd [dof], then the sweeps in row order:
 // the same steps, per lane, as the solver's scalar path (finish_row, apply_impulse, pgs_solve); with a
 // tolerance, each lane stops where pgs_solve would stop it; *converged (if given): -1 in the lanes whose sweeps

@@ -273,10 +273,10 @@ TEST(Pgs, AFixedPointEndsTheSweeps) {
   EXPECT_NE(qd_a, qd);
 }
 
-// the lanes' contact frames against contact_tangents in double: random unit normals and the axes,
-// signed zeros included; each frame orthonormal with t1 x t2 = n
+// the lanes' contact frames (contact_frame on lanes) against contact_tangents in double: random unit normals and the
+// axes, signed zeros included; each frame orthonormal with t1 x t2 = n
 template <typename T>
-void expect_lane_tangents_match_contact_tangents() {
+void expect_lane_frames_match_contact_tangents() {
   using V = Lanes<T>;
   std::mt19937 rng(3);
   std::normal_distribution<double> g;
@@ -287,7 +287,7 @@ void expect_lane_tangents_match_contact_tangents() {
     V n[3], d[9];
     for (int l = 0; l < kLanes<T>; ++l)
       for (int m = 0; m < 3; ++m) n[m][l] = static_cast<T>(normals[first + l][m]);
-    lane_tangents<T>(n, d);
+    contact_frame<V>(n, d);
     for (int l = 0; l < kLanes<T>; ++l) {
       const Vec3 normal(n[0][l], n[1][l], n[2][l]);
       Vec3 t1, t2;
@@ -307,8 +307,8 @@ void expect_lane_tangents_match_contact_tangents() {
   EXPECT_LT(worst, 8);
 }
 
-TEST(BatchPgs, LaneTangentsMatchContactTangentsFloat64) { expect_lane_tangents_match_contact_tangents<double>(); }
-TEST(BatchPgs, LaneTangentsMatchContactTangentsFloat32) { expect_lane_tangents_match_contact_tangents<float>(); }
+TEST(BatchPgs, LaneFramesMatchContactTangentsFloat64) { expect_lane_frames_match_contact_tangents<double>(); }
+TEST(BatchPgs, LaneFramesMatchContactTangentsFloat32) { expect_lane_frames_match_contact_tangents<float>(); }
 
 TEST(BatchPgs, AbsentRowsChangeNoBitOfTheirLane) {
   for (const double tolerance : {0.0, 1e-3}) {

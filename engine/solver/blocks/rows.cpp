@@ -214,7 +214,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
   const RowSpan span = contact_paths(topo, on, link, uniform, R);
   V<T>* d = &R.frame[9 * t];
-  contact_frame<T>(n, d);
+  contact_frame<Lanes<T>>(n, d);
   V<T> warm[6];
   contact_warm_start(in + 3, d, contact_warm_share<V<T>>(step.rows), warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows

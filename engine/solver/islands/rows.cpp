@@ -5,7 +5,7 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/solver/parallel.h"
+#include "engine/threads/parallel.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver/parts/tendon.h"
 

@@ -1,10 +1,10 @@
-// The divergence guard's test, written once over the number type (engine/solver/parts/number.h): a world
+// The divergence guard's test, written once over the number type (kernels/number.h): a world
 // diverged when a coordinate or velocity after the step is not finite, a dof is faster than `speed`, or its
 // kinetic energy per kilogram, 1/2 sum_k weight_k qd_k^2 (weight: the mass matrix's diagonal at joint_q0 over the
 // world's mass), passes `energy` (compared in double, whatever the lanes' precision).
 #pragma once
 
-#include "engine/solver/parts/number.h"
+#include "kernels/number.h"
 
 namespace novaphy {
 

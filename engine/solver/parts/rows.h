@@ -1,4 +1,4 @@
-// The constraint rows of the step, each written once over the number type (engine/solver/parts/number.h) and
+// The constraint rows of the step, each written once over the number type (kernels/number.h) and
 // composed by both row builders (the blocks' lanes and the islands of articulations): their targets,
 // warm starts and the impulses kept for the next step. A row drives J qd towards its target; sweeps
 // (kernels/pgs, kernels/batch/pgs) clamp its impulse.
@@ -8,9 +8,9 @@
 #include <cmath>
 
 #include "engine/model/model.h"
-#include "engine/solver/parts/number.h"
 #include "engine/solver/parts/row_params.h"
 #include "kernels/batch/pgs.h"
+#include "kernels/number.h"
 #include "kernels/pgs.h"
 
 namespace novaphy {
@@ -81,7 +81,7 @@ inline V friction_loss_bound(const V& frictionloss, const V& dt) {
   return frictionloss * dt;
 }
 
-// ---- contacts: a normal row and two friction rows along the tangents of contact_tangents' frame; with condim
+// ---- contacts: a normal row and two friction rows along the tangents of contact_frame's (kernels/pgs.h); with condim
 // 4 a torsional row (the relative angular velocity about the normal, |impulse| <= mu_torsion normal impulse),
 // with 6 also two rolling rows (about the tangents, bounded together by mu_rolling normal impulse)
 
@@ -295,17 +295,6 @@ inline V soft_spin_cfm(const V& cfm_sliding, const V& mu_sliding, const V& mu) {
 template <typename V>
 inline V soft_friction_target(const V& v, const V& damping, const V& dt) {
   return v - dt * damping * v;
-}
-
-// d [9] = the unit normal n [3], then the tangents t1 and t2
-inline void contact_frame(const Scalar* n, Scalar* d) {
-  Vec3 t1, t2;
-  contact_tangents(Vec3(n[0], n[1], n[2]), &t1, &t2);
-  for (int m = 0; m < 3; ++m) d[m] = n[m], d[3 + m] = t1[m], d[6 + m] = t2[m];
-}
-template <typename T>
-inline void contact_frame(const Lanes<T>* n, Lanes<T>* d) {
-  lane_tangents<T>(n, d);
 }
 
 // u [3]: the velocity of the point p [3] moved by the motion s [6] ([angular; linear], about the point p

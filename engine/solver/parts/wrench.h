@@ -1,9 +1,9 @@
-// An applied wrench moved to another point, written once over the number type (engine/solver/parts/number.h):
+// An applied wrench moved to another point, written once over the number type (kernels/number.h):
 // how a body's wrench (body_f: a force through its centre of mass and a torque) reaches the link that
 // carries it, on the dense route and in the blocks alike.
 #pragma once
 
-#include "engine/solver/parts/number.h"
+#include "kernels/number.h"
 
 namespace novaphy {
 

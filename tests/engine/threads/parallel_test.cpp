@@ -1,4 +1,4 @@
-#include "engine/solver/parallel.h"
+#include "engine/threads/parallel.h"
 
 #include <gtest/gtest.h>
 

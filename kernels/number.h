@@ -1,6 +1,7 @@
-// The number types a part of the step is written over: a plain Scalar for one articulation on the dense
-// route, or Lanes<T> for a block of worlds, one per lane. A part uses only arithmetic, comparisons and
-// the few operations below, so one text serves both: a world steps by the same formula on either route.
+// The number types a part of the step (and a kernel's shared steps, such as the sweeps' projections) is written
+// over: a plain Scalar for one articulation on the dense route, or Lanes<T> for a block of worlds, one per lane.
+// A part uses only arithmetic, comparisons and the few operations below, so one text serves both: a world steps
+// by the same formula on either route.
 #pragma once
 
 #include <cmath>
@@ -81,6 +82,27 @@ inline bool lane_set(const Mask<V>& m, int l) {
   } else {
     return m[l] != 0;
   }
+}
+
+// +1 or -1 with the sign of x, lane by lane (copysign: -0 gives -1)
+template <typename V>
+inline V unit_sign(const V& x) {
+  if constexpr (std::is_arithmetic_v<V>) {
+    return std::copysign(V(1), x);
+  } else {
+    V s;
+    for (int l = 0; l < NumberTraits<V>::lanes; ++l) s[l] = std::copysign(Element<V>(1), x[l]);
+    return s;
+  }
+}
+
+// the square root, lane by lane
+template <typename V>
+inline V root(const V& x) {
+  if constexpr (std::is_arithmetic_v<V>)
+    return std::sqrt(x);
+  else
+    return lane_sqrt<Element<V>>(x);
 }
 
 // a number of every lane equal to x
