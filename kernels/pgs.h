@@ -59,6 +59,14 @@ inline void contact_frame(const V* n, V* d) {
 // contact_frame's tangents of the normal n
 void contact_tangents(const Vec3& n, Vec3* t1, Vec3* t2);
 
+// a row's 1 / (J M^-1 J^T + cfm) from jmj = J M^-1 J^T and its cfm (the settings' and its own), 0 for a row of no
+// mass (at most 1e-12): the effective mass both sweeps scale a row's velocity error by
+template <typename V>
+inline V row_inv_mass(const V& jmj, const V& cfm) {
+  const V w = jmj + cfm;
+  return select<V>(w > Element<V>(1e-12), 1 / w, V{});
+}
+
 // ---- a row's impulse projected onto its bounds in a sweep, over the number type: one row (pgs_solve) or a row
 // of a block's lanes (batch_pgs_solve). A NaN stays NaN or becomes a bound; the sweeps skip a non-finite impulse
 

@@ -12,9 +12,9 @@
 
 #include "engine/eval/eval.h"
 #include "engine/model/error.h"
-#include "engine/threads/parallel.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
+#include "engine/threads/parallel.h"
 #include "kernels/crba.h"
 #include "kernels/fk.h"
 #include "kernels/stream.h"

@@ -19,12 +19,12 @@
 #include "engine/model/weld.h"
 #include "engine/solver/blocks/blocks.h"
 #include "engine/solver/dense/dense.h"
-#include "engine/threads/exclusive_call.h"
 #include "engine/solver/islands/rows.h"
-#include "engine/threads/parallel.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver/settings.h"
+#include "engine/threads/exclusive_call.h"
+#include "engine/threads/parallel.h"
 
 namespace novaphy {
 

@@ -72,8 +72,7 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   auto z = [&](int r) { return rows.MinvJT + static_cast<size_t>(r) * n; };
   V<T>* lambda = rows.lambda;
   for (int r = 0; r < rows.count; ++r) {
-    const V<T> W = dot<T>(J(r), z(r), n) + (cfm + rows.cfm[r]);
-    rows.inv_mass[r] = (rows.active[r] != 0) & (W > T(1e-12)) ? 1 / W : V<T>{};
+    rows.inv_mass[r] = rows.active[r] != 0 ? row_inv_mass(dot<T>(J(r), z(r), n), cfm + rows.cfm[r]) : V<T>{};
   }
   for (int r = 0; r < rows.count; ++r) apply<T>(z(r), lambda[r], rows.active[r], n, qd);
   // unconstrained step of one row: the impulse that would bring J qd to its target

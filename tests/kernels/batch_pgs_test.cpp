@@ -166,7 +166,9 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
     const int lane_sweeps =
         pgs_solve(rows, order.data(), static_cast<int>(rows.size()), Jp, zp, settings, v.data(), &lane_converged);
     // (with tolerance 0 a sweep's last bits decide it, and the two sum J qd in different orders)
-    if (tolerance > 0) EXPECT_EQ(converged[l] != 0, lane_converged) << "lane " << l;
+    if (tolerance > 0) {
+      EXPECT_EQ(converged[l] != 0, lane_converged) << "lane " << l;
+    }
     most = std::max(most, lane_sweeps);
     fewest = std::min(fewest, lane_sweeps);
 

@@ -5,9 +5,9 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/threads/parallel.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver/parts/tendon.h"
+#include "engine/threads/parallel.h"
 
 namespace novaphy {
 
@@ -88,7 +88,7 @@ void IslandRows::finish_row(int r, Scalar cfm) {
     (*route_)[a]->solve_mass(a, z);
     for (int k = 0; k < row.dof_count[s]; ++k) W += J[k] * z[k];
   }
-  row.inv_mass = W + (cfm + row.cfm) > 1e-12 ? 1 / (W + (cfm + row.cfm)) : 0;
+  row.inv_mass = row_inv_mass(W, cfm + row.cfm);
 }
 
 void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>& articulations) {

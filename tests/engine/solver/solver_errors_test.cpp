@@ -15,8 +15,8 @@
 #include "engine/eval/eval.h"
 #include "engine/import/mjcf_import.h"
 #include "engine/model/builder.h"
-#include "engine/threads/exclusive_call.h"
 #include "engine/solver/solver_featherstone.h"
+#include "engine/threads/exclusive_call.h"
 #include "solver_test_support.h"
 #include "test_support_errors.h"
 
