@@ -5,7 +5,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "engine/eval/eval.h"
+#include "engine/model/body_kinematics.h"
 #include "engine/model/builder_checks.h"
 #include "engine/model/error.h"
 

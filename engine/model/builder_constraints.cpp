@@ -3,7 +3,6 @@
 #include <limits>
 #include <numeric>
 
-#include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/model/builder_checks.h"
 

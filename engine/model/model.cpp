@@ -4,7 +4,7 @@
 #include <cstddef>
 #include <cstring>
 
-#include "engine/eval/eval.h"
+#include "engine/model/body_kinematics.h"
 #include "engine/model/error.h"
 
 namespace novaphy {
@@ -145,7 +145,7 @@ State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
 #undef NOVAPHY_ALLOCATE_STATE
   std::copy_n(q, model.joint_coord_count, s.joint_q.begin());
   if (qd) std::copy_n(qd, model.joint_dof_count, s.joint_qd.begin());
-  eval_fk(model, s);
+  bodies_from_joints(model, s);
   return s;
 }
 

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <functional>
 
-#include "engine/eval/eval.h"
 #include "engine/model/error.h"
+#include "engine/model/finite_checks.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/tendon.h"
 #include "engine/solver/solver_featherstone.h"

@@ -10,7 +10,6 @@
 #include <sstream>
 #include <type_traits>
 
-#include "engine/eval/eval.h"
 #include "engine/model/error.h"
 #include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "engine/eval/eval.h"
+#include "engine/model/body_kinematics.h"
 #include "engine/solver/parts/drive.h"
 #include "engine/solver/parts/guard.h"
 #include "engine/solver/parts/rows.h"

@@ -1,0 +1,99 @@
+#include "engine/model/body_kinematics.h"
+
+#include <algorithm>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "kernels/fk.h"
+#include "kernels/osim.h"
+
+namespace novaphy {
+
+namespace {
+
+// the bytes that decide an articulation's body_invweight0 (joint_q0's FK, the articulated-body factor and
+// osim_inverse) into key: per link its joint's type, parent and frames, axis, q0, armature and its body's mass, COM
+// and inertia; not a root's parent frame nor a root Free joint's position, which only place the articulation in the
+// world: neither enters a root's S or articulated inertia, and osim_inverse reads no transform above a root (so
+// replicas placed apart share one key, their weights the same bits)
+void invweight0_key(const Model& model, const ArticulationView& art, std::string& key) {
+  key.clear();
+  auto put = [&](const auto* x, int count) { key.append(reinterpret_cast<const char*>(x), sizeof(*x) * count); };
+  for (int i = 0; i < art.link_count(); ++i) {
+    const int j = art.joint_begin + i, b = art.body(i), parent = art.parent(i);
+    const int skip = parent < 0 && art.type(i) == JointType::Free ? 3 : 0;  // (a root Free joint's position)
+    put(&model.joint_type[j], 1);
+    put(&parent, 1);
+    if (parent >= 0) put(&model.joint_X_p[7 * j], 7);
+    put(&model.joint_X_c[7 * j], 7);
+    put(&model.joint_axis[3 * j], 3);
+    put(model.joint_q0.data() + model.joint_q_start[j] + skip, joint_coord_count(art.type(i)) - skip);
+    put(model.joint_armature.data() + model.joint_qd_start[j], art.dof(i));
+    put(&model.body_mass[b], 1);
+    put(&model.body_com[3 * b], 3);
+    put(&model.body_inertia[9 * b], 9);
+  }
+}
+
+}  // namespace
+
+void store_body(const ArticulationScratch& s, int link, const Transform& offset, const Vec3& com, int b, State& state) {
+  const Transform& X = s.X_world[link];
+  (X * offset).to_array(state.body_q.data() + 7 * b);
+  // body_qd = [velocity of the centre of mass; angular velocity], world frame
+  const Vec3 w = s.v[link].head<3>();
+  const Vec3 v_com = s.v[link].tail<3>() + w.cross(offset.apply(com));
+  const Mat3 R = X.rotation();
+  Eigen::Map<Vec6>(state.body_qd.data() + 6 * b) << R * v_com, R * w;
+}
+
+void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state) {
+  for (int i = 0; i < art.link_count(); ++i) store_body(s, i, Transform::identity(), art.com(i), art.body(i), state);
+}
+
+void bodies_from_joints(const Model& model, State& state) {
+  ArticulationScratch s;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = model.articulation(a);
+    s.resize(art);
+    forward_kinematics(art, state.joint_q.data() + art.q_begin(), s);
+    forward_velocity(art, state.joint_qd.data() + art.qd_begin(), s);
+    store_body_state(art, s, state);
+  }
+}
+
+void set_body_invweight0(Model& model) {
+  // inputs: the model at joint_q0; outputs: body_invweight0 (0 for a static body)
+  model.body_invweight0.assign(2 * static_cast<size_t>(model.body_count), 0);
+  ArticulationScratch s;
+  std::vector<Mat6> Omega;
+  std::unordered_map<std::string, int> computed;  // an articulation's defining data -> the first that has it
+  std::string key;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = model.articulation(a);
+    if (art.dof_count() == 0) continue;  // (welded to the world: weightless, as MuJoCo's static bodies)
+    // a replica of one already computed: the same weights, link by link
+    invweight0_key(model, art, key);
+    const auto [first, inserted] = computed.try_emplace(key, a);
+    if (!inserted) {
+      const ArticulationView same = model.articulation(first->second);
+      for (int i = 0; i < art.link_count(); ++i)
+        std::copy_n(&model.body_invweight0[2 * same.body(i)], 2, &model.body_invweight0[2 * art.body(i)]);
+      continue;
+    }
+    s.resize(art);
+    forward_kinematics(art, model.joint_q0.data() + art.q_begin(), s);
+    if (osim_inverse(art, s, Omega) >= 0) continue;
+    for (int i = 0; i < art.link_count(); ++i) {
+      // the COM's velocity v + w x c = v - [c]x w: C = [-[c]x, 1] maps the link's [w; v] to it
+      Eigen::Matrix<Scalar, 3, 6> C;
+      C << -skew(art.com(i)), Mat3::Identity();
+      const int b = art.body(i);
+      model.body_invweight0[2 * b] = (C * Omega[i] * C.transpose()).trace() / 3;
+      model.body_invweight0[2 * b + 1] = Omega[i].topLeftCorner<3, 3>().trace() / 3;
+    }
+  }
+}
+
+}  // namespace novaphy
