@@ -1,7 +1,7 @@
 // Inside the blocks route (engine/solver/blocks/blocks.h): a batch's layout in blocks of lanes, a
 // thread's scratch, and the stages of one block, each in its own file (dynamics.cpp,
-// rows.cpp, integrate.cpp). Not installed for users: the solver and its tests see
-// ArticulationBatches.
+// rows.cpp, integrate.cpp). Installed with every header of engine/ (the install takes them all), but not for
+// users to call: the solver and its tests see ArticulationBatches.
 #pragma once
 
 #include <cstdint>
