@@ -14,7 +14,7 @@ namespace py = pybind11;
 
 void bind_model(py::module_& m);
 void bind_builder(py::module_& m);
-void bind_dynamics(py::module_& m);
+void bind_eval(py::module_& m);
 void bind_collision(py::module_& m);
 void bind_solver_featherstone(py::module_& m);
 void bind_shard(py::module_& m);

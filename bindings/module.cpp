@@ -9,7 +9,7 @@ PYBIND11_MODULE(_novaphy, m) {
   novaphy::python::bind_model(m);
   novaphy::python::bind_builder(m);
   novaphy::python::bind_mujoco(m);
-  novaphy::python::bind_dynamics(m);
+  novaphy::python::bind_eval(m);
   novaphy::python::bind_collision(m);
   novaphy::python::bind_solver_featherstone(m);
   novaphy::python::bind_shard(m);

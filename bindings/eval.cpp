@@ -1,8 +1,9 @@
 // The seed's free functions on lists of Joint/RigidBody, and the same on a Model and State.
 // The GIL is released while the engine computes.
+#include "engine/eval/eval.h"
+
 #include "bindings/bindings.h"
 #include "engine/eval/articulation_functions.h"
-#include "engine/eval/eval.h"
 
 namespace novaphy::python {
 
@@ -17,7 +18,7 @@ ForwardDynamicsMethod method_from_name(const std::string& name) {
 
 }  // namespace
 
-void bind_dynamics(py::module_& m) {
+void bind_eval(py::module_& m) {
   const auto release = py::call_guard<py::gil_scoped_release>();
 
   py::class_<Joint>(m, "Joint", "Joint of the free functions: joints[i] attaches link i to link parent (-1: world).")
