@@ -107,7 +107,7 @@ OracleErrors MujocoOracle::compare_random_state(std::mt19937& rng) {
   }
   e.mass_matrix = relative(T.transpose() * eval_mass_matrix(model_, state) * T, H_mj);
   // MuJoCo's passive forces less its tendons' springs and dampers, which NovaPhy counts with the control's
-  // forces (engine/solver/parts/tendon.h): ten_J^T (-k (L - L_spring) - b V)
+  // forces (engine/model/tendon.h): ten_J^T (-k (L - L_spring) - b V)
   VecX passive = Eigen::Map<const VecX>(d_->qfrc_passive, nv);
   for (int t = 0; t < m_->ntendon; ++t) {
     const mjtNum f = -m_->tendon_stiffness[t] * (d_->ten_length[t] - m_->tendon_lengthspring[t]) -

@@ -9,12 +9,12 @@
 #include <string>
 #include <unordered_map>
 
+#include "engine/model/actuator.h"
 #include "engine/model/body_kinematics.h"
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
+#include "engine/model/tendon.h"
 #include "engine/solver/blocks/blocks.h"
-#include "engine/solver/parts/actuator.h"
-#include "engine/solver/parts/tendon.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -119,7 +119,7 @@ void control_force(const Model& model, const Control& control, const State* stat
     const Scalar q = state ? state->joint_q[model.joint_q_start[j]] : 0, qd = state ? state->joint_qd[dof] : 0;
     tau[dof] += actuator_joint_force(model, u, control.actuator_ctrl[u], q, qd);
   }
-  // tendons (engine/solver/parts/tendon.h): their springs and dampers with the state, the actuators on them
+  // tendons (engine/model/tendon.h): their springs and dampers with the state, the actuators on them
   for (int t = 0; t < model.tendon_count; ++t) {
     const Scalar length = state ? tendon_length(model, t, state->joint_q.data()) : 0;
     const Scalar velocity = state ? tendon_velocity(model, t, state->joint_qd.data()) : 0;

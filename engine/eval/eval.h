@@ -33,8 +33,8 @@ Scalar eval_energy(const Model& model, const State& state);
 // tau = H qdd + bias
 VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd);
 
-// tau = control.joint_f plus every actuator's joint force (engine/solver/parts/actuator.h) at the state's coordinates
-// and velocities, and with a state every tendon's spring and damper (engine/solver/parts/tendon.h); without a state
+// tau = control.joint_f plus every actuator's joint force (engine/model/actuator.h) at the state's coordinates
+// and velocities, and with a state every tendon's spring and damper (engine/model/tendon.h); without a state
 // (nullptr) every actuator must be free of position and velocity bias
 VecX eval_control_force(const Model& model, const Control& control, const State* state = nullptr);
 void control_force(const Model& model, const Control& control, const State* state, Scalar* tau);  // joint_dof_count

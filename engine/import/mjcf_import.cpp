@@ -295,7 +295,7 @@ class MjcfImporter {
   }
 
   // MuJoCo's affine actuators (motor, position, velocity, general of fixed gain and affine or no bias) on a
-  // hinge, slide or fixed tendon without activation dynamics (engine/solver/parts/actuator.h); any other is reported
+  // hinge, slide or fixed tendon without activation dynamics (engine/model/actuator.h); any other is reported
   void add_actuator(int u) {
     const std::string name = m_.name(MjKind::Actuator, u);
     const std::string unsupported = unsupported_actuator(u);

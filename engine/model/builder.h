@@ -150,7 +150,7 @@ class ModelBuilder {
   int add_mesh(const std::vector<Vec3>& vertices, const std::string& name = "");
   int add_shape_mesh(int body, int mesh, const ShapeOptions& options = {});
 
-  // an actuator on a Revolute or Prismatic joint, MuJoCo's affine one (engine/solver/parts/actuator.h):
+  // an actuator on a Revolute or Prismatic joint, MuJoCo's affine one (engine/model/actuator.h):
   // force = clamp(gain clamp(ctrl, ctrl range) + bias[0] + bias[1] gear q + bias[2] gear qd, force range),
   // tau = gear force; its position and velocity terms are integrated implicitly
   int add_actuator(int joint, const ActuatorOptions& options = {});

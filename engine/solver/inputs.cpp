@@ -6,10 +6,10 @@
 #include <cstdint>
 #include <functional>
 
+#include "engine/model/actuator.h"
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
-#include "engine/solver/parts/actuator.h"
-#include "engine/solver/parts/tendon.h"
+#include "engine/model/tendon.h"
 #include "engine/solver/solver_featherstone.h"
 
 namespace novaphy {
@@ -195,7 +195,7 @@ void SolverFeatherstone::actuate(const Control& control, StepContext& step) {
 }
 
 Scalar SolverFeatherstone::tendon_force(int t, const State& in, const Control& control) const {
-  // its spring's, damper's and actuators' (engine/solver/parts/tendon.h, engine/solver/parts/actuator.h)
+  // its spring's, damper's and actuators' (engine/model/tendon.h, engine/model/actuator.h)
   const Scalar length = tendon_length(model_, t, in.joint_q.data());
   const Scalar velocity = tendon_velocity(model_, t, in.joint_qd.data());
   Scalar force = tendon_passive_force(model_, t, length, velocity);

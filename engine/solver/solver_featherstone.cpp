@@ -10,8 +10,8 @@
 #include <sstream>
 #include <type_traits>
 
+#include "engine/model/actuator.h"
 #include "engine/model/error.h"
-#include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/threads/parallel.h"
 #include "kernels/crba.h"

@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "engine/collision/pipeline.h"
+#include "engine/model/actuator.h"
 #include "engine/model/weld.h"
 #include "engine/solver/blocks/blocks.h"
 #include "engine/solver/dense/dense.h"
 #include "engine/solver/islands/rows.h"
-#include "engine/solver/parts/actuator.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver/settings.h"
 #include "engine/threads/exclusive_call.h"

@@ -5,8 +5,8 @@
 #include <limits>
 #include <numeric>
 
+#include "engine/model/tendon.h"
 #include "engine/solver/parts/rows.h"
-#include "engine/solver/parts/tendon.h"
 #include "engine/threads/parallel.h"
 
 namespace novaphy {

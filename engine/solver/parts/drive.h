@@ -2,7 +2,7 @@
 // the step (semi-implicit Euler with the stiff terms implicit), so that
 //   (H + dt D + dt^2 K) qdd = tau - bias - D qd + kd (v_t - qd) - K_s (q_end - q_ref) + ke (q_t - q_end)
 // with D = damping + kd, K = stiffness + ke, q_end = q + dt qd; and the actuators' stiffness K_a and damping D_a
-// (engine/solver/parts/actuator.h) likewise. Written once over the number type
+// (engine/model/actuator.h) likewise. Written once over the number type
 // (kernels/number.h) for the dense route and the blocks.
 #pragma once
 

@@ -1,6 +1,6 @@
 // MuJoCo's affine actuator on a Revolute or Prismatic joint or a fixed tendon (a motor, position and velocity
 // servos, a general actuator of fixed gain and affine bias), written once for the step and the whole-model
-// evaluations; on a tendon its length and velocity stand for q and qd (engine/solver/parts/tendon.h):
+// evaluations; on a tendon its length and velocity stand for q and qd (engine/model/tendon.h):
 //   force = clamp(gain clamp(ctrl, ctrl range) + bias0 + bias1 gear q + bias2 gear qd, force range)
 // and the joint takes gear force. Split for the step: the joint force at (q, qd) is
 //   force - stiffness q - damping qd

@@ -1,4 +1,4 @@
-// Fixed tendons (model.h, engine/solver/parts/tendon.h): springs, dampers and actuators on tendons against MuJoCo on
+// Fixed tendons (model.h, engine/model/tendon.h): springs, dampers and actuators on tendons against MuJoCo on
 // the same MJCF, a tendon joining the articulations of a gripper's fingers, and the joins refused.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// MuJoCo's affine actuators (engine/solver/parts/actuator.h): every kind against MuJoCo on the same MJCF, a stiff
+// MuJoCo's affine actuators (engine/model/actuator.h): every kind against MuJoCo on the same MJCF, a stiff
 // position servo stable at a large step (its gains taken implicitly), a clamped actuator exact at its limit,
 // per-world gains with each world stepping as it does alone.
 #include <gtest/gtest.h>
