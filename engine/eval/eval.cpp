@@ -26,15 +26,6 @@ namespace novaphy {
 
 namespace {
 
-// FK and link velocities of articulation a at the state's coordinates
-ArticulationView kinematics(const Model& model, const State& state, int a, ArticulationScratch& s) {
-  const ArticulationView art = model.articulation(a);
-  s.resize(art);
-  forward_kinematics(art, state.joint_q.data() + art.q_begin(), s);
-  forward_velocity(art, state.joint_qd.data() + art.qd_begin(), s);
-  return art;
-}
-
 // RNEA at qdd minus the passive joint forces: tau = H qdd + bias for one articulation
 void articulation_inverse_dynamics(const Model& model, const State& state, const ArticulationView& art,
                                    ArticulationScratch& s, const Scalar* qdd, Scalar* tau) {

@@ -52,15 +52,17 @@ void store_body_state(const ArticulationView& art, const ArticulationScratch& s,
   for (int i = 0; i < art.link_count(); ++i) store_body(s, i, Transform::identity(), art.com(i), art.body(i), state);
 }
 
+ArticulationView kinematics(const Model& model, const State& state, int a, ArticulationScratch& s) {
+  const ArticulationView art = model.articulation(a);
+  s.resize(art);
+  forward_kinematics(art, state.joint_q.data() + art.q_begin(), s);
+  forward_velocity(art, state.joint_qd.data() + art.qd_begin(), s);
+  return art;
+}
+
 void bodies_from_joints(const Model& model, State& state) {
   ArticulationScratch s;
-  for (int a = 0; a < model.articulation_count; ++a) {
-    const ArticulationView art = model.articulation(a);
-    s.resize(art);
-    forward_kinematics(art, state.joint_q.data() + art.q_begin(), s);
-    forward_velocity(art, state.joint_qd.data() + art.qd_begin(), s);
-    store_body_state(art, s, state);
-  }
+  for (int a = 0; a < model.articulation_count; ++a) store_body_state(kinematics(model, state, a, s), s, state);
 }
 
 void set_body_invweight0(Model& model) {

@@ -14,6 +14,9 @@ void store_body(const ArticulationScratch& s, int link, const Transform& offset,
 // store_body for every link body of the articulation
 void store_body_state(const ArticulationView& art, const ArticulationScratch& s, State& state);
 
+// FK and link velocities of articulation a at the state's coordinates, into s
+ArticulationView kinematics(const Model& model, const State& state, int a, ArticulationScratch& s);
+
 // state.body_q and state.body_qd from state.joint_q and state.joint_qd, unchecked (eval_fk checks them first)
 void bodies_from_joints(const Model& model, State& state);
 
