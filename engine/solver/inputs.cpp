@@ -25,9 +25,9 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
     fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
          " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
   bool loose_finite = true;
-  for (const int b : loose_bodies_)
+  for (const int b : built_.loose_bodies)
     for (int k = 0; k < 6; ++k) loose_finite &= std::isfinite(in.body_f[6 * static_cast<size_t>(b) + k]);
-  for (const int u : loose_actuators_) loose_finite &= std::isfinite(control.actuator_ctrl[u]);
+  for (const int u : built_.loose_actuators) loose_finite &= std::isfinite(control.actuator_ctrl[u]);
   if (loose_finite) return;
   bool wrenches, drives;
   check_finite_step(in, control, &wrenches, &drives);  // throws naming the first non-finite entry
@@ -69,9 +69,10 @@ class RunScan {
 
 }  // namespace
 
-bool SolverFeatherstone::scan_unit(const int* arts, int count, StepContext& local, bool* valid) const {
-  const State& in = *local.in;
-  const Control& control = *local.control;
+bool SolverFeatherstone::scan_unit(const int* arts, int count, const StepContext& step, UnitInputs& inputs,
+                                   bool* valid) const {
+  const State& in = *step.in;
+  const Control& control = *step.control;
   std::uint64_t bad = 0;
   bool negative = false;
   // the notes: the gains and wrenches, and the actuators' commands (their control range would clamp an infinite one
@@ -80,24 +81,24 @@ bool SolverFeatherstone::scan_unit(const int* arts, int count, StepContext& loca
       body_f(in.body_f, &bad), ctrl(control.actuator_ctrl, &bad);
   for (int i = 0; i < count; ++i) {
     const int a = arts[i];
-    for (RunScan* dof : {&ke, &kd}) dof->add(art_[a].qd_begin(), art_[a].dof_count());
-    for (int k = art_body_start_[a]; k < art_body_start_[a + 1]; ++k)
-      body_f.add(6 * art_body_runs_[2 * k], 6 * art_body_runs_[2 * k + 1]);
-    for (int k = art_actuator_start_[a]; k < art_actuator_start_[a + 1]; ++k)
-      ctrl.add(art_actuator_runs_[2 * k], art_actuator_runs_[2 * k + 1]);
+    for (RunScan* dof : {&ke, &kd}) dof->add(built_.art[a].qd_begin(), built_.art[a].dof_count());
+    for (int k = built_.art_body_start[a]; k < built_.art_body_start[a + 1]; ++k)
+      body_f.add(6 * built_.art_body_runs[2 * k], 6 * built_.art_body_runs[2 * k + 1]);
+    for (int k = built_.art_actuator_start[a]; k < built_.art_actuator_start[a + 1]; ++k)
+      ctrl.add(built_.art_actuator_runs[2 * k], built_.art_actuator_runs[2 * k + 1]);
   }
-  local.drives = ke.flush() | kd.flush();
-  local.wrenches = body_f.flush();
+  inputs.drives = ke.flush() | kd.flush();
+  inputs.wrenches = body_f.flush();
   ctrl.flush();
   const bool invalid = bad != 0 || negative;
   if (!valid) return invalid;
   RunScan q(in.joint_q, &bad), qd(in.joint_qd, &bad), f(control.joint_f, &bad), pos(control.joint_target_pos, &bad),
       vel(control.joint_target_vel, &bad);
   for (int i = 0; i < count; ++i) {
-    const ArticulationView& art = art_[arts[i]];
+    const ArticulationView& art = built_.art[arts[i]];
     q.add(art.q_begin(), art.coord_count());
     for (RunScan* dof : {&qd, &f}) dof->add(art.qd_begin(), art.dof_count());
-    if (local.drives)  // the targets, read only where a gain is nonzero
+    if (inputs.drives)  // the targets, read only where a gain is nonzero
       for (RunScan* dof : {&pos, &vel}) dof->add(art.qd_begin(), art.dof_count());
   }
   for (RunScan* x : {&q, &qd, &f, &pos, &vel}) x->flush();
@@ -105,27 +106,28 @@ bool SolverFeatherstone::scan_unit(const int* arts, int count, StepContext& loca
   return invalid;
 }
 
-bool SolverFeatherstone::block_unit_notes(int u, int run_end, UnitNotes& notes, StepContext& local) const {
+bool SolverFeatherstone::block_unit_notes(int u, int run_end, const StepContext& step, UnitNotes& notes,
+                                          UnitInputs& inputs) const {
   if (u < notes.begin || u >= notes.end) {
     notes.begin = u;
     notes.end = std::min(run_end, u + UnitNotes::kUnits);
     for (int v = u; v < notes.end; ++v) {
       int arts[kMostUnitArticulations];
-      StepContext scanned = local;
-      notes.invalid[v - u] = scan_unit(arts, batches_->unit_articulations(v, arts), scanned, nullptr);
+      UnitInputs scanned;
+      notes.invalid[v - u] = scan_unit(arts, batches_->unit_articulations(v, arts), step, scanned, nullptr);
       notes.drives[v - u] = scanned.drives;
       notes.wrenches[v - u] = scanned.wrenches;
     }
   }
-  local.drives = notes.drives[u - notes.begin];
-  local.wrenches = notes.wrenches[u - notes.begin];
+  inputs.drives = notes.drives[u - notes.begin];
+  inputs.wrenches = notes.wrenches[u - notes.begin];
   return notes.invalid[u - notes.begin];
 }
 
 bool SolverFeatherstone::input_valid(int a, const StepContext& step) const {
-  StepContext local = step;
+  UnitInputs inputs;
   bool valid = true;
-  scan_unit(&a, 1, local, &valid);
+  scan_unit(&a, 1, step, inputs, &valid);
   return valid;
 }
 
@@ -137,10 +139,10 @@ void SolverFeatherstone::raise_bad_input(const StepContext& step) {
   auto art_world = [&](int a) { return model_.body_world[model_.joint_child[model_.articulation_start[a]]]; };
   auto coord_world = [&](int k) {
     int a = 0;
-    while (art_[a].q_begin() + art_[a].coord_count() <= k) ++a;
+    while (built_.art[a].q_begin() + built_.art[a].coord_count() <= k) ++a;
     return art_world(a);
   };
-  auto dof_world = [&](int k) { return art_world(index_.dof_articulation[k]); };
+  auto dof_world = [&](int k) { return art_world(built_.index.dof_articulation[k]); };
   auto body_world = [&](int k) { return model_.body_world[k / 6]; };
   auto actuator_world = [&](int u) {
     const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u];
@@ -183,7 +185,7 @@ void SolverFeatherstone::raise_bad_input(const StepContext& step) {
 Scalar SolverFeatherstone::deepest_contact(int a, const Contacts& contacts) const {
   Scalar deepest = 0;
   for (int c = 0; c < contacts.contact_count; ++c)
-    if (index_.moving(contacts.contact_body_a[c]) == a || index_.moving(contacts.contact_body_b[c]) == a)
+    if (built_.index.moving(contacts.contact_body_a[c]) == a || built_.index.moving(contacts.contact_body_b[c]) == a)
       deepest = std::max(deepest, contacts.contact_depth[c]);
   return deepest;
 }
@@ -199,38 +201,38 @@ Scalar SolverFeatherstone::tendon_force(int t, const State& in, const Control& c
   const Scalar length = tendon_length(model_, t, in.joint_q.data());
   const Scalar velocity = tendon_velocity(model_, t, in.joint_qd.data());
   Scalar force = tendon_passive_force(model_, t, length, velocity);
-  for (int k = tendon_actuator_start_[t]; k < tendon_actuator_start_[t + 1]; ++k) {
-    const int u = tendon_actuators_[k];
+  for (int k = built_.tendon_actuator_start[t]; k < built_.tendon_actuator_start[t + 1]; ++k) {
+    const int u = built_.tendon_actuators[k];
     force += actuator_joint_force(model_, u, control.actuator_ctrl[u], length, velocity);
   }
   return force;
 }
 
-void SolverFeatherstone::actuate_unit(const int* arts, int count, StepContext& local) {
+void SolverFeatherstone::actuate_unit(const int* arts, int count, const StepContext& step, UnitInputs& inputs) {
   if (model_.actuator_count == 0 && model_.tendon_count == 0) return;
-  const State& in = *local.in;
-  const Control& control = *local.control;
+  const State& in = *step.in;
+  const Control& control = *step.control;
   // the force along each tendon of these articulations, then each dof's joint force with its actuators' and its
   // tendons', in order; noting whether an actuator has a position or velocity term (taken implicitly)
   bool affine = false;
   for (int i = 0; i < count; ++i) {
     const int a = arts[i];
-    for (int k = art_tendon_start_[a]; k < art_tendon_start_[a + 1]; ++k)
-      data_.tendon_force[art_tendons_[k]] = tendon_force(art_tendons_[k], in, control);
-    const ArticulationView& art = art_[a];
+    for (int k = built_.art_tendon_start[a]; k < built_.art_tendon_start[a + 1]; ++k)
+      data_.tendon_force[built_.art_tendons[k]] = tendon_force(built_.art_tendons[k], in, control);
+    const ArticulationView& art = built_.art[a];
     for (int d = art.qd_begin(); d < art.qd_begin() + art.dof_count(); ++d) {
       Scalar sum = control.joint_f[d], stiffness = 0, damping = 0;
-      for (int k = dof_actuator_start_[d]; k < dof_actuator_start_[d + 1]; ++k) {
-        const DofActuator& u = dof_actuators_[k];
-        const ActuatorForce f =
-            actuator_force(actuator_params_[u.params], control.actuator_ctrl[u.u], in.joint_q[u.q], in.joint_qd[d]);
+      for (int k = built_.dof_actuator_start[d]; k < built_.dof_actuator_start[d + 1]; ++k) {
+        const SolverModel::DofActuator& u = built_.dof_actuators[k];
+        const ActuatorForce f = actuator_force(built_.actuator_params[u.params], control.actuator_ctrl[u.u],
+                                               in.joint_q[u.q], in.joint_qd[d]);
         sum += f.force;
         stiffness += f.stiffness;
         damping += f.damping;
       }
-      for (int k = dof_entry_start_[d]; k < dof_entry_start_[d + 1]; ++k) {
-        const int e = dof_entries_[k];
-        sum += model_.tendon_coef[e] * data_.tendon_force[entry_tendon_[e]];
+      for (int k = built_.dof_entry_start[d]; k < built_.dof_entry_start[d + 1]; ++k) {
+        const int e = built_.dof_entries[k];
+        sum += model_.tendon_coef[e] * data_.tendon_force[built_.entry_tendon[e]];
       }
       data_.tau[d] = sum;
       data_.actuator_stiffness[d] = stiffness;
@@ -238,8 +240,8 @@ void SolverFeatherstone::actuate_unit(const int* arts, int count, StepContext& l
       affine |= stiffness != 0 || damping != 0;
     }
   }
-  local.actuator_stiffness = affine ? data_.actuator_stiffness.data() : nullptr;
-  local.actuator_damping = affine ? data_.actuator_damping.data() : nullptr;
+  inputs.actuator_stiffness = affine ? data_.actuator_stiffness.data() : nullptr;
+  inputs.actuator_damping = affine ? data_.actuator_damping.data() : nullptr;
 }
 
 void SolverFeatherstone::guard(const StepContext& step) {
@@ -266,14 +268,14 @@ void SolverFeatherstone::guard(const StepContext& step) {
            " or a kinetic energy beyond ", settings.divergence_energy, " J/kg; dt ", step.dt,
            " too large for the model's stiffness or forces?)");
     }
-    const ArticulationView& art = art_[a];
+    const ArticulationView& art = built_.art[a];
     const bool keep = settings.on_divergence == DivergencePolicy::Flag;
     for (int k = art.q_begin(); k < art.q_begin() + art.coord_count(); ++k)
       data_.q_next[k] = keep ? step.in->joint_q[k] : reset_q_[k];
     for (int k = art.qd_begin(); k < art.qd_begin() + art.dof_count(); ++k)
       data_.qd[k] = keep ? step.in->joint_qd[k] : reset_qd_[k];
     data_.pgs_converged[a] = 0;  // its next rows start from warmstarting_factor of the impulses this step left
-    dense_->store(a, step);
+    dense_->write_state(a, step);
   }
   if (bad_input) raise_bad_input(step);
   lap(stage_seconds_.integrate);

@@ -1,8 +1,7 @@
 // What one step's stages read and write, and the interface of a route: a way of stepping a set of
 // articulations unit by unit (a SIMD block of worlds, engine/solver/blocks/blocks.h, or one articulation
 // on the scalar kernels, engine/solver/dense/dense.h). The solver's scheduler runs every unit of every
-// route through the same stages, a unit's stages one after another on one thread (block-major) or each
-// stage over all units before the next (stage-major, for profiling): the same arithmetic either way.
+// route through the same stages in one order (run_unit, below), a unit's stages one after another on one thread.
 #pragma once
 
 #include <cstdint>
@@ -11,11 +10,15 @@
 #include "engine/collision/pipeline.h"
 #include "engine/model/model.h"
 #include "engine/solver/parts/row_params.h"
+#include "engine/solver/settings.h"
+#include "engine/threads/parallel.h"
 #include "kernels/lanes.h"
 
 namespace novaphy {
 
-// the per-unit stages of a step, in order
+// the per-unit stages of a step, in order: kinematics and forces, mass and factor, the unconstrained velocity
+// (Dynamics); the unit's own rows and their solve (Rows); integration and the guard's test (Integrate); the new
+// state written out (Store)
 enum class Stage : int { Dynamics = 0, Rows = 1, Integrate = 2, Store = 3 };
 
 struct ArticulationIndex;
@@ -33,6 +36,7 @@ struct ContactLists {
   const ShapeContacts* shapes = nullptr;  // the shapes' contact numbers (engine/solver/parts/rows.h)
 };
 
+// what every unit's stages read and write this step
 struct StepContext {
   const State* in = nullptr;
   State* out = nullptr;
@@ -40,39 +44,28 @@ struct StepContext {
   Contacts* contacts = nullptr;  // geometry and warm starts in; contact_impulse out
   Scalar dt = 0;
   const Scalar* tau = nullptr;  // [dof] the control's joint forces with its actuators'
-  // [dof] the actuators' stiffness and damping, which the step takes implicitly (nullptr: none this step)
-  const Scalar* actuator_stiffness = nullptr;
-  const Scalar* actuator_damping = nullptr;
 
-  // the dynamics this step
-  bool refactor = true;     // H recomputed and factored (else the last factor is reused)
-  bool keep_factor = true;  // H and its factor kept for later steps (update_mass_matrix_interval > 1)
-  bool fuse = true;         // the factor and the first half of the solve in one pass
-  bool tile_gemm = false;   // H as the tiled product sum J_i^T I_i J_i instead of CRBA
-  bool wrenches = false;    // in.body_f has a nonzero entry
-  bool drives = false;      // the control has a nonzero PD gain
-  Scalar keep = 1;          // angular damping: what is left of a rotational dof's velocity over dt
-  Scalar coriolis_implicitness = 0;
-  int aba_min_dofs = 0;  // the dense route factors articulations of at least this many dofs by ABA
+  // the step's options: the settings table as the step began, and what it decides for this step
+  SolverFeatherstoneSettings settings;
+  bool refactor = true;  // H recomputed and factored (else the last factor is reused)
+  Scalar keep = 1;       // angular damping: what is left of a rotational dof's velocity over dt
+  // `split`: a stage between two passes (the islands) reads the units' kinematics and factors; `stream`: body
+  // output written around the caches
+  bool split = false;
+  bool stream = false;
+  // H and its factor kept for later steps
+  bool keep_factor() const { return settings.update_mass_matrix_interval > 1; }
+  // Store follows Integrate in its pass: each world written as it is stepped, unless it diverged or its factor
+  // failed (else the guard comes first, and nothing is written on divergence)
+  bool store_in_pass() const { return settings.on_divergence != DivergencePolicy::Raise; }
 
   // the rows and the guard
   RowParams rows;
   ContactLists lists;
   const std::uint8_t* touched = nullptr;  // [articulation] 1: its rows are the islands' this step
-  Scalar divergence_speed = 0;
-  Scalar divergence_energy = 0;           // J/kg
   const Scalar* energy_weight = nullptr;  // [dof] the guard's energy weights (engine/solver/parts/guard.h)
   // [articulation] 1: diverged before its step's output is tested (an invalid input, a contact too deep)
   const std::uint8_t* flagged = nullptr;
-
-  // the schedule: `split`: a stage between two passes (the islands) reads the units' kinematics and
-  // factors; `store_in_pass`: Store follows Integrate in its pass (each world written as it is stepped,
-  // unless it diverged or its factor failed); `stream`: body output written around the caches
-  bool split = false;
-  bool store_in_pass = false;
-  bool block_major = true;  // a unit's stages one after another in one pass (else a stage over all units at a time)
-  bool stream = false;
-  bool profile = false;  // the rows stage times its phases (stage_seconds)
 
   // the step's vectors, in the model's numbering
   Scalar* qd = nullptr;                   // [dof] velocities between the stages of split passes
@@ -86,6 +79,26 @@ struct StepContext {
   int* factor_failure = nullptr;          // [articulation] dof whose pivot failed, else -1
 };
 
+// what one unit's Dynamics reads of its own articulations' inputs beside the step's
+struct UnitInputs {
+  bool wrenches = false;  // in.body_f has a nonzero entry
+  bool drives = false;    // the control has a nonzero PD gain
+  // [dof] the actuators' stiffness and damping, which the step takes implicitly (nullptr: none)
+  const Scalar* actuator_stiffness = nullptr;
+  const Scalar* actuator_damping = nullptr;
+};
+
+// one unit's pass: its stages first..last, one after another on one thread; a stage after the first takes what
+// the one before left in the thread's scratch (`carried`), the first reads the step's vectors, and a stage
+// before the last leaves its results there (`carry_on`) rather than in the step's vectors
+struct UnitPass {
+  int unit = 0;
+  Stage first = Stage::Dynamics, last = Stage::Store;
+  bool runs(Stage s) const { return s >= first && s <= last; }
+  bool carried(Stage s) const { return s > first; }
+  bool carry_on(Stage s) const { return s < last; }
+};
+
 // where each body and dof sits among the articulations the kernels see
 struct ArticulationIndex {
   std::vector<int> body_articulation, body_link;  // per body; welded bodies at their link's
@@ -97,9 +110,14 @@ struct ArticulationIndex {
   }
 };
 
-// the wall time of the rows stage's phases on one thread (StepContext::profile)
+// the wall time of the rows stage's phases on one thread (settings.profile_stages)
 struct RowPhaseSeconds {
   double limits = 0, contacts = 0, sweeps = 0;
+};
+
+// the time one thread spent in each stage of its units (settings.profile_stages); Store's counts as Integrate's
+struct alignas(64) UnitStageSeconds {
+  double dynamics = 0, rows = 0, integrate = 0;
 };
 
 // the most articulations a unit steps: a block's lanes of float32 worlds
@@ -115,9 +133,11 @@ class StepRoute {
   // before and after the step's passes, on the calling thread
   virtual void begin_step(const StepContext& step) = 0;
   virtual void end_step(const StepContext& step) = 0;
-  // stages first..last of one unit, in order, on the calling thread (a stage after the first takes what
-  // the one before left in the thread's scratch; the first reads the step's vectors)
-  virtual void run(int unit, Stage first, Stage last, const StepContext& step) = 0;
+  // the stages of unit pass.unit, each on the calling thread (run_unit calls them in order)
+  virtual void dynamics(const UnitPass& pass, const StepContext& step, const UnitInputs& inputs) = 0;
+  virtual void rows(const UnitPass& pass, const StepContext& step) = 0;
+  virtual void integrate(const UnitPass& pass, const StepContext& step) = 0;
+  virtual void store(const UnitPass& pass, const StepContext& step) = 0;
 
   // for the islands' rows, after Dynamics: x = M^-1 x with articulation a's factor, and J += sign *
   // (the row of d . the velocity of the point p riding on `link`, or with p null of d . the link's angular
@@ -128,5 +148,27 @@ class StepRoute {
   // bytes held
   virtual std::size_t bytes() const = 0;
 };
+
+// the physics order, written once: the stages of one unit's pass in turn, each timed into `seconds` where it is
+// not null
+inline void run_unit(StepRoute& route, const UnitPass& pass, const StepContext& step, const UnitInputs& inputs,
+                     UnitStageSeconds* seconds) {
+  if (pass.runs(Stage::Dynamics)) {
+    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->dynamics : nullptr);
+    route.dynamics(pass, step, inputs);
+  }
+  if (pass.runs(Stage::Rows)) {
+    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->rows : nullptr);
+    route.rows(pass, step);
+  }
+  if (pass.runs(Stage::Integrate)) {
+    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->integrate : nullptr);
+    route.integrate(pass, step);
+  }
+  if (pass.runs(Stage::Store)) {
+    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->integrate : nullptr);
+    route.store(pass, step);
+  }
+}
 
 }  // namespace novaphy

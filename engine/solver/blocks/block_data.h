@@ -138,6 +138,7 @@ struct alignas(64) ThreadScratch {
   std::vector<Lanes<T>> S, H;
   Lanes<T> origin[3];
   RowPhaseSeconds phases;
+  IntLanes<T> written{};  // the lanes the last Integrate wrote out, for a Store in the same pass
   // a world's factor copied out of its block (solve_mass)
   int factor_of = -1;
   std::uint64_t factor_step = 0;
@@ -179,11 +180,13 @@ inline void weld_pose(const typename BatchGroup<T>::Weld& weld, const BatchWork<
 
 // Dynamics: FK, bias, H and its factor (where step.refactor or the group has none), the unconstrained
 // velocity into w.qd (rotational dofs damped) with w.q the coordinates; written to step.qd unless
-// `carry_on` (a stage of this block follows in the pass). With qdd, M^-1 (tau - bias ...) itself is written
+// `carry_on` (a stage of this block follows in the pass); `inputs` the unit's notes of its wrenches, drives and
+// actuators. With qdd, M^-1 (tau - bias ...) itself is written
 // there instead of any velocity (forward dynamics)
 template <typename T>
 void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const Vec3& gravity,
-                    const StepContext& step, BatchWork<T>& w, bool carry_on, Scalar* qdd = nullptr);
+                    const StepContext& step, const UnitInputs& inputs, BatchWork<T>& w, bool carry_on,
+                    Scalar* qdd = nullptr);
 
 // Rows: the block's joint-limit rows and its worlds' listed contacts, swept by batch_pgs_solve, in the
 // lanes of worlds whose rows are not the islands'; w.qd updated, impulses kept. `carried`: w.q and w.qd

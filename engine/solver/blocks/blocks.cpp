@@ -97,27 +97,48 @@ class Batches final : public ArticulationBatches {
   // scratch and so left the blocks' own stale
   void end_step(const StepContext& step) override {
     for (BatchGroup<T>& G : groups_)
-      if (G.enabled) G.factored = !G.refactor || step.keep_factor || !step.block_major || step.split;
+      if (G.enabled) G.factored = !G.refactor || step.keep_factor() || step.split;
   }
 
-  void run(int unit, Stage first, Stage last, const StepContext& step) override {
-    const auto [g, b] = units_[unit];
+  void dynamics(const UnitPass& pass, const StepContext& step, const UnitInputs& inputs) override {
+    const auto [g, b] = units_[pass.unit];
+    ThreadScratch<T>& scratch = scratch_[omp_get_thread_num()];
+    block_dynamics(groups_[g], b, kinematics(pass, scratch, step), gravity_, step, inputs, scratch.work[g],
+                   pass.carry_on(Stage::Dynamics));
+  }
+  void rows(const UnitPass& pass, const StepContext& step) override {
+    const auto [g, b] = units_[pass.unit];
+    ThreadScratch<T>& scratch = scratch_[omp_get_thread_num()];
+    block_rows<T>(groups_[g], b, kinematics(pass, scratch, step), step, scratch.work[g], scratch.rows,
+                  pass.carried(Stage::Rows), pass.carry_on(Stage::Rows),
+                  step.settings.profile_stages ? &scratch.phases : nullptr);
+  }
+  void integrate(const UnitPass& pass, const StepContext& step) override {
+    const auto [g, b] = units_[pass.unit];
+    ThreadScratch<T>& scratch = scratch_[omp_get_thread_num()];
+    scratch.written = block_integrate(groups_[g], b, step, scratch.work[g], pass.carried(Stage::Integrate),
+                                      pass.carry_on(Stage::Integrate));
+  }
+  // from this pass's Integrate (its written lanes) or from the step's vectors
+  void store(const UnitPass& pass, const StepContext& step) override {
+    const auto [g, b] = units_[pass.unit];
     BatchGroup<T>& G = groups_[g];
     ThreadScratch<T>& scratch = scratch_[omp_get_thread_num()];
     BatchWork<T>& w = scratch.work[g];
-    const BlockKinematics<T> kin = kinematics(G, b, scratch, step, first, last);
-    IntLanes<T> written{};
-    for (int s = static_cast<int>(first); s <= static_cast<int>(last); ++s) {
-      const bool carried = s > static_cast<int>(first), carry_on = s < static_cast<int>(last);
-      switch (static_cast<Stage>(s)) {
-        case Stage::Dynamics: block_dynamics(G, b, kin, gravity_, step, w, carry_on); break;
-        case Stage::Rows:
-          block_rows<T>(G, b, kin, step, w, scratch.rows, carried, carry_on, step.profile ? &scratch.phases : nullptr);
-          break;
-        case Stage::Integrate: written = block_integrate(G, b, step, w, carried, carry_on); break;
-        case Stage::Store: store(G, b, w, scratch, carried, written, step); break;
+    const BatchTopology<T>& topo = G.topo;
+    if (!pass.carried(Stage::Store)) {
+      scratch.written = IntLanes<T>{};
+      for (int l = 0; l < G.lanes_in(b); ++l) {
+        const int a = G.arts[b * W + l], q0 = G.q_off[b * W + l], qd0 = G.qd_off[b * W + l];
+        if (step.diverged[a] || step.factor_failure[a] >= 0) continue;
+        scratch.written[l] = -1;
+        std::copy_n(step.q_next + q0, topo.coord_count, step.out->joint_q.data() + q0);
+        std::copy_n(step.qd + qd0, topo.dof_count, step.out->joint_qd.data() + qd0);
       }
+      gather_lanes<T>(&G.q_off[b * W], step.q_next, topo.coord_count, w.q_next.data());
+      gather_lanes<T>(&G.qd_off[b * W], step.qd, topo.dof_count, w.qd.data());
     }
+    block_store(G, b, w, scratch.origin, w.q_next.data(), scratch.written, *step.out, step.stream);
   }
 
   void accelerations(const State& in, const Control& control, const Scalar* tau, bool wrenches, Scalar* qdd,
@@ -126,15 +147,16 @@ class Batches final : public ArticulationBatches {
     step.in = &in;
     step.control = &control;
     step.tau = tau;
-    step.wrenches = wrenches;
     step.factor_failure = factor_failure;
     step.split = true;
+    UnitInputs inputs;
+    inputs.wrenches = wrenches;
     begin_step(step);
     ThreadScratch<T>& scratch = scratch_[0];
     for (const auto& [g, b] : units_) {
       BatchGroup<T>& G = groups_[g];
       const BlockKinematics<T> kin{G.block_H(b), G.block_S(b), &G.origin[3 * b]};
-      block_dynamics(G, b, kin, gravity_, step, scratch.work[g], false, qdd);
+      block_dynamics(G, b, kin, gravity_, step, inputs, scratch.work[g], false, qdd);
     }
     end_step(step);
   }
@@ -194,34 +216,16 @@ class Batches final : public ArticulationBatches {
   }
 
  private:
-  // where block b's H, S and o go this step: a thread's scratch when the pass takes the block from its
-  // dynamics through its rows and nothing after it reads them (a factor no later step reuses), else the
+  // where the block of pass.unit keeps its H, S and o this step: a thread's scratch when the pass takes the block
+  // from its dynamics through its rows and nothing after it reads them (a factor no later step reuses), else the
   // block's own storage
-  BlockKinematics<T> kinematics(BatchGroup<T>& G, int b, ThreadScratch<T>& scratch, const StepContext& step,
-                                Stage first, Stage last) {
-    const bool in_pass = step.block_major && !step.split && first == Stage::Dynamics && last >= Stage::Rows;
+  BlockKinematics<T> kinematics(const UnitPass& pass, ThreadScratch<T>& scratch, const StepContext& step) {
+    const auto [g, b] = units_[pass.unit];
+    BatchGroup<T>& G = groups_[g];
+    const bool in_pass = !step.split && pass.runs(Stage::Dynamics) && pass.runs(Stage::Rows);
     if (!in_pass) return {G.block_H(b), G.block_S(b), &G.origin[3 * b]};
-    V* H = !step.keep_factor && G.refactor ? scratch.H.data() : G.block_H(b);
+    V* H = !step.keep_factor() && G.refactor ? scratch.H.data() : G.block_H(b);
     return {H, scratch.S.data(), scratch.origin};
-  }
-
-  // Store: from this pass's Integrate (`carried`, its `written` lanes) or from the step's vectors
-  void store(BatchGroup<T>& G, int b, BatchWork<T>& w, ThreadScratch<T>& scratch, bool carried, IntLanes<T> written,
-             const StepContext& step) {
-    const BatchTopology<T>& topo = G.topo;
-    if (!carried) {
-      written = IntLanes<T>{};
-      for (int l = 0; l < G.lanes_in(b); ++l) {
-        const int a = G.arts[b * W + l], q0 = G.q_off[b * W + l], qd0 = G.qd_off[b * W + l];
-        if (step.diverged[a] || step.factor_failure[a] >= 0) continue;
-        written[l] = -1;
-        std::copy_n(step.q_next + q0, topo.coord_count, step.out->joint_q.data() + q0);
-        std::copy_n(step.qd + qd0, topo.dof_count, step.out->joint_qd.data() + qd0);
-      }
-      gather_lanes<T>(&G.q_off[b * W], step.q_next, topo.coord_count, w.q_next.data());
-      gather_lanes<T>(&G.qd_off[b * W], step.qd, topo.dof_count, w.qd.data());
-    }
-    block_store(G, b, w, scratch.origin, w.q_next.data(), written, *step.out, step.stream);
   }
 
   void group_articulations(const std::vector<std::uint8_t>& batched,

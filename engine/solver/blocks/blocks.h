@@ -47,7 +47,7 @@ class ArticulationBatches : public StepRoute {
   // failed, or left alone
   virtual void accelerations(const State& in, const Control& control, const Scalar* tau, bool wrenches, Scalar* qdd,
                              int* factor_failure) = 0;
-  // the rows stage's phases summed over the threads since the step began (StepContext::profile)
+  // the rows stage's phases summed over the threads since the step began (settings.profile_stages)
   virtual RowPhaseSeconds row_phases() const = 0;
 
   virtual int group_count() const = 0;

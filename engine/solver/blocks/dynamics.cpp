@@ -47,7 +47,7 @@ bool gather_wrenches(const BatchGroup<T>& G, int b, const Scalar* body_f, const 
 // x = tau - bias and the implicit terms of every dof, w.diag their diagonal
 template <typename T>
 void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, const StepContext& step,
-                      BatchWork<T>& w) {
+                      const UnitInputs& inputs, BatchWork<T>& w) {
   using V = Lanes<T>;
   const int nv = G.topo.dof_count;
   const int* qd_off = &G.qd_off[static_cast<size_t>(b) * kLanes<T>];
@@ -57,7 +57,7 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
   // actuators' stiffness and damping
   V* kd = w.drive.data();
   V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv, *ka = kd + 4 * nv, *da = kd + 5 * nv;
-  if (step.drives) {
+  if (inputs.drives) {
     const Control& control = *step.control;
     gather_lanes<T>(qd_off, control.joint_target_kd.data(), nv, kd);
     gather_lanes<T>(qd_off, control.joint_target_vel.data(), nv, vt);
@@ -72,9 +72,9 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
     const int c = G.topo.coord_of_dof[k];
     w.diag[k] = add_dof_forces(d, w.tau[k], w.qd[k], c < 0 ? nullptr : &w.q[c], dt, x[k]);
   }
-  if (!step.actuator_stiffness) return;
-  gather_lanes<T>(qd_off, step.actuator_stiffness, nv, ka);
-  gather_lanes<T>(qd_off, step.actuator_damping, nv, da);
+  if (!inputs.actuator_stiffness) return;
+  gather_lanes<T>(qd_off, inputs.actuator_stiffness, nv, ka);
+  gather_lanes<T>(qd_off, inputs.actuator_damping, nv, da);
   for (int k = 0; k < nv; ++k) {
     const int c = G.topo.coord_of_dof[k];  // (actuators drive Revolute and Prismatic joints only)
     if (c >= 0) w.diag[k] += add_actuator_forces(ka[k], da[k], w.q[c], w.qd[k], dt, x[k]);
@@ -96,7 +96,7 @@ Lanes<T> scale_in_double(const Lanes<T>& x, Scalar s) {
 
 template <typename T>
 void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const Vec3& gravity,
-                    const StepContext& step, BatchWork<T>& w, bool carry_on, Scalar* qdd) {
+                    const StepContext& step, const UnitInputs& inputs, BatchWork<T>& w, bool carry_on, Scalar* qdd) {
   using V = Lanes<T>;
   constexpr int W = kLanes<T>;
   const BatchTopology<T>& topo = G.topo;
@@ -109,22 +109,22 @@ void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, cons
   batch_subspace(topo, w, kin.o, kin.S);
   batch_velocity(topo, kin.S, w.qd.data(), w);
   batch_link_inertia(topo, P, kin.o, w);
-  const bool pushed = step.wrenches && gather_wrenches(G, b, step.in->body_f.data(), kin.o, w);
+  const bool pushed = inputs.wrenches && gather_wrenches(G, b, step.in->body_f.data(), kin.o, w);
   V g[3];
   for (int k = 0; k < 3; ++k) g[k] = splat<V>(static_cast<T>(gravity[k]));
   batch_bias(topo, kin.S, g, pushed ? w.f_ext.data() : nullptr, w, w.tau.data());
-  add_joint_forces(G, b, P, step, w);
+  add_joint_forces(G, b, P, step, inputs, w);
 
   V* x = w.x.data();
   IntLanes<T> bad = IntLanes<T>{} - 1;
   if (G.refactor) {
-    if (step.tile_gemm)
+    if (step.settings.use_tile_gemm)
       batch_mass_matrix_gemm(topo, P, kin.S, w, kin.H);
     else
       batch_mass_matrix(topo, P, kin.S, w, kin.H);
     for (int k = 0; k < nv; ++k) kin.H[topo.row_start[k] + k] += w.diag[k];
-    bad = batch_factor(topo, kin.H, step.fuse ? x : nullptr);
-    if (step.fuse)
+    bad = batch_factor(topo, kin.H, step.settings.fuse_cholesky ? x : nullptr);
+    if (step.settings.fuse_cholesky)
       batch_solve_lower(topo, kin.H, x);
     else
       batch_solve(topo, kin.H, x);
@@ -144,8 +144,8 @@ void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, cons
 }
 
 template void block_dynamics(BatchGroup<float>&, int, const BlockKinematics<float>&, const Vec3&, const StepContext&,
-                             BatchWork<float>&, bool, Scalar*);
+                             const UnitInputs&, BatchWork<float>&, bool, Scalar*);
 template void block_dynamics(BatchGroup<double>&, int, const BlockKinematics<double>&, const Vec3&, const StepContext&,
-                             BatchWork<double>&, bool, Scalar*);
+                             const UnitInputs&, BatchWork<double>&, bool, Scalar*);
 
 }  // namespace novaphy

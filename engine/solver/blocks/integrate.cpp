@@ -20,8 +20,8 @@ IntLanes<T> block_integrate(const BatchGroup<T>& G, int b, const StepContext& st
   // (x, the right-hand side of the dynamics, is free once they solved it: it takes the guard's weights)
   gather_lanes<T>(&G.qd_off[b * W], step.energy_weight, nv, w.x.data());
   bool diverged[W];
-  divergence_test(w.q_next.data(), nq, w.qd.data(), w.x.data(), nv, step.divergence_speed, step.divergence_energy,
-                  diverged);
+  divergence_test(w.q_next.data(), nq, w.qd.data(), w.x.data(), nv, step.settings.divergence_speed,
+                  step.settings.divergence_energy, diverged);
   IntLanes<T> written{};
   for (int l = 0; l < G.lanes_in(b); ++l) {
     const int a = G.arts[b * W + l];

@@ -56,19 +56,8 @@ ArticulationScratch& DenseArticulations::scratch(int a) {
   return scratch_[a];
 }
 
-void DenseArticulations::run(int unit, Stage first, Stage last, const StepContext& step) {
-  const int a = units_[unit];
-  for (int s = static_cast<int>(first); s <= static_cast<int>(last); ++s) switch (static_cast<Stage>(s)) {
-      case Stage::Dynamics: dynamics(a, step); break;
-      case Stage::Rows: break;  // the islands'
-      case Stage::Integrate: integrate(a, step); break;
-      case Stage::Store:
-        if (!step.diverged[a] && step.factor_failure[a] < 0) store(a, step);
-        break;
-    }
-}
-
-void DenseArticulations::joint_forces(int a, const StepContext& step, Scalar* rhs, VecX& diagonal) {
+void DenseArticulations::joint_forces(int a, const StepContext& step, const UnitInputs& inputs, Scalar* rhs,
+                                      VecX& diagonal) {
   const ArticulationView& art = art_[a];
   ArticulationScratch& s = scratch_[a];
   const int q0 = art.q_begin(), qd0 = art.qd_begin();
@@ -83,8 +72,8 @@ void DenseArticulations::joint_forces(int a, const StepContext& step, Scalar* rh
     for (int m = 0; m < art.dof(i); ++m) {
       const int k = art.qd_start(i) + m, g = qd0 + k;
       // (the targets are read only when some gain is nonzero: unchecked otherwise)
-      const Scalar target_vel = step.drives ? control.joint_target_vel[g] : 0;
-      const Scalar target_pos = step.drives ? control.joint_target_pos[g] : 0;
+      const Scalar target_vel = inputs.drives ? control.joint_target_vel[g] : 0;
+      const Scalar target_pos = inputs.drives ? control.joint_target_pos[g] : 0;
       const Scalar q_ref = coordinate ? model_.joint_q_ref[q0 + art.q_start(i)] : 0;
       const DofDrive<Scalar> d{model_.joint_damping[g],
                                control.joint_target_kd[g],
@@ -95,8 +84,8 @@ void DenseArticulations::joint_forces(int a, const StepContext& step, Scalar* rh
                                target_pos};
       rhs[k] = step.tau[g];
       diagonal[k] = add_dof_forces(d, bias[k], qd[k], coordinate ? q + art.q_start(i) : nullptr, step.dt, rhs[k]);
-      if (coordinate && step.actuator_stiffness)
-        diagonal[k] += add_actuator_forces(step.actuator_stiffness[g], step.actuator_damping[g], q[art.q_start(i)],
+      if (coordinate && inputs.actuator_stiffness)
+        diagonal[k] += add_actuator_forces(inputs.actuator_stiffness[g], inputs.actuator_damping[g], q[art.q_start(i)],
                                            qd[k], step.dt, rhs[k]);
     }
   }
@@ -109,10 +98,10 @@ int DenseArticulations::factor_and_solve(int a, const StepContext& step, Scalar*
   const ArticulationView& art = art_[a];
   ArticulationScratch& s = scratch_[a];
   const int nv = art.dof_count();
-  const Scalar theta = step.coriolis_implicitness;
+  const Scalar theta = step.settings.coriolis_implicitness;
   const VecX& diagonal = s.u;
   const bool constant = constant_mass_[a];
-  if (theta == 0 && nv >= step.aba_min_dofs) {
+  if (theta == 0 && nv >= step.settings.aba_min_dofs) {
     factor_[a] = Factor::Aba;
     const int link = aba_factor(art, diagonal.data(), s);
     if (link >= 0) return art.qd_start(link);
@@ -127,7 +116,7 @@ int DenseArticulations::factor_and_solve(int a, const StepContext& step, Scalar*
   if (constant && constant_H_[a].size() > 0) {
     s.H = constant_H_[a];
   } else {
-    if (step.tile_gemm)
+    if (step.settings.use_tile_gemm)
       mass_matrix_gemm(art, s);
     else
       crba(art, s);
@@ -144,7 +133,7 @@ int DenseArticulations::factor_and_solve(int a, const StepContext& step, Scalar*
     s.qd_step = Eigen::Map<const VecX>(rhs, nv);
     Eigen::Map<VecX>(rhs, nv) = implicit_lu_[a].solve(s.qd_step);
     bad = cholesky_factor(s.H);
-  } else if (step.fuse) {
+  } else if (step.settings.fuse_cholesky) {
     bad = cholesky_factor_solve(s.H, rhs);
   } else {
     bad = cholesky_factor(s.H);
@@ -154,7 +143,8 @@ int DenseArticulations::factor_and_solve(int a, const StepContext& step, Scalar*
   return bad;
 }
 
-void DenseArticulations::dynamics(int a, const StepContext& step) {
+void DenseArticulations::dynamics(const UnitPass& pass, const StepContext& step, const UnitInputs& inputs) {
+  const int a = units_[pass.unit];
   const ArticulationView& art = art_[a];
   if (art.dof_count() == 0) return;
   ArticulationScratch& s = scratch(a);
@@ -166,24 +156,30 @@ void DenseArticulations::dynamics(int a, const StepContext& step) {
         motion_xform(s.X_world[i].inverse()) * s.S.middleCols(art.qd_start(i), art.dof(i));
   Scalar* rhs = rhs_.data() + qd0;
   s.qdd_zero.setZero(nv);
-  joint_forces(a, step, rhs, s.u);
+  joint_forces(a, step, inputs, rhs, s.u);
   const int bad = factor_and_solve(a, step, rhs);
   step.factor_failure[a] = bad < 0 ? -1 : qd0 + bad;
   for (int k = 0; k < nv; ++k) step.qd[qd0 + k] = step.in->joint_qd[qd0 + k] + step.dt * rhs[k];
   for (const int k : rotational_[a]) step.qd[qd0 + k] *= step.keep;
 }
 
-void DenseArticulations::integrate(int a, const StepContext& step) {
+void DenseArticulations::integrate(const UnitPass& pass, const StepContext& step) {
+  const int a = units_[pass.unit];
   const ArticulationView& art = art_[a];
   const int q0 = art.q_begin(), qd0 = art.qd_begin();
   integrate_joints(art, step.in->joint_q.data() + q0, step.qd + qd0, step.dt, step.q_next + q0);
   bool diverged;
   divergence_test<Scalar>(step.q_next + q0, art.coord_count(), step.qd + qd0, step.energy_weight + qd0, art.dof_count(),
-                          step.divergence_speed, step.divergence_energy, &diverged);
+                          step.settings.divergence_speed, step.settings.divergence_energy, &diverged);
   step.diverged[a] = diverged || step.flagged[a];
 }
 
-void DenseArticulations::store(int a, const StepContext& step) {
+void DenseArticulations::store(const UnitPass& pass, const StepContext& step) {
+  const int a = units_[pass.unit];
+  if (!step.diverged[a] && step.factor_failure[a] < 0) write_state(a, step);
+}
+
+void DenseArticulations::write_state(int a, const StepContext& step) {
   const ArticulationView& art = art_[a];
   State& out = *step.out;
   std::copy_n(step.q_next + art.q_begin(), art.coord_count(), out.joint_q.begin() + art.q_begin());

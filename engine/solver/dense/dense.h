@@ -31,10 +31,14 @@ class DenseArticulations final : public StepRoute {
   }
   void begin_step(const StepContext&) override {}
   void end_step(const StepContext&) override {}
-  void run(int unit, Stage first, Stage last, const StepContext& step) override;
+  void dynamics(const UnitPass& pass, const StepContext& step, const UnitInputs& inputs) override;
+  void rows(const UnitPass&, const StepContext&) override {}  // (the islands')
+  void integrate(const UnitPass& pass, const StepContext& step) override;
+  // the articulation's state, unless it diverged or its factor failed
+  void store(const UnitPass& pass, const StepContext& step) override;
   // out.joint_q, joint_qd from step.q_next and step.qd, and body_q, body_qd from them by the scalar
   // kinematics, for any articulation (the guard's kept and reset ones too)
-  void store(int a, const StepContext& step);
+  void write_state(int a, const StepContext& step);
 
   void solve_mass(int a, Scalar* x) override;
   void point_jacobian(int a, int link, const Vec3* p, const Vec3& d, Scalar sign, Scalar* J) const override;
@@ -44,11 +48,9 @@ class DenseArticulations final : public StepRoute {
   enum class Factor : std::uint8_t { None, Cholesky, Aba };
   ArticulationScratch& scratch(int a);
   // rhs = tau - bias + the implicit dampers, springs and drives; diagonal = what they add to H
-  void joint_forces(int a, const StepContext& step, Scalar* rhs, VecX& diagonal);
+  void joint_forces(int a, const StepContext& step, const UnitInputs& inputs, Scalar* rhs, VecX& diagonal);
   // rhs = M^-1 rhs, M factored as this step needs; returns the dof whose pivot failed, or -1
   int factor_and_solve(int a, const StepContext& step, Scalar* rhs);
-  void dynamics(int a, const StepContext& step);
-  void integrate(int a, const StepContext& step);
   // applied wrenches of articulation a's bodies gathered onto its links (welded bodies' onto theirs)
   const Scalar* link_wrenches(int a, const Scalar* body_f);
 
