@@ -12,8 +12,7 @@
 // (the same in both engines; a free base hops and spins), so every world lands its own way. --kick
 // scales those velocities (0: every world starts at rest).
 // --profile prints NovaPhy's microseconds a step in collide and in each stage of step (the solver's
-// profile_stages: the stages run one after another over all blocks, not block by block, so the total is
-// not the unprofiled step's).
+// profile_stages: each pass's wall time shared out among the stages as the threads' time went to them).
 // --mujoco-worlds times MuJoCo on the first N worlds only (default 1024, or all when fewer; 0: not at all).
 // Exit status: 0, 1 when the forward dynamics differ by more than 1e-9 (relative), 2 on an error.
 #include <mujoco/mujoco.h>

@@ -52,8 +52,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(int, num_threads, 0, 0, kIntUnbounded, "",                                                                        \
     "OpenMP threads (0: all available); results are bit-identical for any count.")                                    \
   X(bool, profile_stages, false, 0, 0, "",                                                                            \
-    "Accumulate each stage's wall time into stage_seconds; the blocks then run a stage over all blocks before the "   \
-    "next (the same arithmetic as a block's whole step at a time).")                                                  \
+    "Accumulate each stage's wall time into stage_seconds: each pass's wall time shared out as the threads' time "    \
+    "went to the stages of its units (the same schedule and arithmetic as unprofiled, a few clock reads a unit "      \
+    "more).")                                                                                                         \
   X(bool, count_serial_time, false, 0, 0, "",                                                                         \
     "Accumulate each step's wall time and that of its parallel work into serial_seconds (its serial share: the "      \
     "rest over the whole).")                                                                                          \

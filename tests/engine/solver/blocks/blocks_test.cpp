@@ -387,12 +387,12 @@ TEST(ArticulationBatches, StreamedBodyOutputEqualsStoredOutput) {
 }
 
 // a step with every articulation in a block and every row solved there runs each block's dynamics,
-// rows and integration in turn; with settings.profile_stages the solver times the stages over all
-// blocks one after another instead. Both are the same arithmetic: bit-identical states and impulses,
-// with contacts, limits, PD drives, an applied wrench, angular damping and a change of
-// update_mass_matrix_interval all in play. One at a time, the blocks also write each world's new state
-// as they step it; under on_divergence Raise they leave that to a pass after the guard: the same states
-TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
+// rows and integration in turn; with settings.profile_stages the solver also times each block's stages, the
+// same schedule and arithmetic: bit-identical states and impulses, with contacts, limits, PD drives, an applied
+// wrench, angular damping and a change of update_mass_matrix_interval all in play. One at a time, the blocks
+// also write each world's new state as they step it; under on_divergence Raise they leave that to a pass after
+// the guard: the same states
+TEST(ArticulationBatches, BlocksSteppedProfiledOrStoredAfterTheGuardGiveTheSameBits) {
   for (const Precision precision : {Precision::Float32, Precision::Float64}) {
     constexpr int kWorlds = 100;
     Model model = replicated(quadruped(true), kWorlds, precision);
@@ -405,11 +405,11 @@ TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
       control.joint_target_kd[k] = 0.5;
       control.joint_target_pos[k] = 0.1;
     }
-    State blocks = model.state(), stages = model.state(), after_guard = model.state();
+    State blocks = model.state(), timed = model.state(), after_guard = model.state();
     blocks.assign(initial);
-    stages.assign(initial);
+    timed.assign(initial);
     after_guard.assign(initial);
-    blocks.body_f[6 * 3 + 2] = stages.body_f[6 * 3 + 2] = after_guard.body_f[6 * 3 + 2] = 5;
+    blocks.body_f[6 * 3 + 2] = timed.body_f[6 * 3 + 2] = after_guard.body_f[6 * 3 + 2] = 5;
     SolverFeatherstoneSettings settings;
     settings.angular_damping = 0.5;
     SolverFeatherstone one_at_a_time(model, settings);
@@ -417,35 +417,35 @@ TEST(ArticulationBatches, BlocksSteppedOneAtATimeEqualTheStagesInTurn) {
     SolverFeatherstone stored_after_guard(model, settings);
     settings.on_divergence = DivergencePolicy::Flag;
     settings.profile_stages = true;
-    SolverFeatherstone in_turn(model, settings);
+    SolverFeatherstone profiled(model, settings);
     // the mass matrix refactored every step (one at a time: in scratch, kept for no later step), then
     // every third (kept in the blocks)
     auto interval = [&](int k) { return k < 20 ? 1 : 3; };
     CollisionPipeline pipeline(model);
-    Contacts contacts_blocks = pipeline.contacts(), contacts_stages = pipeline.contacts(),
+    Contacts contacts_blocks = pipeline.contacts(), contacts_profiled = pipeline.contacts(),
              contacts_after_guard = pipeline.contacts();
     int contacts_seen = 0;
     for (int k = 0; k < 40; ++k) {
       pipeline.collide(blocks, contacts_blocks);
-      pipeline.collide(stages, contacts_stages);
+      pipeline.collide(timed, contacts_profiled);
       pipeline.collide(after_guard, contacts_after_guard);
-      one_at_a_time.settings.update_mass_matrix_interval = in_turn.settings.update_mass_matrix_interval =
+      one_at_a_time.settings.update_mass_matrix_interval = profiled.settings.update_mass_matrix_interval =
           stored_after_guard.settings.update_mass_matrix_interval = interval(k);
       one_at_a_time.step(blocks, blocks, control, contacts_blocks, kDt);
-      in_turn.step(stages, stages, control, contacts_stages, kDt);
+      profiled.step(timed, timed, control, contacts_profiled, kDt);
       stored_after_guard.step(after_guard, after_guard, control, contacts_after_guard, kDt);
       contacts_seen += contacts_blocks.contact_count;
     }
     EXPECT_GT(contacts_seen, 0);
-    EXPECT_EQ(in_turn.stage_seconds().steps, 40);
+    EXPECT_EQ(profiled.stage_seconds().steps, 40);
     auto same = [](const std::vector<Scalar>& a, const std::vector<Scalar>& b) {
       return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Scalar)) == 0;
     };
-    EXPECT_TRUE(same(blocks.joint_q, stages.joint_q));
-    EXPECT_TRUE(same(blocks.joint_qd, stages.joint_qd));
-    EXPECT_TRUE(same(blocks.body_q, stages.body_q));
-    EXPECT_TRUE(same(blocks.body_qd, stages.body_qd));
-    EXPECT_TRUE(same(contacts_blocks.contact_impulse, contacts_stages.contact_impulse));
+    EXPECT_TRUE(same(blocks.joint_q, timed.joint_q));
+    EXPECT_TRUE(same(blocks.joint_qd, timed.joint_qd));
+    EXPECT_TRUE(same(blocks.body_q, timed.body_q));
+    EXPECT_TRUE(same(blocks.body_qd, timed.body_qd));
+    EXPECT_TRUE(same(contacts_blocks.contact_impulse, contacts_profiled.contact_impulse));
     for (const auto field : {&State::joint_q, &State::joint_qd, &State::body_q, &State::body_qd})
       EXPECT_TRUE(same(blocks.*field, after_guard.*field));
   }
