@@ -5,7 +5,10 @@
 // Every articulation goes through the same stages (engine/solver/route.h), on one of two routes chosen
 // when the solver is made (and again when a setting that decides them changes): SIMD blocks of worlds
 // (engine/solver/blocks/blocks.h) or one articulation on the scalar kernels (engine/solver/dense/dense.h);
-// rows that join articulations are solved as islands (engine/solver/islands/rows.h). docs/step.md tells the step.
+// rows that join articulations are solved as islands (engine/solver/islands/rows.h). As MuJoCo splits model and
+// data: what is built once for the model is SolverModel (engine/solver/solver_model.h), what a step writes
+// SolverData (engine/solver/solver_data.h), what it reads of the settings StepContext (engine/solver/route.h);
+// the solver holds those, the routes and the step's schedule. docs/step.md tells the step.
 #pragma once
 
 #include <array>
