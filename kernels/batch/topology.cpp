@@ -140,21 +140,22 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
 template <typename T>
 void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, V<T>* data) {
   const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  const BatchParamOffsets at = batch_param_offsets(topo);
   V<T>* x = data;
   for (int i = 0; i < n; ++i) {
     const int b = art.body(i);
-    x[i][lane] = static_cast<T>(art.body_mass[b]);
-    for (int m = 0; m < 3; ++m) x[n + 3 * i + m][lane] = static_cast<T>(art.body_com[3 * b + m]);
+    x[at.mass + i][lane] = static_cast<T>(art.body_mass[b]);
+    for (int m = 0; m < 3; ++m) x[at.com + 3 * i + m][lane] = static_cast<T>(art.body_com[3 * b + m]);
     const int order[6] = {0, 4, 8, 1, 2, 5};  // xx yy zz xy xz yz of the row-major 3x3
-    for (int m = 0; m < 6; ++m) x[4 * n + 6 * i + m][lane] = static_cast<T>(art.body_inertia[9 * b + order[m]]);
+    for (int m = 0; m < 6; ++m) x[at.inertia + 6 * i + m][lane] = static_cast<T>(art.body_inertia[9 * b + order[m]]);
   }
   for (int k = 0; k < nv; ++k) {
     const int g = art.qd_begin() + k;
-    x[10 * n + k][lane] = static_cast<T>(art.joint_armature[g]);
-    x[10 * n + nv + k][lane] = static_cast<T>(art.joint_damping[g]);
-    x[10 * n + 2 * nv + k][lane] = static_cast<T>(art.joint_stiffness[g]);
+    x[at.armature + k][lane] = static_cast<T>(art.joint_armature[g]);
+    x[at.damping + k][lane] = static_cast<T>(art.joint_damping[g]);
+    x[at.stiffness + k][lane] = static_cast<T>(art.joint_stiffness[g]);
     const int c = topo.coord_of_dof[k];  // spring rest positions of the one-coordinate joints
-    x[10 * n + 3 * nv + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
+    x[at.q_ref + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
   }
 }
 

@@ -67,29 +67,58 @@ struct BatchTopology {
 // H's packed lower triangle: entry (i, j), j <= i
 inline int packed_index(int i, int j) { return i * (i + 1) / 2 + j; }
 
-// one block's per-world parameters (read from the model when the solver is made)
+// one block's per-world parameters (read from the model when the solver is made) as a field table,
+// X(name, count, doc), `count` over the topology's n links and nv dofs: the fields lie in one buffer of
+// batch_param_count lanes in the table's order
+#define NOVAPHY_BATCH_PARAMS(X)                                                         \
+  X(mass, n, "[link]")                                                                  \
+  X(com, 3 * n, "[link][3] body frame")                                                 \
+  X(inertia, 6 * n, "[link][6] xx yy zz xy xz yz about the centre of mass, body frame") \
+  X(armature, nv, "[dof]")                                                              \
+  X(damping, nv, "[dof]")                                                               \
+  X(stiffness, nv, "[dof]")                                                             \
+  X(q_ref, nv, "[dof] spring rest position (Revolute, Prismatic)")
+
 template <typename T>
 struct BatchParams {
-  const Lanes<T>* mass;       // [link]
-  const Lanes<T>* com;        // [link][3] body frame
-  const Lanes<T>* inertia;    // [link][6] xx yy zz xy xz yz about the centre of mass, body frame
-  const Lanes<T>* armature;   // [dof]
-  const Lanes<T>* damping;    // [dof]
-  const Lanes<T>* stiffness;  // [dof]
-  const Lanes<T>* q_ref;      // [dof] spring rest position (Revolute, Prismatic)
+#define NOVAPHY_DECLARE_PARAM(name, count, doc) const Lanes<T>* name;
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_DECLARE_PARAM)
+#undef NOVAPHY_DECLARE_PARAM
 };
 
-// BatchParams over one buffer of batch_param_count lanes (mass, com, inertia, armature, damping,
-// stiffness, q_ref in that order), and lane `lane` of it filled from an articulation's model arrays
+// where each field starts in the buffer, and the buffer's size
+struct BatchParamOffsets {
+#define NOVAPHY_DECLARE_OFFSET(name, count, doc) int name = 0;
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_DECLARE_OFFSET)
+#undef NOVAPHY_DECLARE_OFFSET
+  int count = 0;
+};
+template <typename T>
+BatchParamOffsets batch_param_offsets(const BatchTopology<T>& topo) {
+  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  BatchParamOffsets at;
+#define NOVAPHY_PLACE_PARAM(name, count_, doc) \
+  at.name = at.count;                          \
+  at.count += (count_);
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_PLACE_PARAM)
+#undef NOVAPHY_PLACE_PARAM
+  return at;
+}
+
+// BatchParams over one buffer of batch_param_count lanes, and lane `lane` of it filled from an articulation's
+// model arrays
 template <typename T>
 int batch_param_count(const BatchTopology<T>& topo) {
-  return 10 * static_cast<int>(topo.link.size()) + 4 * topo.dof_count;
+  return batch_param_offsets(topo).count;
 }
 template <typename T>
 BatchParams<T> batch_params(const BatchTopology<T>& topo, const Lanes<T>* data) {
-  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
-  return {
-      data, data + n, data + 4 * n, data + 10 * n, data + 10 * n + nv, data + 10 * n + 2 * nv, data + 10 * n + 3 * nv};
+  const BatchParamOffsets at = batch_param_offsets(topo);
+  BatchParams<T> P;
+#define NOVAPHY_POINT_PARAM(name, count, doc) P.name = data + at.name;
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_POINT_PARAM)
+#undef NOVAPHY_POINT_PARAM
+  return P;
 }
 template <typename T>
 void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, Lanes<T>* data);

@@ -9,18 +9,6 @@
 
 namespace novaphy {
 
-template <typename T>
-std::size_t RowWork<T>::bytes() const {
-  return (J.size() + z.size() + target.size() + mu.size() + inv_mass.size() + lambda.size() + bound.size() +
-          coef.size() + qd_in.size() + point.size() + frame.size()) *
-             sizeof(V) +
-         active.size() * sizeof(IntLanes<T>) +
-         (limit_row.size() + friction_row.size() + contact.size() + normal.size() + nonzero_begin.size() +
-          nonzero_end.size() + zero_begin.size() + zero_end.size()) *
-             sizeof(int) +
-         kind.size() * sizeof(RowKind);
-}
-
 namespace {
 
 template <typename T>
