@@ -161,12 +161,19 @@ void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art,
 
 template <typename T>
 void BatchWork<T>::resize(const BatchTopology<T>& topo) {
-  const size_t n = topo.link.size();
-  Q.resize(4 * n), p.resize(3 * n), R.resize(9 * n);
-  v.resize(6 * n), a.resize(6 * n), f.resize(6 * n), I.resize(10 * n), vrel.resize(3 * n);
-  q.resize(topo.coord_count), qd.resize(topo.dof_count), x.resize(topo.dof_count), tau.resize(topo.dof_count);
-  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(6 * topo.dof_count);
-  IJ.resize(6 * (topo.dof_count + 1));
+  const size_t n = topo.link.size(), nc = topo.coord_count, nv = topo.dof_count;
+#define NOVAPHY_RESIZE_WORK(name, count, doc) name.resize(count);
+  NOVAPHY_BATCH_WORK(NOVAPHY_RESIZE_WORK)
+#undef NOVAPHY_RESIZE_WORK
+}
+
+template <typename T>
+std::size_t BatchWork<T>::bytes() const {
+  std::size_t count = bodies.size();
+#define NOVAPHY_COUNT_WORK(name, count_, doc) count += name.size();
+  NOVAPHY_BATCH_WORK(NOVAPHY_COUNT_WORK)
+#undef NOVAPHY_COUNT_WORK
+  return count * sizeof(Lanes<T>);
 }
 
 #define NOVAPHY_INSTANTIATE(T)      \

@@ -123,24 +123,41 @@ BatchParams<T> batch_params(const BatchTopology<T>& topo, const Lanes<T>* data) 
 template <typename T>
 void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, Lanes<T>* data);
 
-// one block's kinematics and per-link work, sized for a topology (a thread's scratch)
+// one block's kinematics and per-link work, sized for a topology (a thread's scratch), as a field table,
+// X(name, count, doc), `count` over the topology's n links, nc coordinates and nv dofs: resize sizes each field
+#define NOVAPHY_BATCH_WORK(X)                                                             \
+  X(Q, 4 * n, "[link][4] link orientation in the world")                                  \
+  X(p, 3 * n, "[link][3] link position in the world")                                     \
+  X(R, 9 * n, "[link][9] link rotation in the world")                                     \
+  X(v, 6 * n, "[link][6] velocity about o")                                               \
+  X(a, 6 * n, "[link][6] acceleration about o")                                           \
+  X(f, 6 * n, "[link][6] force about o")                                                  \
+  X(I, 10 * n, "[link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix") \
+  X(vrel, 3 * n, "[link][3] Free joints: linear velocity in the parent, world axes")      \
+  X(q, nc, "[coord] a block's coordinates")                                               \
+  X(qd, nv, "[dof] its velocities")                                                       \
+  X(x, nv, "[dof] a right-hand side")                                                     \
+  X(q_next, nc, "[coord] coordinates after the step")                                     \
+  X(tau, nv, "[dof] bias forces")                                                         \
+  X(diag, nv, "[dof] implicit diagonal added to H")                                       \
+  X(f_ext, 6 * n, "[link][6] applied wrenches about o")                                   \
+  X(kd, nv, "[dof] PD drive: velocity gain")                                              \
+  X(target_vel, nv, "[dof] PD drive: target velocity")                                    \
+  X(ke, nv, "[dof] PD drive: position gain")                                              \
+  X(target_pos, nv, "[dof] PD drive: target position")                                    \
+  X(actuator_stiffness, nv, "[dof] the actuators' stiffness")                             \
+  X(actuator_damping, nv, "[dof] the actuators' damping")                                 \
+  X(IJ, 6 * (nv + 1), "[column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column")
+
 template <typename T>
 struct BatchWork {
-  std::vector<Lanes<T>> Q, p, R;   // [link][4], [link][3], [link][9]: link pose in the world
-  std::vector<Lanes<T>> v, a, f;   // [link][6] velocity, acceleration, force about o
-  std::vector<Lanes<T>> I;         // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
-  std::vector<Lanes<T>> vrel;      // [link][3] Free joints: linear velocity in the parent, world axes
-  std::vector<Lanes<T>> q, qd, x;  // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
-  std::vector<Lanes<T>> q_next;    // [coord] coordinates after the step
-  std::vector<Lanes<T>> tau;       // [dof] bias forces
-  std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
-  std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
-  // [6][dof] PD drive gains and targets (kd, target velocity, ke, target position), actuator stiffness and damping
-  std::vector<Lanes<T>> drive;
+#define NOVAPHY_DECLARE_WORK(name, count, doc) std::vector<Lanes<T>> name;
+  NOVAPHY_BATCH_WORK(NOVAPHY_DECLARE_WORK)
+#undef NOVAPHY_DECLARE_WORK
   std::vector<Lanes<T>> bodies;  // [body][13] body_q and body_qd on their way out (sized by the owner)
-  std::vector<Lanes<T>> IJ;      // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
 
   void resize(const BatchTopology<T>& topo);
+  std::size_t bytes() const;  // (bodies included)
 };
 
 }  // namespace novaphy
