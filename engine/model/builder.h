@@ -49,9 +49,9 @@ struct ShapeOptions {
   int priority = 0;  // FrictionRule::Mujoco: the shape of higher priority decides a contact's friction and condim
   int condim = 3;    // MuJoCo's: 1 frictionless, 3 sliding friction, 4 and torsional, 6 and rolling
   Scalar mu_torsion = 0.005, mu_rolling = 0.0001;  // (m) the torsional and rolling friction of condim 4 and 6
-  // MuJoCo's contact softness (model.h, engine/solver/parts/rows.h): solref (0, 0) is a rigid contact (the solver's
-  // erp and slop); (time constant > 0, damping ratio > 0) or (-stiffness < 0, -damping <= 0) a soft one. A pair
-  // of equal priority mixes its shapes' as MuJoCo does, which leaves it rigid where one of them is
+  // MuJoCo's contact softness (model.h, engine/solver/parts/contact_softness.h): solref (0, 0) is a rigid contact (the
+  // solver's erp and slop); (time constant > 0, damping ratio > 0) or (-stiffness < 0, -damping <= 0) a soft one. A
+  // pair of equal priority mixes its shapes' as MuJoCo does, which leaves it rigid where one of them is
   std::array<Scalar, 2> solref = {0, 0};
   std::array<Scalar, 5> solimp = {0.9, 0.95, 0.001, 0.5, 2};  // dmin, dmax, width, midpoint, power
   Scalar solmix = 1;

@@ -48,8 +48,8 @@ const char* shape_type_name(ShapeType type);
 // x = 0), a = equality_data[0..5), q1_0 and q2_0 equality_data[5], [6]; one of type Weld keeps, as a connect,
 // equality_data[0..3) on [3..6) and body 2's orientation in body 1's frame at the quaternion equality_data[6..10)
 // ([x, y, z, w]; body 1 -1: the world)
-// A contact is soft, as MuJoCo's (engine/solver/parts/rows.h), where its shapes' solref has a nonzero time constant:
-// shape_solref (time constant, damping ratio; or -stiffness, -damping), shape_solimp (dmin, dmax, width,
+// A contact is soft, as MuJoCo's (engine/solver/parts/contact_softness.h), where its shapes' solref has a nonzero time
+// constant: shape_solref (time constant, damping ratio; or -stiffness, -damping), shape_solimp (dmin, dmax, width,
 // midpoint, power), shape_solmix (the weight of a shape's solref and solimp in a pair of equal priority),
 // shape_margin (a contact is active from this distance) and shape_gap (less this). body_invweight0 is
 // MuJoCo's: the mean of the diagonal of J M^-1 J^T at joint_q0 for the body's COM, translation then rotation.

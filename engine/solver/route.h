@@ -26,14 +26,14 @@ struct ShapeContacts;
 
 // the contacts whose rows an articulation's own unit solves (with static bodies or with itself), listed
 // per articulation in contact order; the unit reads each one's links, friction, restitution and softness from
-// the model (engine/solver/parts/rows.h) as it builds its rows
+// the model (engine/solver/parts/contact_rows.h) as it builds its rows
 struct ContactLists {
   const int* start = nullptr;  // [articulation + 1]: a's are list[start[a] .. start[a + 1])
   const int* list = nullptr;   // contact indices
   const Model* model = nullptr;
   const ArticulationIndex* index = nullptr;
   int dims = 3;  // the rows of a contact of the most: 3, 4 (torsional) or 6 (and rolling), by the shapes' condim
-  const ShapeContacts* shapes = nullptr;  // the shapes' contact numbers (engine/solver/parts/rows.h)
+  const ShapeContacts* shapes = nullptr;  // the shapes' contact numbers (engine/solver/parts/contact_material.h)
 };
 
 // what every unit's stages read and write this step

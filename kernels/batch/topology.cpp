@@ -140,32 +140,40 @@ BatchTopology<T>::BatchTopology(const ArticulationView& art) {
 template <typename T>
 void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, V<T>* data) {
   const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  const BatchParamOffsets at = batch_param_offsets(topo);
   V<T>* x = data;
   for (int i = 0; i < n; ++i) {
     const int b = art.body(i);
-    x[i][lane] = static_cast<T>(art.body_mass[b]);
-    for (int m = 0; m < 3; ++m) x[n + 3 * i + m][lane] = static_cast<T>(art.body_com[3 * b + m]);
+    x[at.mass + i][lane] = static_cast<T>(art.body_mass[b]);
+    for (int m = 0; m < 3; ++m) x[at.com + 3 * i + m][lane] = static_cast<T>(art.body_com[3 * b + m]);
     const int order[6] = {0, 4, 8, 1, 2, 5};  // xx yy zz xy xz yz of the row-major 3x3
-    for (int m = 0; m < 6; ++m) x[4 * n + 6 * i + m][lane] = static_cast<T>(art.body_inertia[9 * b + order[m]]);
+    for (int m = 0; m < 6; ++m) x[at.inertia + 6 * i + m][lane] = static_cast<T>(art.body_inertia[9 * b + order[m]]);
   }
   for (int k = 0; k < nv; ++k) {
     const int g = art.qd_begin() + k;
-    x[10 * n + k][lane] = static_cast<T>(art.joint_armature[g]);
-    x[10 * n + nv + k][lane] = static_cast<T>(art.joint_damping[g]);
-    x[10 * n + 2 * nv + k][lane] = static_cast<T>(art.joint_stiffness[g]);
+    x[at.armature + k][lane] = static_cast<T>(art.joint_armature[g]);
+    x[at.damping + k][lane] = static_cast<T>(art.joint_damping[g]);
+    x[at.stiffness + k][lane] = static_cast<T>(art.joint_stiffness[g]);
     const int c = topo.coord_of_dof[k];  // spring rest positions of the one-coordinate joints
-    x[10 * n + 3 * nv + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
+    x[at.q_ref + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
   }
 }
 
 template <typename T>
 void BatchWork<T>::resize(const BatchTopology<T>& topo) {
-  const size_t n = topo.link.size();
-  Q.resize(4 * n), p.resize(3 * n), R.resize(9 * n);
-  v.resize(6 * n), a.resize(6 * n), f.resize(6 * n), I.resize(10 * n), vrel.resize(3 * n);
-  q.resize(topo.coord_count), qd.resize(topo.dof_count), x.resize(topo.dof_count), tau.resize(topo.dof_count);
-  diag.resize(topo.dof_count), f_ext.resize(6 * n), q_next.resize(topo.coord_count), drive.resize(6 * topo.dof_count);
-  IJ.resize(6 * (topo.dof_count + 1));
+  const size_t n = topo.link.size(), nc = topo.coord_count, nv = topo.dof_count;
+#define NOVAPHY_RESIZE_WORK(name, count, doc) name.resize(count);
+  NOVAPHY_BATCH_WORK(NOVAPHY_RESIZE_WORK)
+#undef NOVAPHY_RESIZE_WORK
+}
+
+template <typename T>
+std::size_t BatchWork<T>::bytes() const {
+  std::size_t count = bodies.size();
+#define NOVAPHY_COUNT_WORK(name, count_, doc) count += name.size();
+  NOVAPHY_BATCH_WORK(NOVAPHY_COUNT_WORK)
+#undef NOVAPHY_COUNT_WORK
+  return count * sizeof(Lanes<T>);
 }
 
 #define NOVAPHY_INSTANTIATE(T)      \

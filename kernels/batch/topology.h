@@ -67,51 +67,97 @@ struct BatchTopology {
 // H's packed lower triangle: entry (i, j), j <= i
 inline int packed_index(int i, int j) { return i * (i + 1) / 2 + j; }
 
-// one block's per-world parameters (read from the model when the solver is made)
+// one block's per-world parameters (read from the model when the solver is made) as a field table,
+// X(name, count, doc), `count` over the topology's n links and nv dofs: the fields lie in one buffer of
+// batch_param_count lanes in the table's order
+#define NOVAPHY_BATCH_PARAMS(X)                                                         \
+  X(mass, n, "[link]")                                                                  \
+  X(com, 3 * n, "[link][3] body frame")                                                 \
+  X(inertia, 6 * n, "[link][6] xx yy zz xy xz yz about the centre of mass, body frame") \
+  X(armature, nv, "[dof]")                                                              \
+  X(damping, nv, "[dof]")                                                               \
+  X(stiffness, nv, "[dof]")                                                             \
+  X(q_ref, nv, "[dof] spring rest position (Revolute, Prismatic)")
+
 template <typename T>
 struct BatchParams {
-  const Lanes<T>* mass;       // [link]
-  const Lanes<T>* com;        // [link][3] body frame
-  const Lanes<T>* inertia;    // [link][6] xx yy zz xy xz yz about the centre of mass, body frame
-  const Lanes<T>* armature;   // [dof]
-  const Lanes<T>* damping;    // [dof]
-  const Lanes<T>* stiffness;  // [dof]
-  const Lanes<T>* q_ref;      // [dof] spring rest position (Revolute, Prismatic)
+#define NOVAPHY_DECLARE_PARAM(name, count, doc) const Lanes<T>* name;
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_DECLARE_PARAM)
+#undef NOVAPHY_DECLARE_PARAM
 };
 
-// BatchParams over one buffer of batch_param_count lanes (mass, com, inertia, armature, damping,
-// stiffness, q_ref in that order), and lane `lane` of it filled from an articulation's model arrays
+// where each field starts in the buffer, and the buffer's size
+struct BatchParamOffsets {
+#define NOVAPHY_DECLARE_OFFSET(name, count, doc) int name = 0;
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_DECLARE_OFFSET)
+#undef NOVAPHY_DECLARE_OFFSET
+  int count = 0;
+};
+template <typename T>
+BatchParamOffsets batch_param_offsets(const BatchTopology<T>& topo) {
+  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
+  BatchParamOffsets at;
+#define NOVAPHY_PLACE_PARAM(name, count_, doc) \
+  at.name = at.count;                          \
+  at.count += (count_);
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_PLACE_PARAM)
+#undef NOVAPHY_PLACE_PARAM
+  return at;
+}
+
+// BatchParams over one buffer of batch_param_count lanes, and lane `lane` of it filled from an articulation's
+// model arrays
 template <typename T>
 int batch_param_count(const BatchTopology<T>& topo) {
-  return 10 * static_cast<int>(topo.link.size()) + 4 * topo.dof_count;
+  return batch_param_offsets(topo).count;
 }
 template <typename T>
 BatchParams<T> batch_params(const BatchTopology<T>& topo, const Lanes<T>* data) {
-  const int n = static_cast<int>(topo.link.size()), nv = topo.dof_count;
-  return {
-      data, data + n, data + 4 * n, data + 10 * n, data + 10 * n + nv, data + 10 * n + 2 * nv, data + 10 * n + 3 * nv};
+  const BatchParamOffsets at = batch_param_offsets(topo);
+  BatchParams<T> P;
+#define NOVAPHY_POINT_PARAM(name, count, doc) P.name = data + at.name;
+  NOVAPHY_BATCH_PARAMS(NOVAPHY_POINT_PARAM)
+#undef NOVAPHY_POINT_PARAM
+  return P;
 }
 template <typename T>
 void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art, int lane, Lanes<T>* data);
 
-// one block's kinematics and per-link work, sized for a topology (a thread's scratch)
+// one block's kinematics and per-link work, sized for a topology (a thread's scratch), as a field table,
+// X(name, count, doc), `count` over the topology's n links, nc coordinates and nv dofs: resize sizes each field
+#define NOVAPHY_BATCH_WORK(X)                                                             \
+  X(Q, 4 * n, "[link][4] link orientation in the world")                                  \
+  X(p, 3 * n, "[link][3] link position in the world")                                     \
+  X(R, 9 * n, "[link][9] link rotation in the world")                                     \
+  X(v, 6 * n, "[link][6] velocity about o")                                               \
+  X(a, 6 * n, "[link][6] acceleration about o")                                           \
+  X(f, 6 * n, "[link][6] force about o")                                                  \
+  X(I, 10 * n, "[link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix") \
+  X(vrel, 3 * n, "[link][3] Free joints: linear velocity in the parent, world axes")      \
+  X(q, nc, "[coord] a block's coordinates")                                               \
+  X(qd, nv, "[dof] its velocities")                                                       \
+  X(x, nv, "[dof] a right-hand side")                                                     \
+  X(q_next, nc, "[coord] coordinates after the step")                                     \
+  X(tau, nv, "[dof] bias forces")                                                         \
+  X(diag, nv, "[dof] implicit diagonal added to H")                                       \
+  X(f_ext, 6 * n, "[link][6] applied wrenches about o")                                   \
+  X(kd, nv, "[dof] PD drive: velocity gain")                                              \
+  X(target_vel, nv, "[dof] PD drive: target velocity")                                    \
+  X(ke, nv, "[dof] PD drive: position gain")                                              \
+  X(target_pos, nv, "[dof] PD drive: target position")                                    \
+  X(actuator_stiffness, nv, "[dof] the actuators' stiffness")                             \
+  X(actuator_damping, nv, "[dof] the actuators' damping")                                 \
+  X(IJ, 6 * (nv + 1), "[column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column")
+
 template <typename T>
 struct BatchWork {
-  std::vector<Lanes<T>> Q, p, R;   // [link][4], [link][3], [link][9]: link pose in the world
-  std::vector<Lanes<T>> v, a, f;   // [link][6] velocity, acceleration, force about o
-  std::vector<Lanes<T>> I;         // [link][10] m, h, J (xx yy zz xy xz yz); composite after the mass matrix
-  std::vector<Lanes<T>> vrel;      // [link][3] Free joints: linear velocity in the parent, world axes
-  std::vector<Lanes<T>> q, qd, x;  // [coord], [dof], [dof]: a block's coordinates, velocities, right-hand side
-  std::vector<Lanes<T>> q_next;    // [coord] coordinates after the step
-  std::vector<Lanes<T>> tau;       // [dof] bias forces
-  std::vector<Lanes<T>> diag;      // [dof] implicit diagonal added to H
-  std::vector<Lanes<T>> f_ext;     // [link][6] applied wrenches about o
-  // [6][dof] PD drive gains and targets (kd, target velocity, ke, target position), actuator stiffness and damping
-  std::vector<Lanes<T>> drive;
+#define NOVAPHY_DECLARE_WORK(name, count, doc) std::vector<Lanes<T>> name;
+  NOVAPHY_BATCH_WORK(NOVAPHY_DECLARE_WORK)
+#undef NOVAPHY_DECLARE_WORK
   std::vector<Lanes<T>> bodies;  // [body][13] body_q and body_qd on their way out (sized by the owner)
-  std::vector<Lanes<T>> IJ;      // [column][6] I_i J_i of batch_mass_matrix_gemm, then a zero column
 
   void resize(const BatchTopology<T>& topo);
+  std::size_t bytes() const;  // (bodies included)
 };
 
 }  // namespace novaphy

@@ -82,52 +82,63 @@ struct BlockKinematics {
   Lanes<T>* o = nullptr;  // [3] the root link's origin
 };
 
-// a thread's rows of one block; grows to the most rows a block has had. On cache lines of its own: each
-// block writes `dofs`
+// a thread's rows of one block as a field table, X(type, name, count, doc), `count` over RowCounts n (the block's
+// rows, dofs and contact slots, one a lane): resize grows each field to its count, bytes counts them all
+struct RowCounts {
+  size_t rows, dofs, slots;
+};
+#define NOVAPHY_ROW_WORK(X)                                                                  \
+  X(RowKind, kind, n.rows, "[row] the projection of its impulse")                            \
+  X(int, normal, n.rows, "[row] a friction row's normal row")                                \
+  X(int, nonzero_begin, n.rows, "[row] where J may be nonzero begins (BatchRows)")           \
+  X(int, nonzero_end, n.rows, "[row] (and where it ends)")                                   \
+  X(int, zero_begin, n.rows, "[row] where whole quads of J that are zero begin (BatchRows)") \
+  X(int, zero_end, n.rows, "[row] (and where they end)")                                     \
+  X(IntLanes<T>, active, n.rows, "[row] the lanes it is on in")                              \
+  X(V, J, (n.rows * n.dofs), "[row][dof] its Jacobian")                                      \
+  X(V, z, (n.rows * n.dofs), "[row][dof] M^-1 J^T")                                          \
+  X(V, target, n.rows, "[row] the velocity J qd it drives towards")                          \
+  X(V, cfm, n.rows, "[row] its own constraint force mixing (a soft contact's)")              \
+  X(V, mu, n.rows, "[row] a friction row's coefficient")                                     \
+  X(V, inv_mass, n.rows, "[row] 1 / (J M^-1 J^T + cfm)")                                     \
+  X(V, lambda, n.rows, "[row] its impulse")                                                  \
+  X(V, bound, n.rows, "[row] a Bounded row's largest |impulse|")                             \
+  X(int, limit_row, n.rows, "[limited][2] its row, or -1")                                   \
+  X(int, friction_row, n.rows, "[frictional] its row, or -1")                                \
+  X(int, contact, (n.slots * kLanes<T>), "[slot][lane] the contact, or -1")                  \
+  X(V, frame, n.slots * 9, "[slot][3][3] the normal and tangents")                           \
+  X(V, coef, n.dofs, "[dof] a slot's +-1 per dof on a contact's paths")                      \
+  X(V, qd_in, n.dofs, "[dof] in.joint_qd")                                                   \
+  X(V, point, 3 * n.dofs, "[dof][3] the velocity of a slot's contact point moved by each dof")
+
+// On cache lines of its own: each block writes `dofs`
 template <typename T>
 struct alignas(64) RowWork {
   using V = Lanes<T>;
   int dofs = 0;
-  std::vector<RowKind> kind;
-  std::vector<int> normal;
-  std::vector<int> nonzero_begin, nonzero_end, zero_begin, zero_end;  // [row]: where J may be nonzero (BatchRows)
-  std::vector<IntLanes<T>> active;
-  std::vector<V> J, z, target, cfm, mu, inv_mass, lambda;  // [row][dof] J and M^-1 J^T, then [row]
-  std::vector<int> limit_row;                              // [limited][2] its row, or -1
-  std::vector<int> friction_row;                           // [frictional] its row, or -1
-  std::vector<V> bound;                                    // [row] a Bounded row's largest |impulse|
-  std::vector<int> contact;                                // [slot][lane] the contact, or -1
-  std::vector<V> frame;                                    // [slot][3][3] the normal and tangents
-  std::vector<V> coef, qd_in;  // [dof] a slot's +-1 per dof on a contact's paths; in.joint_qd
-  std::vector<V> point;        // [dof][3] the velocity of a slot's contact point moved by each dof
-  int rows = 0;                // rows of the block being built
-  V warm_share{};              // the share of the last step's impulses its limit and friction-loss rows start from
+#define NOVAPHY_DECLARE_ROW_WORK(type, name, count, doc) std::vector<type> name;
+  NOVAPHY_ROW_WORK(NOVAPHY_DECLARE_ROW_WORK)
+#undef NOVAPHY_DECLARE_ROW_WORK
+  int rows = 0;    // rows of the block being built
+  V warm_share{};  // the share of the last step's impulses its limit and friction-loss rows start from
   // room for `rows` rows of `dofs` dofs and `slots` contacts a lane (inline: every block calls it)
   void resize(int rows_, int dofs_, int slots) {
     dofs = dofs_;
-    if (static_cast<int>(kind.size()) < rows_) {
-      kind.resize(rows_);
-      normal.resize(rows_);
-      active.resize(rows_);
-      nonzero_begin.resize(rows_);
-      nonzero_end.resize(rows_);
-      zero_begin.resize(rows_);
-      zero_end.resize(rows_);
-      limit_row.resize(rows_);
-      friction_row.resize(rows_);
-      for (auto* x : {&target, &cfm, &mu, &inv_mass, &lambda, &bound}) x->resize(rows_);
-    }
-    for (auto* x : {&J, &z})
-      if (x->size() < static_cast<size_t>(rows_) * dofs) x->resize(static_cast<size_t>(rows_) * dofs);
-    if (contact.size() < static_cast<size_t>(slots) * kLanes<T>) contact.resize(static_cast<size_t>(slots) * kLanes<T>);
-    if (frame.size() < static_cast<size_t>(slots) * 9) frame.resize(static_cast<size_t>(slots) * 9);
-    for (auto* x : {&coef, &qd_in})
-      if (static_cast<int>(x->size()) < dofs) x->resize(dofs);
-    if (static_cast<int>(point.size()) < 3 * dofs) point.resize(3 * dofs);
+    const RowCounts n{static_cast<size_t>(rows_), static_cast<size_t>(dofs_), static_cast<size_t>(slots)};
+#define NOVAPHY_RESIZE_ROW_WORK(type, name, count, doc) \
+  if (name.size() < (count)) name.resize(count);
+    NOVAPHY_ROW_WORK(NOVAPHY_RESIZE_ROW_WORK)
+#undef NOVAPHY_RESIZE_ROW_WORK
   }
   V* J_row(int r) { return J.data() + static_cast<size_t>(r) * dofs; }
   V* z_row(int r) { return z.data() + static_cast<size_t>(r) * dofs; }
-  std::size_t bytes() const;
+  std::size_t bytes() const {
+    std::size_t n = 0;
+#define NOVAPHY_ROW_WORK_BYTES(type, name, count, doc) n += name.size() * sizeof(type);
+    NOVAPHY_ROW_WORK(NOVAPHY_ROW_WORK_BYTES)
+#undef NOVAPHY_ROW_WORK_BYTES
+    return n;
+  }
 };
 
 // a thread's scratch: per group its kernels' work, and the rows, S, o and a factor no later step reuses

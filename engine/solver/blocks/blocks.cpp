@@ -207,10 +207,7 @@ class Batches final : public ArticulationBatches {
            (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int) + G.contiguous.size();
     for (const ThreadScratch<T>& s : scratch_) {
       n += (s.S.size() + s.H.size()) * sizeof(V) + s.factor.size() * sizeof(Scalar) + s.rows.bytes();
-      for (const BatchWork<T>& w : s.work)
-        for (const auto* v : {&w.Q, &w.p, &w.R, &w.v, &w.a, &w.f, &w.I, &w.vrel, &w.q, &w.qd, &w.x, &w.tau, &w.diag,
-                              &w.f_ext, &w.q_next, &w.drive, &w.bodies, &w.IJ})
-          n += v->size() * sizeof(V);
+      for (const BatchWork<T>& w : s.work) n += w.bytes();
     }
     return n;
   }

@@ -53,10 +53,10 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
   const int* qd_off = &G.qd_off[static_cast<size_t>(b) * kLanes<T>];
   V* x = w.x.data();
   gather_lanes<T>(qd_off, step.tau, nv, x);
-  // kd, target velocity, ke, target position (the targets are read only where some gain is nonzero), the
-  // actuators' stiffness and damping
-  V* kd = w.drive.data();
-  V *vt = kd + nv, *ke = kd + 2 * nv, *qt = kd + 3 * nv, *ka = kd + 4 * nv, *da = kd + 5 * nv;
+  // the PD drives' gains and targets (the targets are read only where some gain is nonzero), the actuators'
+  // stiffness and damping
+  V *kd = w.kd.data(), *vt = w.target_vel.data(), *ke = w.ke.data(), *qt = w.target_pos.data();
+  V *ka = w.actuator_stiffness.data(), *da = w.actuator_damping.data();
   if (inputs.drives) {
     const Control& control = *step.control;
     gather_lanes<T>(qd_off, control.joint_target_kd.data(), nv, kd);
@@ -64,7 +64,7 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
     gather_lanes<T>(qd_off, control.joint_target_ke.data(), nv, ke);
     gather_lanes<T>(qd_off, control.joint_target_pos.data(), nv, qt);
   } else {
-    std::fill(kd, kd + 4 * nv, V{});
+    for (V* x : {kd, vt, ke, qt}) std::fill(x, x + nv, V{});
   }
   const V dt = splat<V>(static_cast<T>(step.dt));
   for (int k = 0; k < nv; ++k) {

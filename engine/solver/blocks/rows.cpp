@@ -9,18 +9,6 @@
 
 namespace novaphy {
 
-template <typename T>
-std::size_t RowWork<T>::bytes() const {
-  return (J.size() + z.size() + target.size() + mu.size() + inv_mass.size() + lambda.size() + bound.size() +
-          coef.size() + qd_in.size() + point.size() + frame.size()) *
-             sizeof(V) +
-         active.size() * sizeof(IntLanes<T>) +
-         (limit_row.size() + friction_row.size() + contact.size() + normal.size() + nonzero_begin.size() +
-          nonzero_end.size() + zero_begin.size() + zero_end.size()) *
-             sizeof(int) +
-         kind.size() * sizeof(RowKind);
-}
-
 namespace {
 
 template <typename T>
@@ -78,11 +66,11 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, cons
     for (int side = 0; side < 2; ++side) {
       const T sign = side == 0 ? 1 : -1;
       const V<T> gap = sign * (q - limit[2 * m + side]);
-      const IntLanes<T> on = mine & finite(limit[2 * m + side]) & limit_row_on(gap, sign * w.qd[k], dt);
+      const IntLanes<T> on = mine & finite(limit[2 * m + side]) & LimitRow::on(gap, sign * w.qd[k], dt);
       R.limit_row[2 * m + side] = -1;
       if (!any_lane<T>(on)) continue;
-      const V<T> warm = R.warm_share * lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>);
-      const int r = add_row(R, RowKind::Unilateral, on, limit_row_target(gap, step.rows, dt), warm);
+      const V<T> warm = LimitRow::warm(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), R.warm_share);
+      const int r = add_row(R, LimitRow::kKind, on, LimitRow::target(gap, step.rows, dt), warm);
       R.limit_row[2 * m + side] = r;
       unit_row(topo.dof_count, k, sign, on, r, R);
     }
@@ -98,30 +86,28 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const StepContext& step, c
   const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
   for (int m = 0; m < nf; ++m) {
     const int k = G.frictional[m];
-    const IntLanes<T> on = mine & (loss[m] > 0);
+    const IntLanes<T> on = mine & FrictionLossRow::on(loss[m]);
     R.friction_row[m] = -1;
     if (!any_lane<T>(on)) continue;
     V<T> kept;
     gather_lanes<T>(&G.qd_off[b * kLanes<T>], step.friction_impulse + k, 1, &kept);
-    const int r = add_row(R, RowKind::Bounded, on, V<T>{}, R.warm_share * kept);
-    R.bound[r] = friction_loss_bound(loss[m], dt);
+    const int r = add_row(R, FrictionLossRow::kKind, on, V<T>{}, FrictionLossRow::warm(kept, R.warm_share));
+    R.bound[r] = FrictionLossRow::bound(loss[m], dt);
     R.friction_row[m] = r;
     unit_row(G.topo.dof_count, k, T(1), on, r, R);
   }
 }
 
-// slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, depth, mu,
-// restitution, the previous impulse and spin impulse, its softness, its condim and torsional and rolling friction),
-// its links (b, a) per lane; returns the lanes that have one, and in `uniform` the lane whose links every other such
-// lane shares (-2: none does)
+// slot t of the contact rows: each lane's t-th listed contact read into lanes (n, p relative to o, its input), its
+// links (b, a) per lane; returns the lanes that have one, and in `uniform` the lane whose links every other such lane
+// shares (-2: none does)
 template <typename T>
 IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* listed, const Lanes<T>* o,
-                          const StepContext& step, RowWork<T>& R, V<T>* n, V<T>* p, V<T>* in, int (*link)[2],
-                          int* uniform) {
+                          const StepContext& step, RowWork<T>& R, V<T>* n, V<T>* p, ContactInput<V<T>>& in,
+                          int (*link)[2], int* uniform) {
   const Contacts& C = *step.contacts;
   const ContactLists& lists = step.lists;
   IntLanes<T> on{};
-  ContactPair made;  // (a pair past the table: ShapeContacts::pair)
   *uniform = -1;
   for (int l = 0; l < kLanes<T>; ++l) {
     const int c = t < listed[l] ? lists.list[lists.start[G.arts[b * kLanes<T> + l]] + t] : -1;
@@ -132,23 +118,7 @@ IntLanes<T> read_contacts(const BatchGroup<T>& G, int b, int t, const int* liste
       n[m][l] = static_cast<T>(C.contact_normal[3 * c + m]);
       p[m][l] = static_cast<T>(C.contact_point[3 * c + m] - o[m][l]);
     }
-    const ShapeContacts& shapes = *lists.shapes;
-    const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
-    const ContactPair& pair = shapes.pair(sa, sb, &made);
-    const ContactFriction& f = pair.friction;
-    Scalar softness[5];
-    contact_softness_row(contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], lists.model->impratio,
-                                          C.contact_depth[c]),
-                         softness);
-    in[0][l] = static_cast<T>(C.contact_depth[c]);
-    in[1][l] = static_cast<T>(f.mu);
-    in[2][l] = static_cast<T>(pair.restitution);
-    if (const Scalar* P = C.previous(c))
-      for (int m = 0; m < 6; ++m) in[3 + m][l] = static_cast<T>(P[m]);
-    for (int m = 0; m < 5; ++m) in[9 + m][l] = static_cast<T>(softness[m]);
-    in[14][l] = static_cast<T>(f.condim);
-    in[15][l] = static_cast<T>(f.torsion);
-    in[16][l] = static_cast<T>(f.rolling);
+    ContactRows::set_lane(in, l, ContactRows::read(C, c, *lists.shapes, lists.model->impratio));
     // the links holding the bodies in this articulation (-1: a static body)
     const ArticulationIndex& index = *lists.index;
     const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
@@ -206,9 +176,8 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
                       const StepContext& step, RowWork<T>& R) {
   const BatchTopology<T>& topo = G.topo;
   const int nv = topo.dof_count;
-  // depth, mu, restitution, previous impulse and spin impulse [6], softness [5], condim, torsional and rolling
-  // friction
-  V<T> n[3] = {}, p[3] = {}, in[17] = {};
+  V<T> n[3] = {}, p[3] = {};
+  ContactInput<V<T>> in;
   int link[kLanes<T>][2];
   int uniform;
   const IntLanes<T> on = read_contacts(G, b, t, listed, kin.o, step, R, n, p, in, link, &uniform);
@@ -216,25 +185,23 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   V<T>* d = &R.frame[9 * t];
   contact_frame<Lanes<T>>(n, d);
   V<T> warm[6];
-  contact_warm_start(in + 3, d, contact_warm_share<V<T>>(step.rows), warm);
+  ContactRows::warm(in, d, ContactRows::warm_share<V<T>>(step.rows), warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
   for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);
   const int first = R.rows, dims = step.lists.dims;
   for (int e = 0; e < dims; ++e) {
     // the normal and sliding rows in every lane of `on`; the torsional and rolling ones where its condim has them
-    const IntLanes<T> has = e < 3 ? on : on & (in[14] >= T(e == 3 ? 4 : 6));
-    const RowKind kind = e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
-    const int r = add_row(R, kind, has, V<T>{}, warm[e]);
+    const IntLanes<T> has = e < 3 ? on : on & (in.condim >= T(e == 3 ? 4 : 6));
+    const int r = add_row(R, ContactRows::kind(e), has, V<T>{}, warm[e]);
     V<T>* J = R.J_row(r);
-    if (e < 3) {  // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
-      const V<T>* de = d + 3 * e;
+    const V<T>* de = ContactRows::direction(d, e);
+    if (!ContactRows::turns(e)) {  // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k
       for (int j = 0; j < nv; ++j) J[j] = R.coef[j] * (de[0] * u[3 * j] + de[1] * u[3 * j + 1] + de[2] * u[3 * j + 2]);
     } else {  // J_k = coef_k axis . S_ang,k: the relative angular velocity about the normal or a tangent
-      const V<T>* axis = d + 3 * (e == 3 ? 0 : e - 3);
       for (int j = 0; j < nv; ++j) {
         const V<T>* s = kin.S + 6 * j;
-        J[j] = has ? R.coef[j] * (axis[0] * s[0] + axis[1] * s[1] + axis[2] * s[2]) : V<T>{};
+        J[j] = has ? R.coef[j] * (de[0] * s[0] + de[1] * s[1] + de[2] * s[2]) : V<T>{};
       }
     }
     std::copy(J, J + nv, R.z_row(r));
@@ -244,21 +211,12 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
     R.zero_begin[r] = span.skip_begin;
     R.zero_end[r] = span.skip_end;
   }
-  // the rows' velocities at the step's start; their targets and a soft contact's cfm
+  // the rows' velocities at the step's start; their targets, cfm and friction
   V<T> v[6] = {};
   for (int e = 0; e < dims; ++e)
     for (int j = 0; j < nv; ++j) v[e] += R.J_row(first + e)[j] * R.qd_in[j];
-  const V<T> dt = splat<V<T>>(static_cast<T>(step.dt));
-  const auto soft = in[9] >= 0;
-  R.target[first] = select<V<T>>(soft, soft_normal_target(in[0], v[0], in[11], in[12], in[13], dt),
-                                 contact_normal_target(in[0], v[0], in[2], step.rows, dt));
-  R.cfm[first] = select<V<T>>(soft, in[9], V<T>{});
-  for (int e = 1; e < dims; ++e) {
-    const V<T> mu = in[e < 3 ? 1 : e == 3 ? 15 : 16];
-    R.target[first + e] = select<V<T>>(soft, soft_friction_target(v[e], in[11], dt), V<T>{});
-    R.cfm[first + e] = select<V<T>>(soft, e < 3 ? in[10] : soft_spin_cfm(in[10], in[1], mu), V<T>{});
-    R.mu[first + e] = mu;
-  }
+  ContactRows::targets(in, v, dims, step.rows, splat<V<T>>(static_cast<T>(step.dt)), &R.target[first], &R.cfm[first],
+                       &R.mu[first]);
 }
 
 // the sweeps over the block's rows; returns the lanes whose sweeps converged
@@ -294,21 +252,18 @@ void keep_impulses(const BatchGroup<T>& G, int b, int slots, const IntLanes<T>& 
   Scalar* kept = step.limit_impulse + G.impulse_base + static_cast<size_t>(b) * 2 * nl * kLanes<T>;
   for (int m = 0; m < 2 * nl; ++m) {
     const int r = R.limit_row[m];
-    const V<T> x = r >= 0 ? impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
+    const V<T> x = r >= 0 ? LimitRow::keep(R.lambda[r], R.active[r]) : V<T>{};
     doubles_from_lanes<T>(x, mine, kept + m * kLanes<T>);
   }
   for (size_t m = 0; m < G.frictional.size(); ++m) {
     const int r = R.friction_row[m];
-    const V<T> x = r >= 0 ? impulse_kept(R.lambda[r], R.active[r]) : V<T>{};
+    const V<T> x = r >= 0 ? FrictionLossRow::keep(R.lambda[r], R.active[r]) : V<T>{};
     scatter_lanes<T>(&G.qd_off[b * kLanes<T>], &x, 1, mine, step.friction_impulse + G.frictional[m]);
   }
   const int dims = step.lists.dims;
   for (int t = 0; t < slots; ++t) {
-    const V<T>* lambda = &R.lambda[R.rows - dims * (slots - t)];
-    const V<T> spin[3] = {dims > 3 ? lambda[3] : V<T>{}, dims > 4 ? lambda[4] : V<T>{}, dims > 5 ? lambda[5] : V<T>{}};
     V<T> P[6];
-    contact_impulse_kept(lambda, &R.frame[9 * t], P);
-    contact_impulse_kept(spin, &R.frame[9 * t], P + 3);
+    ContactRows::keep(&R.lambda[R.rows - dims * (slots - t)], dims, &R.frame[9 * t], P);
     for (int l = 0; l < kLanes<T>; ++l) {
       const int c = R.contact[t * kLanes<T> + l];
       if (c < 0) continue;

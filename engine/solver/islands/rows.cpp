@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 
 #include "engine/model/tendon.h"
@@ -96,7 +95,7 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
   for (const int a : articulations)
     for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
       const int r = friction_row_[g];
-      step.friction_impulse[g] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+      step.friction_impulse[g] = FrictionLossRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
     }
   for (const int a : articulations)
     for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
@@ -107,10 +106,10 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
         const Scalar sign = side == 0 ? 1 : -1;
         const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
         const Scalar gap = sign * (q - limit);
-        if (!std::isfinite(limit) || !limit_row_on(gap, sign * step.qd[g], dt)) continue;
-        const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, dt));
+        if (!std::isfinite(limit) || !LimitRow::on(gap, sign * step.qd[g], dt)) continue;
+        const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.rows, dt));
         row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
-        rows_[r].lambda = warm_share_of(r, step) * step.limit_impulse[limit_cell_[2 * m + side]];
+        rows_[r].lambda = LimitRow::warm(step.limit_impulse[limit_cell_[2 * m + side]], warm_share_of(r, step));
         limit_row_[2 * g + side] = r;
       }
     }
@@ -121,11 +120,11 @@ void IslandRows::add_friction_rows(const StepContext& step, const std::vector<in
     for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
       friction_row_[g] = -1;
       const Scalar loss = model_.joint_frictionloss[g];
-      if (!(loss > 0)) continue;
-      const int r = begin_row(a, -1, RowKind::Bounded, 0);
+      if (!FrictionLossRow::on(loss)) continue;
+      const int r = begin_row(a, -1, FrictionLossRow::kKind, 0);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = 1;
-      rows_[r].bound = friction_loss_bound(loss, step.dt);
-      rows_[r].lambda = warm_share_of(r, step) * step.friction_impulse[g];
+      rows_[r].bound = FrictionLossRow::bound(loss, step.dt);
+      rows_[r].lambda = FrictionLossRow::warm(step.friction_impulse[g], warm_share_of(r, step));
       friction_row_[g] = r;
     }
 }
@@ -136,59 +135,33 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     contact_row_.resize(C.contact_count);
     contact_dims_.resize(C.contact_count);
   }
-  const Scalar zero[6] = {};
-  ContactPair made;  // (a pair past the table: ShapeContacts::pair)
+  const Scalar* qd = step.in->joint_qd.data();
   for (const int c : contacts) {
-    const int sa = C.contact_shape_a[c], sb = C.contact_shape_b[c];
     const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
     const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
-    Scalar d[9];
-    contact_frame(&C.contact_normal[3 * c], d);
-    const int rn = add_row(ba, bb, &p, Vec3(d[0], d[1], d[2]), RowKind::Unilateral);
-    const int r1 = add_row(ba, bb, &p, Vec3(d[3], d[4], d[5]), RowKind::FrictionPair);
-    add_row(ba, bb, &p, Vec3(d[6], d[7], d[8]), RowKind::FrictionPair);
-    const ShapeContacts& shapes = *step.lists.shapes;
-    const ContactPair& pair = shapes.pair(sa, sb, &made);
-    const ContactFriction& f = pair.friction;
-    rows_[r1].normal = rn;
-    rows_[r1].mu = f.mu;
-    // the rows' velocities at the step's start; their targets and a soft contact's cfm
-    Scalar v[3];
-    for (int e = 0; e < 3; ++e) v[e] = row_velocity(rows_[rn + e], J_, step.in->joint_qd.data());
-    const Scalar depth = C.contact_depth[c];
-    const ContactSoftness soft =
-        contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], model_.impratio, depth);
-    if (soft.soft) {
-      rows_[rn].target = soft_normal_target(depth, v[0], soft.damping, soft.spring, soft.active_margin, step.dt);
-      rows_[rn].cfm = soft.cfm_normal;
-      for (int e = 1; e < 3; ++e) {
-        rows_[rn + e].target = soft_friction_target(v[e], soft.damping, step.dt);
-        rows_[rn + e].cfm = soft.cfm_friction;
-      }
-    } else {
-      rows_[rn].target = contact_normal_target(depth, v[0], pair.restitution, step.rows, step.dt);
-    }
-    Scalar warm[6];
-    const Scalar* previous = C.previous(c);
-    contact_warm_start(previous ? previous : zero, d, contact_warm_share<Scalar>(step.rows), warm);
-    for (int e = 0; e < 3; ++e) rows_[rn + e].lambda = warm[e];
-    contact_row_[c] = rn;
+    const ContactInput<Scalar> in = ContactRows::read(C, c, *step.lists.shapes, model_.impratio);
     // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents
-    const int dims = std::min(step.lists.dims, contact_row_count(f.condim));
-    contact_dims_[c] = dims;
-    for (int e = 3; e < dims; ++e) {
-      const Scalar* axis = d + 3 * (e == 3 ? 0 : e - 3);
-      const int r = add_row(ba, bb, nullptr, Vec3(axis[0], axis[1], axis[2]),
-                            e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair);
-      const Scalar mu = e == 3 ? f.torsion : f.rolling;
-      rows_[r].normal = rn;
-      rows_[r].mu = mu;
+    const int dims = std::min(step.lists.dims, contact_row_count(static_cast<int>(in.condim)));
+    Scalar d[9], warm[6], v[6], target[6], cfm[6], mu[6];
+    contact_frame(&C.contact_normal[3 * c], d);
+    ContactRows::warm(in, d, ContactRows::warm_share<Scalar>(step.rows), warm);
+    const int first = row_count_;
+    for (int e = 0; e < dims; ++e) {
+      const Scalar* axis = ContactRows::direction(d, e);
+      const int r =
+          add_row(ba, bb, ContactRows::turns(e) ? nullptr : &p, Vec3(axis[0], axis[1], axis[2]), ContactRows::kind(e));
       rows_[r].lambda = warm[e];
-      if (!soft.soft) continue;
-      rows_[r].target =
-          soft_friction_target(row_velocity(rows_[r], J_, step.in->joint_qd.data()), soft.damping, step.dt);
-      rows_[r].cfm = soft_spin_cfm(soft.cfm_friction, f.mu, mu);
+      if (e > 0) rows_[r].normal = first;
+      v[e] = row_velocity(rows_[r], J_, qd);  // (at the step's start)
     }
+    ContactRows::targets(in, v, dims, step.rows, step.dt, target, cfm, mu);
+    for (int e = 0; e < dims; ++e) {
+      rows_[first + e].target = target[e];
+      rows_[first + e].cfm = cfm[e];
+      rows_[first + e].mu = mu[e];
+    }
+    contact_row_[c] = first;
+    contact_dims_[c] = dims;
   }
 }
 
@@ -207,22 +180,16 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
   // the first's at their midpoint, each driving its part of the gap p2 - p1 to zero; a weld's three more of
   // their angular velocities, driving the rotation from body 2's held orientation to its own to zero
   const int b1 = model_.equality_object[2 * e], b2 = model_.equality_object[2 * e + 1];
-  const Scalar* data = &model_.equality_data[10 * e];
-  const Transform X1 = body_pose(*step.in, b1), X2 = body_pose(*step.in, b2);
-  const Vec3 p1 = X1.apply(Vec3(data[0], data[1], data[2])), p2 = X2.apply(Vec3(data[3], data[4], data[5]));
-  const Vec3 mid = (p1 + p2) / 2;
-  Vec3 error[2] = {p2 - p1, Vec3::Zero()};
   const bool weld = static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Weld;
-  if (weld) {
-    const Eigen::AngleAxis<Scalar> turn(X2.q * (X1.q * Quat(data[9], data[6], data[7], data[8])).inverse());
-    error[1] = turn.angle() * turn.axis();
-  }
+  Vec3 mid, error[2] = {Vec3::Zero(), Vec3::Zero()};
+  BodyEquality::of(model_, e).errors(body_pose(*step.in, b1), body_pose(*step.in, b2), &mid, &error[0],
+                                     weld ? &error[1] : nullptr);
   equality_row_[e] = row_count_;
   for (int k = 0; k < (weld ? 6 : 3); ++k) {
-    const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), RowKind::Bounded);
-    rows_[r].bound = std::numeric_limits<Scalar>::infinity();
-    rows_[r].target = equality_row_target(error[k / 3][k % 3], step.rows, step.dt);
-    rows_[r].lambda = warm_share_of(r, step) * step.equality_impulse[6 * e + k];
+    const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), EqualityRow::kKind);
+    rows_[r].bound = EqualityRow::bound();
+    rows_[r].target = EqualityRow::target(error[k / 3][k % 3], step.rows, step.dt);
+    rows_[r].lambda = EqualityRow::warm(step.equality_impulse[6 * e + k], warm_share_of(r, step));
   }
 }
 
@@ -230,16 +197,16 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   const int j1 = model_.equality_object[2 * e], j2 = model_.equality_object[2 * e + 1];
   const int d1 = model_.joint_qd_start[j1], d2 = j2 < 0 ? -1 : model_.joint_qd_start[j2];
   const Scalar* q = step.in->joint_q.data();
+  const JointCoupling coupling = JointCoupling::of(model_, e);
   Scalar slope = 0;
   const Scalar error =
-      joint_coupling_error(&model_.equality_data[10 * e], q[model_.joint_q_start[j1]],
-                           j2 < 0 ? model_.equality_data[10 * e + 6] : q[model_.joint_q_start[j2]], &slope);
+      coupling.error(q[model_.joint_q_start[j1]], j2 < 0 ? coupling.q2_ref : q[model_.joint_q_start[j2]], &slope);
   const int a1 = index_.dof_articulation[d1], a2 = d2 < 0 ? -1 : index_.dof_articulation[d2];
-  const int r = begin_row(a1, a2 == a1 ? -1 : a2, RowKind::Bounded, equality_row_target(error, step.rows, step.dt));
+  const int r = begin_row(a1, a2 == a1 ? -1 : a2, EqualityRow::kKind, EqualityRow::target(error, step.rows, step.dt));
   row_jacobian(r, a1)[d1 - art_[a1].qd_begin()] += 1;
   if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
-  rows_[r].bound = std::numeric_limits<Scalar>::infinity();
-  rows_[r].lambda = warm_share_of(r, step) * step.equality_impulse[6 * e];
+  rows_[r].bound = EqualityRow::bound();
+  rows_[r].lambda = EqualityRow::warm(step.equality_impulse[6 * e], warm_share_of(r, step));
   equality_row_[e] = r;
 }
 
@@ -253,12 +220,12 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
     const Scalar sign = side == 0 ? 1 : -1;
     const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
     const Scalar gap = sign * (length - limit);
-    if (!std::isfinite(limit) || !limit_row_on(gap, sign * velocity, step.dt)) continue;
-    const int r = begin_row(a, -1, RowKind::Unilateral, limit_row_target(gap, step.rows, step.dt));
+    if (!std::isfinite(limit) || !LimitRow::on(gap, sign * velocity, step.dt)) continue;
+    const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.rows, step.dt));
     Scalar* J = row_jacobian(r, a);
     for (int e = first; e < model_.tendon_start[t + 1]; ++e)
       J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
-    rows_[r].lambda = warm_share_of(r, step) * step.tendon_impulse[2 * t + side];
+    rows_[r].lambda = LimitRow::warm(step.tendon_impulse[2 * t + side], warm_share_of(r, step));
     tendon_row_[2 * t + side] = r;
   }
 }
@@ -268,11 +235,11 @@ void IslandRows::keep_constraint_impulses(const StepContext& step) const {
     const auto type = static_cast<EqualityType>(model_.equality_type[e]);
     const int rows = type == EqualityType::Weld ? 6 : type == EqualityType::Connect ? 3 : 1;
     for (int k = 0; k < rows; ++k)
-      step.equality_impulse[6 * e + k] = impulse_kept(rows_[equality_row_[e] + k].lambda, true);
+      step.equality_impulse[6 * e + k] = EqualityRow::keep(rows_[equality_row_[e] + k].lambda, true);
   }
   for (int t = 0; t < 2 * model_.tendon_count; ++t) {
     const int r = tendon_row_[t];
-    step.tendon_impulse[t] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+    step.tendon_impulse[t] = LimitRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
   }
 }
 
@@ -321,11 +288,10 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
   }
   // impulses kept for warm starting: contacts as world vectors on body b, limits per dof and side
   for (const int c : contacts) {
-    Scalar d[9], lambda[6] = {}, P[6];
+    Scalar d[9], lambda[6], P[6];
     contact_frame(&step.contacts->contact_normal[3 * c], d);
     for (int e = 0; e < contact_dims_[c]; ++e) lambda[e] = rows_[contact_row_[c] + e].lambda;
-    contact_impulse_kept(lambda, d, P);
-    contact_impulse_kept(lambda + 3, d, P + 3);
+    ContactRows::keep(lambda, contact_dims_[c], d, P);
     std::copy_n(P, 3, &step.contacts->contact_impulse[3 * c]);
     std::copy_n(P + 3, 3, &step.contacts->contact_spin_impulse[3 * c]);
   }
@@ -335,7 +301,7 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
       const int g = model_.joint_qd_start[limited_joints_[m]];
       for (int side = 0; side < 2; ++side) {
         const int r = limit_row_[2 * g + side];
-        step.limit_impulse[limit_cell_[2 * m + side]] = impulse_kept(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+        step.limit_impulse[limit_cell_[2 * m + side]] = LimitRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
       }
     }
 }

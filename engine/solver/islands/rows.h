@@ -42,7 +42,7 @@ class IslandRows {
   // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world), or with
   // p null their relative angular velocity
   int add_row(int body_a, int body_b, const Vec3* p, const Vec3& d, RowKind kind);
-  // the share of the last step's impulses row r (not a contact's: contact_warm_share) starts from: warm_share
+  // the share of the last step's impulses row r (not a contact's: ContactRows::warm_share) starts from: warm_share
   // over the articulations it acts on (all of them converged, or not)
   Scalar warm_share_of(int row, const StepContext& step) const;
   // M^-1 J^T and the effective mass, once J is filled in

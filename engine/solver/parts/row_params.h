@@ -1,4 +1,4 @@
-// What every constraint row reads of the solver's settings (engine/solver/parts/rows.h).
+// What every constraint row reads of the solver's settings (the row parts: engine/solver/parts/rows.h).
 #pragma once
 
 #include "kernels/pgs.h"

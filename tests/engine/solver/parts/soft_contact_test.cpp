@@ -1,5 +1,5 @@
-// MuJoCo's soft contacts (engine/solver/parts/rows.h contact_softness): the weights they scale by, and where bodies
-// come to rest on them, against MuJoCo 2.2.2 on the same MJCF.
+// MuJoCo's soft contacts (engine/solver/parts/contact_softness.h contact_softness): the weights they scale by, and
+// where bodies come to rest on them, against MuJoCo 2.2.2 on the same MJCF.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -113,7 +113,7 @@ TEST(SoftContacts, BodiesRestAtMujocosDepth) {
 }
 
 // spheres each of its own solref, solimp, priority and solmix (more distinct materials than the step tables: each
-// contact's pair made as it is read, engine/solver/parts/rows.h ShapeContacts) rest as deep as in MuJoCo
+// contact's pair made as it is read, engine/solver/parts/contact_material.h ShapeContacts) rest as deep as in MuJoCo
 TEST(SoftContacts, ManyMaterialsRestAtMujocosDepth) {
   constexpr int kSpheres = 40;
   static_assert(kSpheres + 1 > ShapeContacts::kPairTableMaterials);
@@ -242,7 +242,7 @@ TEST(SoftContacts, SpinImpulsesAreKeptAndWarmStartTheirRows) {
       }
     }
     // a step of no sweeps starts from all of the contacts' impulses, after sweeps that converged (to pgs_tolerance)
-    // and after that step, whose sweeps ran out (warmstarting_factor is not a contact's: parts/rows.h)
+    // and after that step, whose sweeps ran out (warmstarting_factor is not a contact's: parts/contact_rows.h)
     scene.solver.settings.num_iterations = 0;
     for (const char* after : {"converged sweeps", "sweeps that ran out"}) {
       const std::vector<Scalar> impulse = C.contact_impulse, spin = C.contact_spin_impulse;

@@ -1,0 +1,95 @@
+"""Two builds' SolverFeatherstone.step side by side: Go1 (../shared/robots), the quadruped and humanoid.xml, float32
+and float64, on one thread (pinned to CPU 0) and two, a build's run and the other's alternating before, after,
+after, before in each round so that a slow spell of the machine lands on both. Each run is a fresh process that
+replicates the robot, settles it 50 steps and times `steps` steps `reps` times (its median); a round's ratio is the
+before build's time over the after build's (above 1: after is faster), the table their median over the rounds.
+    build/venv/bin/python bench/ab_builds.py BEFORE/build/python AFTER/build/python [--rounds 5] > table.md"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+
+SCENES = {
+    "go1": "../shared/robots/unitree_go1/scene.xml",
+    "quadruped": "bench/scenes/quadruped.xml",
+    "humanoid": "/usr/share/mujoco/model/humanoid/humanoid.xml",
+}
+
+RUN = r"""
+import json, statistics, sys, time, warnings
+import novaphy
+scene, precision, threads, worlds, steps, reps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    robot = novaphy.ModelBuilder()
+    robot.add_mjcf(scene)
+    builder = novaphy.ModelBuilder()
+    builder.precision = getattr(novaphy.Precision, precision)
+    builder.replicate(robot, worlds)
+    model = builder.finalize()
+key = model.keyframes[0] if model.keyframes else None
+state = model.state(keyframe=key) if key else model.state()
+control = model.control(keyframe=key) if key else model.control()
+solver = novaphy.solvers.SolverFeatherstone(model)
+solver.settings.num_threads = threads
+pipeline = novaphy.CollisionPipeline(model, num_threads=threads)
+contacts = pipeline.contacts()
+dt = 0.002
+for _ in range(50):
+    pipeline.collide(state, contacts)
+    solver.step(state, state, control, contacts, dt)
+times = []
+for _ in range(reps):
+    total = 0.0
+    for _ in range(steps):
+        pipeline.collide(state, contacts)
+        start = time.perf_counter()
+        solver.step(state, state, control, contacts, dt)
+        total += time.perf_counter() - start
+    times.append(total / steps)
+print(json.dumps(statistics.median(times)))
+"""
+
+
+def run(build, scene, precision, threads, args):
+    env = dict(os.environ, PYTHONPATH=build, OMP_WAIT_POLICY="passive")
+    pin = ["taskset", "-c", "0"] if threads == 1 else []
+    command = pin + [sys.executable, "-c", RUN, SCENES[scene], precision, str(threads), str(args.worlds),
+                     str(args.steps), str(args.reps)]
+    done = subprocess.run(command, env=env, capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"{build} {scene} {precision} {threads} threads failed:\n{done.stderr}")
+    return json.loads(done.stdout)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("before")
+    parser.add_argument("after")
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--worlds", type=int, default=256)
+    parser.add_argument("--steps", type=int, default=20)
+    parser.add_argument("--reps", type=int, default=9)
+    args = parser.parse_args()
+    print(f"| scene | precision | threads | before ms | after ms | before / after (median of {args.rounds} rounds) |")
+    print("|---|---|---|---|---|---|")
+    for scene in SCENES:
+        for precision in ("Float32", "Float64"):
+            for threads in (1, 2):
+                ratios, before, after = [], [], []
+                for _ in range(args.rounds):
+                    b1 = run(args.before, scene, precision, threads, args)
+                    a1 = run(args.after, scene, precision, threads, args)
+                    a2 = run(args.after, scene, precision, threads, args)
+                    b2 = run(args.before, scene, precision, threads, args)
+                    before += [b1, b2]
+                    after += [a1, a2]
+                    ratios.append((b1 + b2) / (a1 + a2))
+                print(f"| {scene} | {precision} | {threads} | {1e3 * statistics.median(before):.3f} | "
+                      f"{1e3 * statistics.median(after):.3f} | {statistics.median(ratios):.3f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,84 @@
+// A contact's softness: MuJoCo's soft constraint (solref, solimp) over one step of the rows' sweeps. MuJoCo's rows
+// satisfy J a + R f = aref with aref = -B v - K imp (pos - margin); times dt, with the impulse p = f dt, the
+// step's J qd_out + R p = v + dt aref, v = J qd_in: a row of cfm R and target v + dt aref. A contact whose
+// deciding solref is (0, 0) is rigid (ContactRows::rigid_normal_target, contact_rows.h). Where a contact's softness is
+// computed: contact_softness, from its pair (contact_material.h contact_pair: the deciding solref and solimp as MuJoCo
+// combines geoms) and its depth.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/solver/parts/contact_material.h"
+#include "kernels/number.h"
+
+namespace novaphy {
+
+// MuJoCo's impedance at a distance x past the active margin, from solimp (dmin, dmax, width, midpoint, power)
+inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
+  constexpr Scalar kMin = 1e-4, kMax = 0.9999;  // (MuJoCo's mjMINIMP, mjMAXIMP)
+  const Scalar dmin = std::clamp(solimp[0], kMin, kMax), dmax = std::clamp(solimp[1], kMin, kMax);
+  const Scalar width = solimp[2], mid = std::clamp(solimp[3], kMin, kMax), power = solimp[4];
+  if (dmin == dmax || width <= 1e-15) return 0.5 * (dmin + dmax);
+  const Scalar u = std::abs(x) / width;
+  if (u >= 1) return dmax;
+  // (power 2, MuJoCo's default, without std::pow: this runs per contact and step)
+  const auto raise = [power](Scalar x, Scalar p) { return power == 2 ? (p == 2 ? x * x : x) : std::pow(x, p); };
+  const Scalar y = power == 1 ? u
+                   : u <= mid ? raise(u, power) / raise(mid, power - 1)
+                              : 1 - raise(1 - u, power) / raise(1 - mid, power - 1);
+  return dmin + y * (dmax - dmin);
+}
+
+// a contact's softness over the number type (kernels/number.h): whether it is soft, the normal row's cfm R (0 while
+// the contact is inactive, farther than margin - gap), the friction rows' (R / impratio), MuJoCo's B, and K imp
+// (pos - margin)
+template <typename V>
+struct ContactSoftness {
+  Mask<V> soft{};
+  V cfm_normal{}, cfm_friction{};
+  V damping{};        // B
+  V spring{};         // K imp (pos - margin), pos = -depth: the acceleration it pushes out at (< 0)
+  V active_margin{};  // margin - gap: a contact nearer than this is active
+};
+
+// a contact's softness from its pair at penetration `depth`; weight_a, weight_b: the shapes' bodies'
+// invweight0 (translational; 0 for a static body, contact_weight), impratio the model's
+inline ContactSoftness<Scalar> contact_softness(const ContactPair& pair, Scalar weight_a, Scalar weight_b,
+                                                Scalar impratio, Scalar depth) {
+  ContactSoftness<Scalar> s;
+  if (!pair.soft) return s;
+  s.soft = true;
+  s.active_margin = pair.active_margin;
+  const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
+  if (x >= 0) return s;
+  const Scalar imp = contact_impedance(pair.solimp, x);
+  s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (weight_a + weight_b));
+  s.cfm_friction = s.cfm_normal / impratio;
+  s.damping = pair.damping;
+  s.spring = pair.stiffness * imp * x;
+  return s;
+}
+
+// the normal row's target: where active, v + dt aref; before, it may close the distance to the active margin
+template <typename V>
+inline V soft_normal_target(const V& depth, const V& v, const V& damping, const V& spring, const V& active_margin,
+                            const V& dt) {
+  const V reach = depth + active_margin;
+  return select<V>(reach > 0, v - dt * (damping * v + spring), reach / dt);
+}
+
+// a torsional or rolling row's cfm (MuJoCo's elliptic cone): the sliding rows' R_1 times mu_1^2 / mu^2 (0 where
+// its mu is 0: the row holds nothing)
+template <typename V>
+inline V soft_spin_cfm(const V& cfm_sliding, const V& mu_sliding, const V& mu) {
+  return select<V>(mu > 0, cfm_sliding * (mu_sliding * mu_sliding) / select<V>(mu > 0, mu * mu, V{} + 1), V{});
+}
+
+// a friction row's target: its sliding damped by B over the step (MuJoCo's aref = -B v for friction)
+template <typename V>
+inline V soft_friction_target(const V& v, const V& damping, const V& dt) {
+  return v - dt * damping * v;
+}
+
+}  // namespace novaphy

@@ -1,0 +1,68 @@
+// The rows of an equality constraint (model.h: Connect, Weld, JointCoupling): bilateral rows (Bounded, no bound) that
+// drive the constraint's error to zero, a share erp of it each step. The constraint's data read as named records
+// (the model keeps them as equality_data[10 e ..]).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <limits>
+
+#include "engine/model/model.h"
+#include "engine/solver/parts/warm_start.h"
+#include "kernels/pgs.h"
+
+namespace novaphy {
+
+// (warm start and kept impulse: KeptImpulseRow)
+struct EqualityRow : KeptImpulseRow {
+  static constexpr RowKind kKind = RowKind::Bounded;
+
+  template <typename V>
+  static V target(const V& error, const RowParams& p, const V& dt) {
+    return -static_cast<Element<V>>(p.erp) * error / dt;
+  }
+  static Scalar bound() { return std::numeric_limits<Scalar>::infinity(); }
+};
+
+// a Connect's or Weld's data: the anchor on body 1 (in its frame) held on the anchor on body 2 (in its), and a
+// weld's orientation of body 2 in body 1's frame
+struct BodyEquality {
+  Vec3 anchor1, anchor2;
+  Quat relative;  // (a weld's)
+
+  static BodyEquality of(const Model& model, int e) {
+    const Scalar* data = &model.equality_data[10 * e];
+    return {Vec3(data[0], data[1], data[2]), Vec3(data[3], data[4], data[5]), Quat(data[9], data[6], data[7], data[8])};
+  }
+
+  // at the bodies' poses X1, X2: the anchors' midpoint (where the translational rows act), their gap p2 - p1, and a
+  // weld's rotation from body 2's held orientation to its own (angle times axis; turn null: a connect's none)
+  void errors(const Transform& X1, const Transform& X2, Vec3* mid, Vec3* gap, Vec3* turn) const {
+    const Vec3 p1 = X1.apply(anchor1), p2 = X2.apply(anchor2);
+    *mid = (p1 + p2) / 2;
+    *gap = p2 - p1;
+    if (!turn) return;
+    const Eigen::AngleAxis<Scalar> rotation(X2.q * (X1.q * relative).inverse());
+    *turn = rotation.angle() * rotation.axis();
+  }
+};
+
+// a JointCoupling's data: q1 - q1_ref = poly(x), x = q2 - q2_ref (poly: a0 + a1 x + .. + a4 x^4)
+struct JointCoupling {
+  Scalar poly[5];
+  Scalar q1_ref, q2_ref;
+
+  static JointCoupling of(const Model& model, int e) {
+    const Scalar* data = &model.equality_data[10 * e];
+    return {{data[0], data[1], data[2], data[3], data[4]}, data[5], data[6]};
+  }
+
+  // its error q1 - q1_ref - poly(x) and the slope d poly / dx at x = q2 - q2_ref
+  Scalar error(Scalar q1, Scalar q2, Scalar* slope) const {
+    const Scalar* a = poly;
+    const Scalar x = q2 - q2_ref;
+    *slope = a[1] + x * (2 * a[2] + x * (3 * a[3] + x * 4 * a[4]));
+    return q1 - q1_ref - (a[0] + x * (a[1] + x * (a[2] + x * (a[3] + x * a[4]))));
+  }
+};
+
+}  // namespace novaphy

@@ -1,0 +1,31 @@
+// The limit rows of a Revolute or Prismatic joint's range, or of a tendon's length: one row per side, over the
+// number type (kernels/number.h: one world, or a SIMD block's lanes). With sign +1 for the lower limit and -1 for
+// the upper, gap = sign (x - limit) >= 0 inside the range (x: the coordinate or the length) and the row keeps
+// sign x_dot >= its target: a Unilateral row (kernels/pgs.h project_unilateral).
+#pragma once
+
+#include "engine/solver/parts/warm_start.h"
+#include "kernels/pgs.h"
+
+namespace novaphy {
+
+// (warm start and kept impulse: KeptImpulseRow)
+struct LimitRow : KeptImpulseRow {
+  static constexpr RowKind kKind = RowKind::Unilateral;
+
+  // the side's row is on this step: the coordinate would cross its limit within the step
+  template <typename V>
+  static Mask<V> on(const V& gap, const V& signed_velocity, const V& dt) {
+    return gap + dt * signed_velocity < 0;
+  }
+
+  // close a gap in one step; push a penetration beyond the slop out at erp / dt
+  template <typename V>
+  static V target(const V& gap, const RowParams& p, const V& dt) {
+    const V depth = -gap - static_cast<Element<V>>(p.linear_slop);
+    const V zero{};
+    return select<V>(gap >= 0, -gap / dt, static_cast<Element<V>>(p.erp) * select<V>(depth > 0, depth, zero) / dt);
+  }
+};
+
+}  // namespace novaphy

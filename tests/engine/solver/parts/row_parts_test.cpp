@@ -1,0 +1,254 @@
+// Each row part (engine/solver/parts/rows.h) on its own, with a plain number (one world) and with a SIMD block's
+// lanes: each lane's numbers are what the plain number gives for that lane's inputs (lanes do not leak into each
+// other), and the plain numbers are what the part's physics says (analytic cases).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "engine/solver/parts/rows.h"
+#include "kernels/lanes.h"
+
+namespace novaphy {
+namespace {
+
+constexpr Scalar kNaN = std::numeric_limits<Scalar>::quiet_NaN();
+
+template <typename T>
+class RowParts : public ::testing::Test {};
+using Precisions = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(RowParts, Precisions);
+
+// lane l's inputs of a test: a value per lane from f(l)
+template <typename T, typename F>
+Lanes<T> lanes_of(F f) {
+  Lanes<T> x{};
+  for (int l = 0; l < kLanes<T>; ++l) x[l] = static_cast<T>(f(l));
+  return x;
+}
+
+// x's lane l is the plain number y (to a few ulps: the compiler may fuse a multiply and add in one and not the other)
+template <typename T>
+void expect_lane(const Lanes<T>& x, int l, T y, const char* what) {
+  const T tolerance = 8 * std::numeric_limits<T>::epsilon() * std::max<T>(1, std::abs(y));
+  EXPECT_NEAR(x[l], y, tolerance) << what << " lane " << l;
+}
+
+TYPED_TEST(RowParts, LimitRowIsOnWhereTheCoordinateWouldCrossAndPushesOutBeyondTheSlop) {
+  using T = TypeParam;
+  RowParams p;
+  p.erp = 0.2;
+  p.linear_slop = 0.001;
+  const T dt = T(0.01);
+  // plain: inside the range, closing the gap in one step; beyond it, erp of the depth past the slop per step
+  EXPECT_FALSE(LimitRow::on<T>(T(0.02), T(-1), dt));
+  EXPECT_TRUE(LimitRow::on<T>(T(0.005), T(-1), dt));
+  EXPECT_NEAR(LimitRow::target<T>(T(0.005), p, dt), T(-0.5), 1e-5);
+  EXPECT_NEAR(LimitRow::target<T>(T(-0.011), p, dt), T(0.2 * 0.01 / 0.01), 1e-5);
+  EXPECT_EQ(LimitRow::target<T>(T(-0.0005), p, dt), T(0));  // within the slop
+  EXPECT_EQ(LimitRow::kKind, RowKind::Unilateral);
+  // lanes: lane l's gap and velocity
+  auto gap = [](int l) { return 0.0037 * (l % 5) - 0.01; };
+  auto velocity = [](int l) { return 0.55 - 0.35 * (l % 3); };  // (no lane at gap + dt v = 0)
+  const Lanes<T> g = lanes_of<T>(gap), v = lanes_of<T>(velocity), dts = splat<Lanes<T>>(dt);
+  const IntLanes<T> on = LimitRow::on(g, v, dts);
+  const Lanes<T> target = LimitRow::target(g, p, dts);
+  for (int l = 0; l < kLanes<T>; ++l) {
+    EXPECT_EQ(on[l] != 0, LimitRow::on<T>(T(gap(l)), T(velocity(l)), dt)) << "lane " << l;
+    expect_lane<T>(target, l, LimitRow::target<T>(T(gap(l)), p, dt), "target");
+  }
+}
+
+TYPED_TEST(RowParts, FrictionLossRowIsBoundedByTheLossOverTheStep) {
+  using T = TypeParam;
+  const T dt = T(0.002);
+  EXPECT_FALSE(FrictionLossRow::on<T>(T(0)));
+  EXPECT_TRUE(FrictionLossRow::on<T>(T(0.3)));
+  EXPECT_NEAR(FrictionLossRow::bound<T>(T(0.3), dt), T(0.0006), 1e-9);
+  EXPECT_EQ(FrictionLossRow::kKind, RowKind::Bounded);
+  auto loss = [](int l) { return l % 2 ? 0.1 * l : 0.0; };
+  const Lanes<T> x = lanes_of<T>(loss);
+  const IntLanes<T> on = FrictionLossRow::on(x);
+  const Lanes<T> bound = FrictionLossRow::bound(x, splat<Lanes<T>>(dt));
+  for (int l = 0; l < kLanes<T>; ++l) {
+    EXPECT_EQ(on[l] != 0, loss(l) > 0) << "lane " << l;
+    expect_lane<T>(bound, l, FrictionLossRow::bound<T>(T(loss(l)), dt), "bound");
+  }
+}
+
+TYPED_TEST(RowParts, KeptImpulsesStartTheirWorldsShareAndKeepOnlyFiniteImpulsesOfRowsThatWereOn) {
+  using T = TypeParam;
+  RowParams p;
+  p.warmstarting_factor = 0.85;
+  EXPECT_EQ(warm_share<T>(true, p), T(1));
+  EXPECT_EQ(warm_share<T>(false, p), T(0.85));
+  p.use_warmstarting = false;
+  EXPECT_EQ(warm_share<T>(true, p), T(0));
+  EXPECT_EQ(LimitRow::warm<T>(T(2), T(0.5)), T(1));
+  EXPECT_EQ(EqualityRow::keep<T>(T(3), true), T(3));
+  EXPECT_EQ(EqualityRow::keep<T>(T(3), false), T(0));
+  EXPECT_EQ(EqualityRow::keep<T>(static_cast<T>(kNaN), true), T(0));
+  // lanes: a NaN or an off row in one lane does not touch the others
+  const Lanes<T> lambda = lanes_of<T>([](int l) { return l == 1 ? kNaN : 0.25 * l; });
+  IntLanes<T> on{};
+  for (int l = 0; l < kLanes<T>; ++l) on[l] = l == 2 ? 0 : -1;
+  const Lanes<T> kept = FrictionLossRow::keep(lambda, on);
+  for (int l = 0; l < kLanes<T>; ++l) EXPECT_EQ(kept[l], l == 1 || l == 2 ? T(0) : T(0.25 * l)) << "lane " << l;
+}
+
+TEST(RowParts, EqualityRowsDriveTheirErrorsToZero) {
+  RowParams p;
+  p.erp = 0.2;
+  EXPECT_NEAR(EqualityRow::target<Scalar>(0.01, p, 0.01), -0.2, 1e-15);
+  EXPECT_EQ(EqualityRow::bound(), std::numeric_limits<Scalar>::infinity());
+  EXPECT_EQ(EqualityRow::kKind, RowKind::Bounded);
+  // a coupling's slope is its polynomial's derivative
+  const JointCoupling coupling{{0.1, 0.5, -0.3, 0.2, 0.05}, 0.2, -0.1};
+  Scalar slope = 0, ignored = 0;
+  const Scalar q2 = 0.4, h = 1e-6;
+  coupling.error(1, q2, &slope);
+  const Scalar numeric = -(coupling.error(1, q2 + h, &ignored) - coupling.error(1, q2 - h, &ignored)) / (2 * h);
+  EXPECT_NEAR(slope, numeric, 1e-8);
+  EXPECT_NEAR(coupling.error(0.2 + 0.1, -0.1, &ignored), 0, 1e-15);  // q1 - q1_ref = poly(0) = a0
+  // a weld whose body 2 turned by 0.3 rad about z from its held orientation; its anchors 0.1 apart along x
+  const BodyEquality weld{Vec3::Zero(), Vec3::Zero(), Quat::Identity()};
+  Transform X1, X2;
+  X2.p = Vec3(0.1, 0, 0);
+  X2.q = Quat(Eigen::AngleAxis<Scalar>(0.3, Vec3::UnitZ()));
+  Vec3 mid, gap, turn;
+  weld.errors(X1, X2, &mid, &gap, &turn);
+  EXPECT_TRUE(gap.isApprox(Vec3(0.1, 0, 0)));
+  EXPECT_TRUE(mid.isApprox(Vec3(0.05, 0, 0)));
+  EXPECT_TRUE(turn.isApprox(Vec3(0, 0, 0.3)));
+}
+
+// a contact's input of lane l: soft in the even lanes, rigid in the odd ones, at depths and speeds of its own
+ContactInput<Scalar> contact_of(int l) {
+  ContactInput<Scalar> in;
+  in.depth = 0.002 * (l % 4) - 0.001;
+  in.mu = 0.5 + 0.1 * l;
+  in.restitution = l % 3 == 0 ? 0.5 : 0;
+  for (int m = 0; m < 6; ++m) in.previous[m] = 0.01 * (m + 1) * (l % 2 ? 1 : -1);
+  in.condim = l % 3 == 2 ? 6 : 3;
+  in.torsion = 0.02;
+  in.rolling = l % 2 ? 0.001 : 0;
+  if (l % 2 == 0) {
+    ContactPair pair;
+    pair.soft = true;
+    pair.stiffness = 2500;
+    pair.damping = 100;
+    pair.solimp[0] = 0.9, pair.solimp[1] = 0.95, pair.solimp[2] = 0.001, pair.solimp[3] = 0.5, pair.solimp[4] = 2;
+    in.softness = contact_softness(pair, 0.5, 0, 1, in.depth);
+  }
+  return in;
+}
+
+template <typename T>
+ContactInput<T> plain(const ContactInput<Scalar>& in) {
+  ContactInput<T> x;
+  x.depth = T(in.depth), x.mu = T(in.mu), x.restitution = T(in.restitution);
+  for (int m = 0; m < 6; ++m) x.previous[m] = T(in.previous[m]);
+  x.softness = {in.softness.soft,       T(in.softness.cfm_normal), T(in.softness.cfm_friction),
+                T(in.softness.damping), T(in.softness.spring),     T(in.softness.active_margin)};
+  x.condim = T(in.condim), x.torsion = T(in.torsion), x.rolling = T(in.rolling);
+  return x;
+}
+
+TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
+  using T = TypeParam;
+  using V = Lanes<T>;
+  RowParams p;
+  const T dt = T(0.002);
+  ContactInput<V> in;
+  for (int l = 0; l < kLanes<T>; ++l) ContactRows::set_lane(in, l, contact_of(l));
+  T n[3] = {T(0.6), T(0), T(0.8)}, d[9];
+  contact_frame(n, d);
+  V nv[3], dv[9];
+  for (int m = 0; m < 3; ++m) nv[m] = splat<V>(n[m]);
+  contact_frame(nv, dv);
+  V v[6], target[6], cfm[6], mu[6], warm[6];
+  for (int e = 0; e < 6; ++e) v[e] = lanes_of<T>([e](int l) { return 0.1 * (e + 1) - 0.05 * l; });
+  ContactRows::targets(in, v, 6, p, splat<V>(dt), target, cfm, mu);
+  ContactRows::warm(in, dv, ContactRows::warm_share<V>(p), warm);
+  for (int l = 0; l < kLanes<T>; ++l) {
+    const ContactInput<T> one = plain<T>(contact_of(l));
+    T vl[6], target_l[6], cfm_l[6], mu_l[6], warm_l[6];
+    for (int e = 0; e < 6; ++e) vl[e] = v[e][l];
+    ContactRows::targets(one, vl, 6, p, dt, target_l, cfm_l, mu_l);
+    ContactRows::warm(one, d, ContactRows::warm_share<T>(p), warm_l);
+    for (int e = 0; e < 6; ++e) {
+      expect_lane<T>(target[e], l, target_l[e], "target");
+      expect_lane<T>(cfm[e], l, cfm_l[e], "cfm");
+      expect_lane<T>(mu[e], l, mu_l[e], "mu");
+      expect_lane<T>(warm[e], l, warm_l[e], "warm");
+    }
+    // the plain numbers' physics: a rigid contact has no cfm and its friction rows no target; a soft one's friction
+    // rows are softer than its normal by impratio (1 here); the normal never starts pulling
+    if (!one.softness.soft) {
+      EXPECT_EQ(cfm_l[0], T(0)) << "lane " << l;
+      EXPECT_EQ(target_l[1], T(0)) << "lane " << l;
+    } else {
+      EXPECT_EQ(cfm_l[1], cfm_l[0]) << "lane " << l;
+    }
+    EXPECT_GE(warm_l[0], T(0)) << "lane " << l;
+    EXPECT_EQ(mu_l[0], T(0));
+    EXPECT_EQ(mu_l[1], one.mu);
+    EXPECT_EQ(mu_l[3], one.torsion);
+    EXPECT_EQ(mu_l[5], one.rolling);
+  }
+}
+
+TYPED_TEST(RowParts, ARigidNormalRowBouncesOnlyWhereItClosesFasterThanTheThreshold) {
+  using T = TypeParam;
+  RowParams p;
+  p.restitution_threshold = 0.2;
+  const T dt = T(0.01);
+  // approaching at 1 m/s with 0.5 restitution from a gap of 1 mm: a bounce at 0.5 m/s
+  EXPECT_NEAR(ContactRows::rigid_normal_target<T>(T(-0.001), T(-1), T(0.5), p, dt), T(0.5), 1e-6);
+  // slower than the threshold: the gap closes in the step
+  EXPECT_NEAR(ContactRows::rigid_normal_target<T>(T(-0.001), T(-0.1), T(0.5), p, dt), T(-0.1), 1e-6);
+  // penetrating 11 mm: erp (0.2) of the 10 mm past the slop per step
+  EXPECT_NEAR(ContactRows::rigid_normal_target<T>(T(0.011), T(0), T(0), p, dt), T(0.2), 1e-5);
+}
+
+TYPED_TEST(RowParts, AContactKeepsItsRowsImpulsesAsWorldVectorsAndDropsOnesNotFinite) {
+  using T = TypeParam;
+  using V = Lanes<T>;
+  T n[3] = {T(0), T(0.6), T(0.8)}, d[9];
+  contact_frame(n, d);
+  const T lambda[6] = {T(2), T(0.3), T(-0.4), T(0.05), T(0.01), T(-0.02)};
+  T P[6];
+  ContactRows::keep(lambda, 6, d, P);
+  // the world vectors along the frame give the impulses back (the frame is orthonormal)
+  for (int e = 0; e < 6; ++e) {
+    const T* axis = d + 3 * (e % 3);
+    const T* x = P + (e < 3 ? 0 : 3);
+    EXPECT_NEAR(x[0] * axis[0] + x[1] * axis[1] + x[2] * axis[2], lambda[e], 1e-5) << "row " << e;
+  }
+  // with three rows the spin impulse is 0; a NaN drops its vector in its lane only
+  ContactRows::keep(lambda, 3, d, P);
+  for (int m = 3; m < 6; ++m) EXPECT_EQ(P[m], T(0));
+  V lanes[6], dv[9], Pv[6];
+  for (int e = 0; e < 6; ++e) lanes[e] = lanes_of<T>([&](int l) { return l == 3 && e == 1 ? kNaN : lambda[e]; });
+  for (int m = 0; m < 9; ++m) dv[m] = splat<V>(d[m]);
+  ContactRows::keep(lanes, 6, dv, Pv);
+  ContactRows::keep(lambda, 6, d, P);
+  for (int l = 0; l < kLanes<T>; ++l)
+    for (int m = 0; m < 6; ++m) expect_lane<T>(Pv[m], l, l == 3 && m < 3 ? T(0) : P[m], "kept");
+}
+
+TEST(RowParts, AContactsRowsAreANormalASlidingPairATorsionAndARollingPair) {
+  const RowKind kinds[6] = {RowKind::Unilateral,  RowKind::FrictionPair, RowKind::FrictionPair,
+                            RowKind::FrictionOne, RowKind::FrictionPair, RowKind::FrictionPair};
+  Scalar d[9];
+  for (int m = 0; m < 9; ++m) d[m] = m;
+  const int direction[6] = {0, 3, 6, 0, 3, 6};
+  for (int e = 0; e < 6; ++e) {
+    EXPECT_EQ(ContactRows::kind(e), kinds[e]) << "row " << e;
+    EXPECT_EQ(ContactRows::turns(e), e >= 3) << "row " << e;
+    EXPECT_EQ(ContactRows::direction(d, e), d + direction[e]) << "row " << e;
+  }
+}
+
+}  // namespace
+}  // namespace novaphy
