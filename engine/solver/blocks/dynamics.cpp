@@ -64,7 +64,7 @@ void add_joint_forces(const BatchGroup<T>& G, int b, const BatchParams<T>& P, co
     gather_lanes<T>(qd_off, control.joint_target_ke.data(), nv, ke);
     gather_lanes<T>(qd_off, control.joint_target_pos.data(), nv, qt);
   } else {
-    for (V* x : {kd, vt, ke, qt}) std::fill(x, x + nv, V{});
+    for (V* gains : {kd, vt, ke, qt}) std::fill(gains, gains + nv, V{});
   }
   const V dt = splat<V>(static_cast<T>(step.dt));
   for (int k = 0; k < nv; ++k) {

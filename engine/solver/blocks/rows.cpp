@@ -64,15 +64,14 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, cons
     const int k = G.limited[m];
     const V<T> q = w.q[topo.coord_of_dof[k]];
     for (int side = 0; side < 2; ++side) {
-      const T sign = side == 0 ? 1 : -1;
-      const V<T> gap = sign * (q - limit[2 * m + side]);
-      const IntLanes<T> on = mine & finite(limit[2 * m + side]) & LimitRow::on(gap, sign * w.qd[k], dt);
+      const V<T> gap = LimitRow::gap(q, limit[2 * m + side], side);
+      const IntLanes<T> on = mine & LimitRow::on(limit[2 * m + side], gap, w.qd[k], side, dt);
       R.limit_row[2 * m + side] = -1;
       if (!any_lane<T>(on)) continue;
       const V<T> warm = LimitRow::warm(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), R.warm_share);
       const int r = add_row(R, LimitRow::kKind, on, LimitRow::target(gap, step.rows, dt), warm);
       R.limit_row[2 * m + side] = r;
-      unit_row(topo.dof_count, k, sign, on, r, R);
+      unit_row(topo.dof_count, k, T(LimitRow::sign(side)), on, r, R);
     }
   }
 }
@@ -192,7 +191,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   const int first = R.rows, dims = step.lists.dims;
   for (int e = 0; e < dims; ++e) {
     // the normal and sliding rows in every lane of `on`; the torsional and rolling ones where its condim has them
-    const IntLanes<T> has = e < 3 ? on : on & (in.condim >= T(e == 3 ? 4 : 6));
+    const IntLanes<T> has = on & ContactRows::has(e, in.condim);
     const int r = add_row(R, ContactRows::kind(e), has, V<T>{}, warm[e]);
     V<T>* J = R.J_row(r);
     const V<T>* de = ContactRows::direction(d, e);

@@ -1,7 +1,6 @@
 #include "engine/solver/islands/rows.h"
 
 #include <algorithm>
-#include <cmath>
 #include <numeric>
 
 #include "engine/model/tendon.h"
@@ -103,12 +102,11 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
       const Scalar q = step.in->joint_q[model_.joint_q_start[j]];
       for (int side = 0; side < 2; ++side) {
         limit_row_[2 * g + side] = -1;
-        const Scalar sign = side == 0 ? 1 : -1;
         const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
-        const Scalar gap = sign * (q - limit);
-        if (!std::isfinite(limit) || !LimitRow::on(gap, sign * step.qd[g], dt)) continue;
+        const Scalar gap = LimitRow::gap(q, limit, side);
+        if (!LimitRow::on(limit, gap, step.qd[g], side, dt)) continue;
         const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.rows, dt));
-        row_jacobian(r, a)[g - art_[a].qd_begin()] = sign;
+        row_jacobian(r, a)[g - art_[a].qd_begin()] = LimitRow::sign(side);
         rows_[r].lambda = LimitRow::warm(step.limit_impulse[limit_cell_[2 * m + side]], warm_share_of(r, step));
         limit_row_[2 * g + side] = r;
       }
@@ -141,7 +139,8 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
     const ContactInput<Scalar> in = ContactRows::read(C, c, *step.lists.shapes, model_.impratio);
     // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents
-    const int dims = std::min(step.lists.dims, contact_row_count(static_cast<int>(in.condim)));
+    int dims = 3;
+    while (dims < step.lists.dims && ContactRows::has(dims, in.condim)) ++dims;
     Scalar d[9], warm[6], v[6], target[6], cfm[6], mu[6];
     contact_frame(&C.contact_normal[3 * c], d);
     ContactRows::warm(in, d, ContactRows::warm_share<Scalar>(step.rows), warm);
@@ -180,12 +179,13 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
   // the first's at their midpoint, each driving its part of the gap p2 - p1 to zero; a weld's three more of
   // their angular velocities, driving the rotation from body 2's held orientation to its own to zero
   const int b1 = model_.equality_object[2 * e], b2 = model_.equality_object[2 * e + 1];
-  const bool weld = static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::Weld;
+  const auto type = static_cast<EqualityType>(model_.equality_type[e]);
+  const bool weld = type == EqualityType::Weld;
   Vec3 mid, error[2] = {Vec3::Zero(), Vec3::Zero()};
   BodyEquality::of(model_, e).errors(body_pose(*step.in, b1), body_pose(*step.in, b2), &mid, &error[0],
                                      weld ? &error[1] : nullptr);
   equality_row_[e] = row_count_;
-  for (int k = 0; k < (weld ? 6 : 3); ++k) {
+  for (int k = 0; k < EqualityRow::count(type); ++k) {
     const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), EqualityRow::kKind);
     rows_[r].bound = EqualityRow::bound();
     rows_[r].target = EqualityRow::target(error[k / 3][k % 3], step.rows, step.dt);
@@ -217,14 +217,13 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
   const int first = model_.tendon_start[t], a = index_.dof_articulation[model_.tendon_dof[first]];
   for (int side = 0; side < 2; ++side) {
     tendon_row_[2 * t + side] = -1;
-    const Scalar sign = side == 0 ? 1 : -1;
     const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
-    const Scalar gap = sign * (length - limit);
-    if (!std::isfinite(limit) || !LimitRow::on(gap, sign * velocity, step.dt)) continue;
+    const Scalar gap = LimitRow::gap(length, limit, side);
+    if (!LimitRow::on(limit, gap, velocity, side, step.dt)) continue;
     const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.rows, step.dt));
     Scalar* J = row_jacobian(r, a);
     for (int e = first; e < model_.tendon_start[t + 1]; ++e)
-      J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
+      J[model_.tendon_dof[e] - art_[a].qd_begin()] += LimitRow::sign(side) * model_.tendon_coef[e];
     rows_[r].lambda = LimitRow::warm(step.tendon_impulse[2 * t + side], warm_share_of(r, step));
     tendon_row_[2 * t + side] = r;
   }
@@ -232,9 +231,7 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
 
 void IslandRows::keep_constraint_impulses(const StepContext& step) const {
   for (int e = 0; e < model_.equality_count; ++e) {
-    const auto type = static_cast<EqualityType>(model_.equality_type[e]);
-    const int rows = type == EqualityType::Weld ? 6 : type == EqualityType::Connect ? 3 : 1;
-    for (int k = 0; k < rows; ++k)
+    for (int k = 0; k < EqualityRow::count(static_cast<EqualityType>(model_.equality_type[e])); ++k)
       step.equality_impulse[6 * e + k] = EqualityRow::keep(rows_[equality_row_[e] + k].lambda, true);
   }
   for (int t = 0; t < 2 * model_.tendon_count; ++t) {

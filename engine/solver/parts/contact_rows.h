@@ -17,8 +17,8 @@ namespace novaphy {
 // what a contact's rows read of it beside its geometry (normal, point, bodies)
 template <typename V>
 struct ContactInput {
-  V depth{}, mu{}, restitution{};  // mu: sliding friction
-  V previous[6] = {};              // the last step's impulse and spin impulse (world vectors; 0 for a new contact)
+  V depth{}, mu{}, restitution{};   // mu: sliding friction
+  V impulse[3] = {}, spin[3] = {};  // the last step's impulse and spin impulse (world vectors; 0 for a new contact)
   ContactSoftness<V> softness;
   V condim{}, torsion{}, rolling{};  // friction about the normal and about the tangents
 };
@@ -28,6 +28,12 @@ struct ContactRows {
   // the torsional row (3) FrictionOne
   static RowKind kind(int e) {
     return e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
+  }
+  // where a contact of that condim has row e: the normal and sliding rows always, the torsional row from condim 4,
+  // the rolling rows from 6
+  template <typename V>
+  static Mask<V> has(int e, const V& condim) {
+    return condim >= static_cast<Element<V>>(e < 3 ? 0 : e == 3 ? 4 : 6);
   }
   // whether row e is of the relative angular velocity (torsion, rolling) rather than of the contact point's velocity
   static bool turns(int e) { return e >= 3; }
@@ -48,7 +54,7 @@ struct ContactRows {
     in.mu = pair.friction.mu;
     in.restitution = pair.restitution;
     if (const Scalar* P = contacts.previous(c))
-      for (int m = 0; m < 6; ++m) in.previous[m] = P[m];
+      for (int m = 0; m < 3; ++m) in.impulse[m] = P[m], in.spin[m] = P[3 + m];
     in.softness = contact_softness(pair, shapes.shape_weight[sa], shapes.shape_weight[sb], impratio, in.depth);
     in.condim = pair.friction.condim;
     in.torsion = pair.friction.torsion;
@@ -63,7 +69,7 @@ struct ContactRows {
     put(lanes.depth, one.depth);
     put(lanes.mu, one.mu);
     put(lanes.restitution, one.restitution);
-    for (int m = 0; m < 6; ++m) put(lanes.previous[m], one.previous[m]);
+    for (int m = 0; m < 3; ++m) put(lanes.impulse[m], one.impulse[m]), put(lanes.spin[m], one.spin[m]);
     const ContactSoftness<Scalar>& s = one.softness;
     lanes.softness.soft[l] = s.soft ? -1 : 0;
     put(lanes.softness.cfm_normal, s.cfm_normal);
@@ -86,12 +92,12 @@ struct ContactRows {
   }
 
   // the rows' starting impulses warm [6] (normal, t1, t2, then torsion about the normal and rolling about t1 and
-  // t2): the impulse and spin impulse it kept (in.previous) along this step's frame d [9], their share, never pulling
-  // along the normal
+  // t2): the impulse and spin impulse it kept (in.impulse, in.spin) along this step's frame d [9], their share, never
+  // pulling along the normal
   template <typename V>
   static void warm(const ContactInput<V>& in, const V* d, const V& share, V* warm) {
     for (int e = 0; e < 6; ++e) {
-      const V* P = in.previous + (e < 3 ? 0 : 3);
+      const V* P = e < 3 ? in.impulse : in.spin;
       const V* axis = d + 3 * (e % 3);
       warm[e] = share * (P[0] * axis[0] + P[1] * axis[1] + P[2] * axis[2]);
     }

@@ -2,8 +2,9 @@
 // satisfy J a + R f = aref with aref = -B v - K imp (pos - margin); times dt, with the impulse p = f dt, the
 // step's J qd_out + R p = v + dt aref, v = J qd_in: a row of cfm R and target v + dt aref. A contact whose
 // deciding solref is (0, 0) is rigid (ContactRows::rigid_normal_target, contact_rows.h). Where a contact's softness is
-// computed: contact_softness, from its pair (contact_material.h contact_pair: the deciding solref and solimp as MuJoCo
-// combines geoms) and its depth.
+// computed: contact_pair (contact_material.h) takes the deciding solref and solimp from the two shapes as MuJoCo
+// combines geoms, and K and B from that solref at the step's dt, once per pair of materials; contact_softness here
+// the rest, per contact and step, from its depth.
 #pragma once
 
 #include <algorithm>

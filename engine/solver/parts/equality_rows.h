@@ -21,6 +21,8 @@ struct EqualityRow : KeptImpulseRow {
     return -static_cast<Element<V>>(p.erp) * error / dt;
   }
   static Scalar bound() { return std::numeric_limits<Scalar>::infinity(); }
+  // its rows: a Weld's 6 (3 for the anchors' gap, 3 for the rotation), a Connect's 3, a JointCoupling's 1
+  static int count(EqualityType type) { return type == EqualityType::Weld ? 6 : type == EqualityType::Connect ? 3 : 1; }
 };
 
 // a Connect's or Weld's data: the anchor on body 1 (in its frame) held on the anchor on body 2 (in its), and a
@@ -46,7 +48,8 @@ struct BodyEquality {
   }
 };
 
-// a JointCoupling's data: q1 - q1_ref = poly(x), x = q2 - q2_ref (poly: a0 + a1 x + .. + a4 x^4)
+// a JointCoupling's data: q1 - q1_ref = poly(x), x = q2 - q2_ref (poly: a0 + a1 x + .. + a4 x^4; q1_ref and q2_ref
+// are model.h's q1_0 and q2_0)
 struct JointCoupling {
   Scalar poly[5];
   Scalar q1_ref, q2_ref;

@@ -13,10 +13,19 @@ namespace novaphy {
 struct LimitRow : KeptImpulseRow {
   static constexpr RowKind kKind = RowKind::Unilateral;
 
-  // the side's row is on this step: the coordinate would cross its limit within the step
+  // the side's sign: +1 for the lower limit (side 0), -1 for the upper
+  static int sign(int side) { return side == 0 ? 1 : -1; }
+  // the side's gap: >= 0 inside the range
   template <typename V>
-  static Mask<V> on(const V& gap, const V& signed_velocity, const V& dt) {
-    return gap + dt * signed_velocity < 0;
+  static V gap(const V& x, const V& limit, int side) {
+    return static_cast<Element<V>>(sign(side)) * (x - limit);
+  }
+
+  // the side's row is on this step: its limit is finite and the coordinate would cross it within the step
+  // (x_dot: the coordinate's velocity)
+  template <typename V>
+  static Mask<V> on(const V& limit, const V& gap, const V& x_dot, int side, const V& dt) {
+    return both<Mask<V>>(finite(limit), gap + dt * (static_cast<Element<V>>(sign(side)) * x_dot) < 0);
   }
 
   // close a gap in one step; push a penetration beyond the slop out at erp / dt

@@ -17,14 +17,8 @@ inline V warm_share(const Mask<V>& converged, const RowParams& p) {
   return select<V>(converged, splat<V>(E(1)), splat<V>(static_cast<E>(p.warmstarting_factor)));
 }
 
-// the impulse a row keeps for the next step: 0 where it was off or is not finite
-template <typename V>
-inline V impulse_kept(const V& lambda, const Mask<V>& on) {
-  return select<V>(both(on, finite(lambda)), lambda, V{});
-}
-
-// a row that starts from its world's warm_share of the impulse it kept, and keeps its own where it was on and
-// finite (LimitRow, FrictionLossRow, EqualityRow)
+// a row that starts from its world's warm_share of the impulse it kept, and keeps its own for the next step where it
+// was on and is finite, else 0 (LimitRow, FrictionLossRow, EqualityRow)
 struct KeptImpulseRow {
   template <typename V>
   static V warm(const V& kept, const V& share) {
@@ -32,7 +26,7 @@ struct KeptImpulseRow {
   }
   template <typename V>
   static V keep(const V& lambda, const Mask<V>& on) {
-    return impulse_kept(lambda, on);
+    return select<V>(both(on, finite(lambda)), lambda, V{});
   }
 };
 

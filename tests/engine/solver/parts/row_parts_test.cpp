@@ -3,9 +3,11 @@
 // other), and the plain numbers are what the part's physics says (analytic cases).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "engine/model/builder.h"
 #include "engine/solver/parts/rows.h"
 #include "kernels/lanes.h"
 
@@ -40,21 +42,30 @@ TYPED_TEST(RowParts, LimitRowIsOnWhereTheCoordinateWouldCrossAndPushesOutBeyondT
   p.erp = 0.2;
   p.linear_slop = 0.001;
   const T dt = T(0.01);
-  // plain: inside the range, closing the gap in one step; beyond it, erp of the depth past the slop per step
-  EXPECT_FALSE(LimitRow::on<T>(T(0.02), T(-1), dt));
-  EXPECT_TRUE(LimitRow::on<T>(T(0.005), T(-1), dt));
+  const T inf = std::numeric_limits<T>::infinity();
+  // plain: a side's gap is >= 0 inside the range; its row is on where the coordinate would cross the (finite) limit
+  // within the step
+  EXPECT_EQ(LimitRow::gap<T>(T(0.25), T(0.2), 0), T(0.25) - T(0.2));
+  EXPECT_EQ(LimitRow::gap<T>(T(0.25), T(0.3), 1), -(T(0.25) - T(0.3)));
+  EXPECT_FALSE(LimitRow::on<T>(T(0), T(0.02), T(-1), 0, dt));
+  EXPECT_TRUE(LimitRow::on<T>(T(0), T(0.005), T(-1), 0, dt));
+  EXPECT_TRUE(LimitRow::on<T>(T(1), T(0.005), T(1), 1, dt));  // the upper side, approached from below
+  EXPECT_FALSE(LimitRow::on<T>(T(1), T(0.005), T(-1), 1, dt));
+  EXPECT_FALSE(LimitRow::on<T>(inf, -inf, T(-1), 0, dt));
+  // closing the gap in one step; beyond it, erp of the depth past the slop per step
   EXPECT_NEAR(LimitRow::target<T>(T(0.005), p, dt), T(-0.5), 1e-5);
   EXPECT_NEAR(LimitRow::target<T>(T(-0.011), p, dt), T(0.2 * 0.01 / 0.01), 1e-5);
   EXPECT_EQ(LimitRow::target<T>(T(-0.0005), p, dt), T(0));  // within the slop
   EXPECT_EQ(LimitRow::kKind, RowKind::Unilateral);
-  // lanes: lane l's gap and velocity
+  // lanes: lane l's gap and velocity against a lower limit (none in the last lane)
   auto gap = [](int l) { return 0.0037 * (l % 5) - 0.01; };
   auto velocity = [](int l) { return 0.55 - 0.35 * (l % 3); };  // (no lane at gap + dt v = 0)
+  auto limit = [](int l) { return l == kLanes<T> - 1 ? std::numeric_limits<Scalar>::infinity() : 0.0; };
   const Lanes<T> g = lanes_of<T>(gap), v = lanes_of<T>(velocity), dts = splat<Lanes<T>>(dt);
-  const IntLanes<T> on = LimitRow::on(g, v, dts);
+  const IntLanes<T> on = LimitRow::on(lanes_of<T>(limit), g, v, 0, dts);
   const Lanes<T> target = LimitRow::target(g, p, dts);
   for (int l = 0; l < kLanes<T>; ++l) {
-    EXPECT_EQ(on[l] != 0, LimitRow::on<T>(T(gap(l)), T(velocity(l)), dt)) << "lane " << l;
+    EXPECT_EQ(on[l] != 0, LimitRow::on<T>(T(limit(l)), T(gap(l)), T(velocity(l)), 0, dt)) << "lane " << l;
     expect_lane<T>(target, l, LimitRow::target<T>(T(gap(l)), p, dt), "target");
   }
 }
@@ -82,18 +93,24 @@ TYPED_TEST(RowParts, KeptImpulsesStartTheirWorldsShareAndKeepOnlyFiniteImpulsesO
   p.warmstarting_factor = 0.85;
   EXPECT_EQ(warm_share<T>(true, p), T(1));
   EXPECT_EQ(warm_share<T>(false, p), T(0.85));
+  IntLanes<T> converged{};  // a world's share by its own sweeps
+  for (int l = 0; l < kLanes<T>; ++l) converged[l] = l % 2 ? -1 : 0;
+  const Lanes<T> share = warm_share<Lanes<T>>(converged, p);
+  for (int l = 0; l < kLanes<T>; ++l) EXPECT_EQ(share[l], l % 2 ? T(1) : T(0.85)) << "lane " << l;
   p.use_warmstarting = false;
   EXPECT_EQ(warm_share<T>(true, p), T(0));
   EXPECT_EQ(LimitRow::warm<T>(T(2), T(0.5)), T(1));
   EXPECT_EQ(EqualityRow::keep<T>(T(3), true), T(3));
   EXPECT_EQ(EqualityRow::keep<T>(T(3), false), T(0));
   EXPECT_EQ(EqualityRow::keep<T>(static_cast<T>(kNaN), true), T(0));
-  // lanes: a NaN or an off row in one lane does not touch the others
-  const Lanes<T> lambda = lanes_of<T>([](int l) { return l == 1 ? kNaN : 0.25 * l; });
+  // lanes: a NaN (the last lane) or an off row (the first) in one lane does not touch the others
+  constexpr int kNaNLane = kLanes<T> - 1, kOffLane = 0;
+  const Lanes<T> lambda = lanes_of<T>([](int l) { return l == kNaNLane ? kNaN : 0.25 * (l + 1); });
   IntLanes<T> on{};
-  for (int l = 0; l < kLanes<T>; ++l) on[l] = l == 2 ? 0 : -1;
+  for (int l = 0; l < kLanes<T>; ++l) on[l] = l == kOffLane ? 0 : -1;
   const Lanes<T> kept = FrictionLossRow::keep(lambda, on);
-  for (int l = 0; l < kLanes<T>; ++l) EXPECT_EQ(kept[l], l == 1 || l == 2 ? T(0) : T(0.25 * l)) << "lane " << l;
+  for (int l = 0; l < kLanes<T>; ++l)
+    EXPECT_EQ(kept[l], l == kNaNLane || l == kOffLane ? T(0) : T(0.25 * (l + 1))) << "lane " << l;
 }
 
 TEST(RowParts, EqualityRowsDriveTheirErrorsToZero) {
@@ -102,6 +119,9 @@ TEST(RowParts, EqualityRowsDriveTheirErrorsToZero) {
   EXPECT_NEAR(EqualityRow::target<Scalar>(0.01, p, 0.01), -0.2, 1e-15);
   EXPECT_EQ(EqualityRow::bound(), std::numeric_limits<Scalar>::infinity());
   EXPECT_EQ(EqualityRow::kKind, RowKind::Bounded);
+  EXPECT_EQ(EqualityRow::count(EqualityType::Weld), 6);
+  EXPECT_EQ(EqualityRow::count(EqualityType::Connect), 3);
+  EXPECT_EQ(EqualityRow::count(EqualityType::JointCoupling), 1);
   // a coupling's slope is its polynomial's derivative
   const JointCoupling coupling{{0.1, 0.5, -0.3, 0.2, 0.05}, 0.2, -0.1};
   Scalar slope = 0, ignored = 0;
@@ -122,13 +142,59 @@ TEST(RowParts, EqualityRowsDriveTheirErrorsToZero) {
   EXPECT_TRUE(turn.isApprox(Vec3(0, 0, 0.3)));
 }
 
+// the records read a model's equality_data as the builder wrote it
+TEST(RowParts, EqualityRecordsReadTheModelsData) {
+  ModelBuilder builder(Vec3::Zero());
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.dof.q0 = 0.4;
+  const int a = builder.add_body(RigidBody::from_box(1, Vec3(0.1, 0.1, 0.1)));
+  const int j1 = builder.add_joint_revolute(-1, a, options);
+  options.dof.q0 = -0.7;
+  const int b = builder.add_body(RigidBody::from_box(1, Vec3(0.1, 0.1, 0.1)));
+  const int j2 = builder.add_joint_revolute(a, b, options);
+  const Vec3 anchor1(0.1, 0.2, 0.3), anchor2(0.4, 0.5, 0.6), weld_anchor(0.1, -0.2, 0.05);
+  builder.add_connect(a, b, anchor1, "", anchor2);
+  Transform relative;
+  relative.p = Vec3(0, 0, 1);
+  relative.q = Quat(Eigen::AngleAxis<Scalar>(0.3, Vec3(1, 2, 3).normalized()));
+  builder.add_weld(a, b, "", weld_anchor, relative);
+  builder.add_joint_coupling(j1, j2, {0.1, 0.5, -0.3, 0.2, 0.05});
+  const Model model = builder.finalize();
+  const BodyEquality connect = BodyEquality::of(model, 0), weld = BodyEquality::of(model, 1);
+  EXPECT_EQ(connect.anchor1, anchor1);
+  EXPECT_EQ(connect.anchor2, anchor2);
+  EXPECT_EQ(weld.anchor2, weld_anchor);
+  EXPECT_TRUE(weld.anchor1.isApprox(relative.apply(weld_anchor)));
+  EXPECT_TRUE(weld.relative.coeffs().isApprox(relative.q.coeffs()));  // (w read from its place, not x's)
+  const JointCoupling coupling = JointCoupling::of(model, 2);
+  const Scalar poly[5] = {0.1, 0.5, -0.3, 0.2, 0.05};
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(coupling.poly[k], poly[k]);
+  EXPECT_EQ(coupling.q1_ref, 0.4);
+  EXPECT_EQ(coupling.q2_ref, -0.7);
+  // a connect held at bodies turned and moved: the gap between its anchors in the world, acting at their middle
+  Transform X1, X2;
+  X1.q = Quat(Eigen::AngleAxis<Scalar>(0.5, Vec3::UnitZ()));
+  X2.p = Vec3(0.3, 0, 0);
+  Vec3 mid, gap;
+  connect.errors(X1, X2, &mid, &gap, nullptr);
+  const Vec3 p1 = X1.q * anchor1, p2 = X2.p + anchor2;
+  EXPECT_TRUE(gap.isApprox(p2 - p1));
+  EXPECT_TRUE(mid.isApprox((p1 + p2) / 2));
+}
+
+constexpr Scalar kImpratio = 2;
+
 // a contact's input of lane l: soft in the even lanes, rigid in the odd ones, at depths and speeds of its own
 ContactInput<Scalar> contact_of(int l) {
   ContactInput<Scalar> in;
   in.depth = 0.002 * (l % 4) - 0.001;
   in.mu = 0.5 + 0.1 * l;
-  in.restitution = l % 3 == 0 ? 0.5 : 0;
-  for (int m = 0; m < 6; ++m) in.previous[m] = 0.01 * (m + 1) * (l % 2 ? 1 : -1);
+  in.restitution = l % 2 ? 0.5 : 0;
+  for (int m = 0; m < 3; ++m) {
+    in.impulse[m] = 0.01 * (m + 1) * (l % 2 ? 1 : -1);
+    in.spin[m] = 0.001 * (m + 1) * (l % 4 ? 1 : -1);
+  }
   in.condim = l % 3 == 2 ? 6 : 3;
   in.torsion = 0.02;
   in.rolling = l % 2 ? 0.001 : 0;
@@ -138,7 +204,7 @@ ContactInput<Scalar> contact_of(int l) {
     pair.stiffness = 2500;
     pair.damping = 100;
     pair.solimp[0] = 0.9, pair.solimp[1] = 0.95, pair.solimp[2] = 0.001, pair.solimp[3] = 0.5, pair.solimp[4] = 2;
-    in.softness = contact_softness(pair, 0.5, 0, 1, in.depth);
+    in.softness = contact_softness(pair, 0.5, 0, kImpratio, in.depth);
   }
   return in;
 }
@@ -147,7 +213,7 @@ template <typename T>
 ContactInput<T> plain(const ContactInput<Scalar>& in) {
   ContactInput<T> x;
   x.depth = T(in.depth), x.mu = T(in.mu), x.restitution = T(in.restitution);
-  for (int m = 0; m < 6; ++m) x.previous[m] = T(in.previous[m]);
+  for (int m = 0; m < 3; ++m) x.impulse[m] = T(in.impulse[m]), x.spin[m] = T(in.spin[m]);
   x.softness = {in.softness.soft,       T(in.softness.cfm_normal), T(in.softness.cfm_friction),
                 T(in.softness.damping), T(in.softness.spring),     T(in.softness.active_margin)};
   x.condim = T(in.condim), x.torsion = T(in.torsion), x.rolling = T(in.rolling);
@@ -167,7 +233,8 @@ TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
   for (int m = 0; m < 3; ++m) nv[m] = splat<V>(n[m]);
   contact_frame(nv, dv);
   V v[6], target[6], cfm[6], mu[6], warm[6];
-  for (int e = 0; e < 6; ++e) v[e] = lanes_of<T>([e](int l) { return 0.1 * (e + 1) - 0.05 * l; });
+  // (the normal's velocity: from 0.1 down to fast approaches, beyond the restitution threshold, in the later lanes)
+  for (int e = 0; e < 6; ++e) v[e] = lanes_of<T>([e](int l) { return 0.1 * (e + 1) - (e == 0 ? 0.11 : 0.05) * l; });
   ContactRows::targets(in, v, 6, p, splat<V>(dt), target, cfm, mu);
   ContactRows::warm(in, dv, ContactRows::warm_share<V>(p), warm);
   for (int l = 0; l < kLanes<T>; ++l) {
@@ -182,13 +249,20 @@ TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
       expect_lane<T>(mu[e], l, mu_l[e], "mu");
       expect_lane<T>(warm[e], l, warm_l[e], "warm");
     }
-    // the plain numbers' physics: a rigid contact has no cfm and its friction rows no target; a soft one's friction
-    // rows are softer than its normal by impratio (1 here); the normal never starts pulling
+    // the plain numbers' physics: a rigid contact has no cfm and its friction rows no target, and bounces back at
+    // restitution times its approach where it closes faster than the threshold; a soft one's friction rows are
+    // softer than its normal by impratio, and it has none while inactive; the normal never starts pulling
     if (!one.softness.soft) {
       EXPECT_EQ(cfm_l[0], T(0)) << "lane " << l;
       EXPECT_EQ(target_l[1], T(0)) << "lane " << l;
+      if (vl[0] < -p.restitution_threshold && one.depth - vl[0] * dt >= 0)
+        EXPECT_GE(target_l[0], T(0.999) * one.restitution * -vl[0]) << "lane " << l;
     } else {
-      EXPECT_EQ(cfm_l[1], cfm_l[0]) << "lane " << l;
+      if (one.depth > 0)  // (active: nearer than its margin, 0)
+        EXPECT_GT(cfm_l[0], T(0)) << "lane " << l;
+      else
+        EXPECT_EQ(cfm_l[0], T(0)) << "lane " << l;
+      EXPECT_NEAR(cfm_l[1], cfm_l[0] / T(kImpratio), 4 * std::numeric_limits<T>::epsilon() * cfm_l[0]) << l;
     }
     EXPECT_GE(warm_l[0], T(0)) << "lane " << l;
     EXPECT_EQ(mu_l[0], T(0));
@@ -196,6 +270,37 @@ TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
     EXPECT_EQ(mu_l[3], one.torsion);
     EXPECT_EQ(mu_l[5], one.rolling);
   }
+}
+
+TYPED_TEST(RowParts, AContactsRowsBeyondItsDimsAreLeftAloneAndItsConditionSaysWhichItHas) {
+  using T = TypeParam;
+  RowParams p;
+  const ContactInput<T> in = plain<T>(contact_of(0));
+  const T v[6] = {T(-0.1), T(0.2), T(0.3), T(0.4), T(0.5), T(0.6)};
+  T all[3][6], target[6], cfm[6], mu[6];
+  ContactRows::targets(in, v, 6, p, T(0.002), all[0], all[1], all[2]);
+  for (const int dims : {3, 4}) {
+    std::fill(target, target + 6, T(7));
+    std::fill(cfm, cfm + 6, T(7));
+    std::fill(mu, mu + 6, T(7));
+    ContactRows::targets(in, v, dims, p, T(0.002), target, cfm, mu);
+    for (int e = 0; e < 6; ++e) {
+      EXPECT_EQ(target[e], e < dims ? all[0][e] : T(7)) << dims << " rows, row " << e;
+      EXPECT_EQ(cfm[e], e < dims ? all[1][e] : T(7)) << dims << " rows, row " << e;
+      EXPECT_EQ(mu[e], e < dims ? all[2][e] : T(7)) << dims << " rows, row " << e;
+    }
+  }
+  for (const int condim : {1, 3, 4, 6})
+    for (int e = 0; e < 6; ++e)
+      EXPECT_EQ(ContactRows::has<T>(e, T(condim)), e < 3 || (e == 3 && condim >= 4) || condim == 6)
+          << "condim " << condim << ", row " << e;
+  // without warm starting a contact starts from nothing
+  p.use_warmstarting = false;
+  T d[9], warm[6];
+  const T n[3] = {T(0), T(0), T(1)};
+  contact_frame(n, d);
+  ContactRows::warm(in, d, ContactRows::warm_share<T>(p), warm);
+  for (int e = 0; e < 6; ++e) EXPECT_EQ(warm[e], T(0)) << "row " << e;
 }
 
 TYPED_TEST(RowParts, ARigidNormalRowBouncesOnlyWhereItClosesFasterThanTheThreshold) {
@@ -225,16 +330,17 @@ TYPED_TEST(RowParts, AContactKeepsItsRowsImpulsesAsWorldVectorsAndDropsOnesNotFi
     const T* x = P + (e < 3 ? 0 : 3);
     EXPECT_NEAR(x[0] * axis[0] + x[1] * axis[1] + x[2] * axis[2], lambda[e], 1e-5) << "row " << e;
   }
-  // with three rows the spin impulse is 0; a NaN drops its vector in its lane only
+  // with three rows the spin impulse is 0; a NaN drops its vector in its lane only (the last)
   ContactRows::keep(lambda, 3, d, P);
   for (int m = 3; m < 6; ++m) EXPECT_EQ(P[m], T(0));
+  constexpr int kNaNLane = kLanes<T> - 1;
   V lanes[6], dv[9], Pv[6];
-  for (int e = 0; e < 6; ++e) lanes[e] = lanes_of<T>([&](int l) { return l == 3 && e == 1 ? kNaN : lambda[e]; });
+  for (int e = 0; e < 6; ++e) lanes[e] = lanes_of<T>([&](int l) { return l == kNaNLane && e == 1 ? kNaN : lambda[e]; });
   for (int m = 0; m < 9; ++m) dv[m] = splat<V>(d[m]);
   ContactRows::keep(lanes, 6, dv, Pv);
   ContactRows::keep(lambda, 6, d, P);
   for (int l = 0; l < kLanes<T>; ++l)
-    for (int m = 0; m < 6; ++m) expect_lane<T>(Pv[m], l, l == 3 && m < 3 ? T(0) : P[m], "kept");
+    for (int m = 0; m < 6; ++m) expect_lane<T>(Pv[m], l, l == kNaNLane && m < 3 ? T(0) : P[m], "kept");
 }
 
 TEST(RowParts, AContactsRowsAreANormalASlidingPairATorsionAndARollingPair) {
