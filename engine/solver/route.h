@@ -9,10 +9,10 @@
 
 #include "engine/collision/pipeline.h"
 #include "engine/model/model.h"
-#include "engine/solver/parts/row_params.h"
 #include "engine/solver/settings.h"
 #include "engine/threads/parallel.h"
 #include "kernels/lanes.h"
+#include "kernels/pgs.h"
 
 namespace novaphy {
 
@@ -60,7 +60,7 @@ struct StepContext {
   bool store_in_pass() const { return settings.on_divergence != DivergencePolicy::Raise; }
 
   // the rows and the guard
-  RowParams rows;
+  PgsSettings pgs;  // the sweeps' (kernels/pgs.h) of the settings; the row parts read the settings themselves
   ContactLists lists;
   const std::uint8_t* touched = nullptr;  // [articulation] 1: its rows are the islands' this step
   const Scalar* energy_weight = nullptr;  // [dof] the guard's energy weights (engine/solver/parts/guard.h)

@@ -188,13 +188,7 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.refactor = refactor;
   step.keep = std::max<Scalar>(0, 1 - settings.angular_damping * dt);
   step.stream = step_bytes_ > settings.stream_body_output_above;
-  // (what the row parts read of the settings, engine/solver/parts/row_params.h)
-  step.rows.pgs = {settings.num_iterations, settings.cfm, settings.friction_smoothing, settings.pgs_tolerance};
-  step.rows.erp = settings.erp;
-  step.rows.linear_slop = settings.linear_slop;
-  step.rows.warmstarting_factor = settings.warmstarting_factor;
-  step.rows.restitution_threshold = settings.restitution_threshold;
-  step.rows.use_warmstarting = settings.use_warmstarting;
+  step.pgs = {settings.num_iterations, settings.cfm, settings.friction_smoothing, settings.pgs_tolerance};
   step.energy_weight = built_.energy_weight.data();
   if (flagged_) std::fill(data_.flagged.begin(), data_.flagged.end(), 0);
   flagged_ = 0;

@@ -69,7 +69,7 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, cons
       R.limit_row[2 * m + side] = -1;
       if (!any_lane<T>(on)) continue;
       const V<T> warm = LimitRow::warm(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), R.warm_share);
-      const int r = add_row(R, LimitRow::kKind, on, LimitRow::target(gap, step.rows, dt), warm);
+      const int r = add_row(R, LimitRow::kKind, on, LimitRow::target(gap, step.settings, dt), warm);
       R.limit_row[2 * m + side] = r;
       unit_row(topo.dof_count, k, T(LimitRow::sign(side)), on, r, R);
     }
@@ -184,7 +184,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   V<T>* d = &R.frame[9 * t];
   contact_frame<Lanes<T>>(n, d);
   V<T> warm[6];
-  ContactRows::warm(in, d, ContactRows::warm_share<V<T>>(step.rows), warm);
+  ContactRows::warm(in, d, ContactRows::warm_share<V<T>>(step.settings), warm);
   // u_k = S_lin,k + S_ang,k x p: the velocity of the point p moved by dof k, once for the three rows
   V<T>* u = R.point.data();
   for (int j = 0; j < nv; ++j) point_velocity(kin.S + 6 * j, p, u + 3 * j);
@@ -214,8 +214,8 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   V<T> v[6] = {};
   for (int e = 0; e < dims; ++e)
     for (int j = 0; j < nv; ++j) v[e] += R.J_row(first + e)[j] * R.qd_in[j];
-  ContactRows::targets(in, v, dims, step.rows, splat<V<T>>(static_cast<T>(step.dt)), &R.target[first], &R.cfm[first],
-                       &R.mu[first]);
+  ContactRows::targets(in, v, dims, step.settings, splat<V<T>>(static_cast<T>(step.dt)), &R.target[first],
+                       &R.cfm[first], &R.mu[first]);
 }
 
 // the sweeps over the block's rows; returns the lanes whose sweeps converged
@@ -313,7 +313,7 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   Clock::time_point mark = phases ? Clock::now() : Clock::time_point{};
   R.resize(2 * nl + nf + step.lists.dims * slots, nv, slots);
   R.rows = 0;
-  R.warm_share = warm_share<V<T>>(converged, step.rows);
+  R.warm_share = warm_share<V<T>>(converged, step.settings);
   add_limit_rows(G, b, step, w, mine, R);
   add_friction_rows(G, b, step, mine, R);
   solve_rows(G.topo, kin.H, 0, R);
@@ -323,7 +323,7 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);
   solve_rows(G.topo, kin.H, contact_rows, R);
   if (phases) phases->contacts += seconds_since(&mark);
-  converged = sweep(R, nv, step.rows.pgs, w.qd.data());
+  converged = sweep(R, nv, step.pgs, w.qd.data());
   for (int l = 0; l < lanes; ++l)
     if (mine[l]) step.pgs_converged[G.arts[b * W + l]] = converged[l] != 0;
   keep_impulses(G, b, slots, mine, step, R);

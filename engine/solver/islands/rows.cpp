@@ -72,7 +72,7 @@ Scalar IslandRows::warm_share_of(int r, const StepContext& step) const {
   bool converged = true;
   for (int s = 0; s < rows_[r].side_count; ++s)
     converged = converged && step.pgs_converged[index_.dof_articulation[rows_[r].dof_begin[s]]] != 0;
-  return warm_share<Scalar>(converged, step.rows);
+  return warm_share<Scalar>(converged, step.settings);
 }
 
 void IslandRows::finish_row(int r, Scalar cfm) {
@@ -105,7 +105,7 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
         const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
         const Scalar gap = LimitRow::gap(q, limit, side);
         if (!LimitRow::on(limit, gap, step.qd[g], side, dt)) continue;
-        const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.rows, dt));
+        const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.settings, dt));
         row_jacobian(r, a)[g - art_[a].qd_begin()] = LimitRow::sign(side);
         rows_[r].lambda = LimitRow::warm(step.limit_impulse[limit_cell_[2 * m + side]], warm_share_of(r, step));
         limit_row_[2 * g + side] = r;
@@ -143,7 +143,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     while (dims < step.lists.dims && ContactRows::has(dims, in.condim)) ++dims;
     Scalar d[9], warm[6], v[6], target[6], cfm[6], mu[6];
     contact_frame(&C.contact_normal[3 * c], d);
-    ContactRows::warm(in, d, ContactRows::warm_share<Scalar>(step.rows), warm);
+    ContactRows::warm(in, d, ContactRows::warm_share<Scalar>(step.settings), warm);
     const int first = row_count_;
     for (int e = 0; e < dims; ++e) {
       const Scalar* axis = ContactRows::direction(d, e);
@@ -153,7 +153,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
       if (e > 0) rows_[r].normal = first;
       v[e] = row_velocity(rows_[r], J_, qd);  // (at the step's start)
     }
-    ContactRows::targets(in, v, dims, step.rows, step.dt, target, cfm, mu);
+    ContactRows::targets(in, v, dims, step.settings, step.dt, target, cfm, mu);
     for (int e = 0; e < dims; ++e) {
       rows_[first + e].target = target[e];
       rows_[first + e].cfm = cfm[e];
@@ -188,7 +188,7 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
   for (int k = 0; k < EqualityRow::count(type); ++k) {
     const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), EqualityRow::kKind);
     rows_[r].bound = EqualityRow::bound();
-    rows_[r].target = EqualityRow::target(error[k / 3][k % 3], step.rows, step.dt);
+    rows_[r].target = EqualityRow::target(error[k / 3][k % 3], step.settings, step.dt);
     rows_[r].lambda = EqualityRow::warm(step.equality_impulse[6 * e + k], warm_share_of(r, step));
   }
 }
@@ -202,7 +202,8 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   const Scalar error =
       coupling.error(q[model_.joint_q_start[j1]], j2 < 0 ? coupling.q2_ref : q[model_.joint_q_start[j2]], &slope);
   const int a1 = index_.dof_articulation[d1], a2 = d2 < 0 ? -1 : index_.dof_articulation[d2];
-  const int r = begin_row(a1, a2 == a1 ? -1 : a2, EqualityRow::kKind, EqualityRow::target(error, step.rows, step.dt));
+  const int r =
+      begin_row(a1, a2 == a1 ? -1 : a2, EqualityRow::kKind, EqualityRow::target(error, step.settings, step.dt));
   row_jacobian(r, a1)[d1 - art_[a1].qd_begin()] += 1;
   if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
   rows_[r].bound = EqualityRow::bound();
@@ -220,7 +221,7 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
     const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
     const Scalar gap = LimitRow::gap(length, limit, side);
     if (!LimitRow::on(limit, gap, velocity, side, step.dt)) continue;
-    const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.rows, step.dt));
+    const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.settings, step.dt));
     Scalar* J = row_jacobian(r, a);
     for (int e = first; e < model_.tendon_start[t + 1]; ++e)
       J[model_.tendon_dof[e] - art_[a].qd_begin()] += LimitRow::sign(side) * model_.tendon_coef[e];
@@ -274,10 +275,10 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
     parallel_for(std::min(threads, n), n, [&](int island) {
       const int begin = island_start_[island], count = island_start_[island + 1] - begin;
       const int* order = island_rows_.data() + begin;
-      for (int k = 0; k < count; ++k) finish_row(order[k], step.rows.pgs.cfm);
+      for (int k = 0; k < count; ++k) finish_row(order[k], step.pgs.cfm);
       for (int k = 0; k < count; ++k) apply_impulse(rows_[order[k]], MinvJT_, rows_[order[k]].lambda, step.qd);
       bool converged = false;
-      pgs_solve(rows_, order, count, J_, MinvJT_, step.rows.pgs, step.qd, &converged);
+      pgs_solve(rows_, order, count, J_, MinvJT_, step.pgs, step.qd, &converged);
       for (int k = 0; k < count; ++k)
         for (int s = 0; s < rows_[order[k]].side_count; ++s)
           step.pgs_converged[index_.dof_articulation[rows_[order[k]].dof_begin[s]]] = converged;

@@ -9,7 +9,7 @@
 #include "engine/collision/pipeline.h"
 #include "engine/solver/parts/contact_material.h"
 #include "engine/solver/parts/contact_softness.h"
-#include "engine/solver/parts/row_params.h"
+#include "engine/solver/settings.h"
 #include "kernels/pgs.h"
 
 namespace novaphy {
@@ -87,7 +87,7 @@ struct ContactRows {
   // not build up as an equality's can; a smaller share lets a stack creep, its friction restarting short of what
   // holds it
   template <typename V>
-  static V warm_share(const RowParams& p) {
+  static V warm_share(const SolverFeatherstoneSettings& p) {
     return splat<V>(static_cast<Element<V>>(p.use_warmstarting ? 1 : 0));
   }
 
@@ -108,8 +108,8 @@ struct ContactRows {
   // step; a contact that closes within this step faster than the restitution threshold bounces at
   // -restitution times its approach speed (v_approach: J qd of the normal row at the step's start)
   template <typename V>
-  static V rigid_normal_target(const V& depth, const V& v_approach, const V& restitution, const RowParams& p,
-                               const V& dt) {
+  static V rigid_normal_target(const V& depth, const V& v_approach, const V& restitution,
+                               const SolverFeatherstoneSettings& p, const V& dt) {
     using E = Element<V>;
     const E slop = static_cast<E>(p.linear_slop);
     const V zero{};
@@ -124,8 +124,8 @@ struct ContactRows {
   // rows e < dims: their targets, cfm (a soft contact's; 0 for a rigid one) and friction coefficients mu (0 for the
   // normal), from their velocities v at the step's start
   template <typename V>
-  static void targets(const ContactInput<V>& in, const V* v, int dims, const RowParams& p, const V& dt, V* target,
-                      V* cfm, V* mu) {
+  static void targets(const ContactInput<V>& in, const V* v, int dims, const SolverFeatherstoneSettings& p, const V& dt,
+                      V* target, V* cfm, V* mu) {
     const ContactSoftness<V>& s = in.softness;
     target[0] = select<V>(s.soft, soft_normal_target(in.depth, v[0], s.damping, s.spring, s.active_margin, dt),
                           rigid_normal_target(in.depth, v[0], in.restitution, p, dt));

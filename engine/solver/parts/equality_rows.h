@@ -17,7 +17,7 @@ struct EqualityRow : KeptImpulseRow {
   static constexpr RowKind kKind = RowKind::Bounded;
 
   template <typename V>
-  static V target(const V& error, const RowParams& p, const V& dt) {
+  static V target(const V& error, const SolverFeatherstoneSettings& p, const V& dt) {
     return -static_cast<Element<V>>(p.erp) * error / dt;
   }
   static Scalar bound() { return std::numeric_limits<Scalar>::infinity(); }

@@ -2,7 +2,7 @@
 // keeps for the next step (a contact's rows: contact_rows.h).
 #pragma once
 
-#include "engine/solver/parts/row_params.h"
+#include "engine/solver/settings.h"
 #include "kernels/number.h"
 
 namespace novaphy {
@@ -11,7 +11,7 @@ namespace novaphy {
 // (stopped at one that moved no row beyond pgs_tolerance), warmstarting_factor of them where they ran out (an
 // error left by sweeps that ran out, carried whole from step to step, can build up), none without warm starting
 template <typename V>
-inline V warm_share(const Mask<V>& converged, const RowParams& p) {
+inline V warm_share(const Mask<V>& converged, const SolverFeatherstoneSettings& p) {
   using E = Element<V>;
   if (!p.use_warmstarting) return V{};
   return select<V>(converged, splat<V>(E(1)), splat<V>(static_cast<E>(p.warmstarting_factor)));

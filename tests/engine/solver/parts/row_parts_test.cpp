@@ -38,7 +38,7 @@ void expect_lane(const Lanes<T>& x, int l, T y, const char* what) {
 
 TYPED_TEST(RowParts, LimitRowIsOnWhereTheCoordinateWouldCrossAndPushesOutBeyondTheSlop) {
   using T = TypeParam;
-  RowParams p;
+  SolverFeatherstoneSettings p;
   p.erp = 0.2;
   p.linear_slop = 0.001;
   const T dt = T(0.01);
@@ -89,7 +89,7 @@ TYPED_TEST(RowParts, FrictionLossRowIsBoundedByTheLossOverTheStep) {
 
 TYPED_TEST(RowParts, KeptImpulsesStartTheirWorldsShareAndKeepOnlyFiniteImpulsesOfRowsThatWereOn) {
   using T = TypeParam;
-  RowParams p;
+  SolverFeatherstoneSettings p;
   p.warmstarting_factor = 0.85;
   EXPECT_EQ(warm_share<T>(true, p), T(1));
   EXPECT_EQ(warm_share<T>(false, p), T(0.85));
@@ -114,7 +114,7 @@ TYPED_TEST(RowParts, KeptImpulsesStartTheirWorldsShareAndKeepOnlyFiniteImpulsesO
 }
 
 TEST(RowParts, EqualityRowsDriveTheirErrorsToZero) {
-  RowParams p;
+  SolverFeatherstoneSettings p;
   p.erp = 0.2;
   EXPECT_NEAR(EqualityRow::target<Scalar>(0.01, p, 0.01), -0.2, 1e-15);
   EXPECT_EQ(EqualityRow::bound(), std::numeric_limits<Scalar>::infinity());
@@ -223,7 +223,7 @@ ContactInput<T> plain(const ContactInput<Scalar>& in) {
 TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
   using T = TypeParam;
   using V = Lanes<T>;
-  RowParams p;
+  SolverFeatherstoneSettings p;
   const T dt = T(0.002);
   ContactInput<V> in;
   for (int l = 0; l < kLanes<T>; ++l) ContactRows::set_lane(in, l, contact_of(l));
@@ -274,7 +274,7 @@ TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
 
 TYPED_TEST(RowParts, AContactsRowsBeyondItsDimsAreLeftAloneAndItsConditionSaysWhichItHas) {
   using T = TypeParam;
-  RowParams p;
+  SolverFeatherstoneSettings p;
   const ContactInput<T> in = plain<T>(contact_of(0));
   const T v[6] = {T(-0.1), T(0.2), T(0.3), T(0.4), T(0.5), T(0.6)};
   T all[3][6], target[6], cfm[6], mu[6];
@@ -305,7 +305,7 @@ TYPED_TEST(RowParts, AContactsRowsBeyondItsDimsAreLeftAloneAndItsConditionSaysWh
 
 TYPED_TEST(RowParts, ARigidNormalRowBouncesOnlyWhereItClosesFasterThanTheThreshold) {
   using T = TypeParam;
-  RowParams p;
+  SolverFeatherstoneSettings p;
   p.restitution_threshold = 0.2;
   const T dt = T(0.01);
   // approaching at 1 m/s with 0.5 restitution from a gap of 1 mm: a bounce at 0.5 m/s
