@@ -72,12 +72,15 @@ def main():
     parser.add_argument("--worlds", type=int, default=256)
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--reps", type=int, default=9)
+    parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated: go1, quadruped, humanoid")
+    parser.add_argument("--precisions", default="Float32,Float64")
+    parser.add_argument("--threads", default="1,2")
     args = parser.parse_args()
     print(f"| scene | precision | threads | before ms | after ms | before / after (median of {args.rounds} rounds) |")
     print("|---|---|---|---|---|---|")
-    for scene in SCENES:
-        for precision in ("Float32", "Float64"):
-            for threads in (1, 2):
+    for scene in args.scenes.split(","):
+        for precision in args.precisions.split(","):
+            for threads in map(int, args.threads.split(",")):
                 ratios, before, after = [], [], []
                 for _ in range(args.rounds):
                     b1 = run(args.before, scene, precision, threads, args)
