@@ -230,7 +230,7 @@ void SolverFeatherstone::list_contacts(const Contacts& contacts, StepContext& st
                 data_.contact_list.data(),
                 &model_,
                 &built_.index,
-                std::min(built_.contact_dims, contact_row_count(settings.max_condim)),
+                std::min(built_.contact_dims, ContactRows::count(settings.max_condim)),
                 &shape_contacts_};
   step.touched = data_.touched.data();
   island_contacts_.clear();

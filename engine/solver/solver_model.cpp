@@ -144,7 +144,7 @@ void SolverModel::index_inputs(const Model& model) {
 void SolverModel::index_contacts(const Model& model) {
   Distinct<ContactMaterial> materials;
   for (int s = 0; s < model.shape_count; ++s) {
-    contact_dims = std::max(contact_dims, contact_row_count(model.shape_condim[s]));
+    contact_dims = std::max(contact_dims, ContactRows::count(model.shape_condim[s]));
     shape_material.push_back(materials.index(contact_material(model, s), contact_materials));
     shape_weight.push_back(contact_weight(model, s));
   }

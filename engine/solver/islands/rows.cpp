@@ -139,8 +139,7 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
     const ContactInput<Scalar> in = ContactRows::read(C, c, *step.lists.shapes, model_.impratio);
     // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents
-    int dims = 3;
-    while (dims < step.lists.dims && ContactRows::has(dims, in.condim)) ++dims;
+    const int dims = std::min(step.lists.dims, ContactRows::count(static_cast<int>(in.condim)));
     Scalar d[9], warm[6], v[6], target[6], cfm[6], mu[6];
     contact_frame(&C.contact_normal[3 * c], d);
     ContactRows::warm(in, d, ContactRows::warm_share<Scalar>(step.settings), warm);

@@ -61,10 +61,6 @@ inline ContactFriction contact_friction_of(FrictionRule rule, const ContactMater
 inline ContactFriction contact_friction_of(const Model& model, int a, int b) {
   return contact_friction_of(model.friction_rule, contact_material(model, a), contact_material(model, b));
 }
-// the rows of a contact of that condim, or of at most that many friction dimensions: 3 (a normal row and two
-// sliding rows; condim 1 has them with no friction), 4 (and a torsional row) or 6 (and two rolling rows)
-inline int contact_row_count(int condim) { return condim >= 6 ? 6 : condim >= 4 ? 4 : 3; }
-
 // the sliding friction coefficient alone
 inline Scalar contact_friction(const Model& model, int a, int b) { return contact_friction_of(model, a, b).mu; }
 inline Scalar contact_restitution(const ContactMaterial& a, const ContactMaterial& b) {

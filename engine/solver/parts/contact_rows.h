@@ -29,11 +29,19 @@ struct ContactRows {
   static RowKind kind(int e) {
     return e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
   }
-  // where a contact of that condim has row e: the normal and sliding rows always, the torsional row from condim 4,
-  // the rolling rows from 6
+  // the condim from which a contact has row e: the normal and sliding rows always (condim 1 has them with no
+  // friction), the torsional row from 4, the rolling rows from 6
+  static int first_condim(int e) { return e < 3 ? 0 : e == 3 ? 4 : 6; }
+  // where a contact of that condim has row e
   template <typename V>
   static Mask<V> has(int e, const V& condim) {
-    return condim >= static_cast<Element<V>>(e < 3 ? 0 : e == 3 ? 4 : 6);
+    return condim >= static_cast<Element<V>>(first_condim(e));
+  }
+  // the rows of a contact of that condim, or of at most that many friction dimensions: 3, 4 or 6
+  static int count(int condim) {
+    int rows = 3;
+    while (rows < 6 && condim >= first_condim(rows)) ++rows;
+    return rows;
   }
   // whether row e is of the relative angular velocity (torsion, rolling) rather than of the contact point's velocity
   static bool turns(int e) { return e >= 3; }

@@ -290,10 +290,12 @@ TYPED_TEST(RowParts, AContactsRowsBeyondItsDimsAreLeftAloneAndItsConditionSaysWh
       EXPECT_EQ(mu[e], e < dims ? all[2][e] : T(7)) << dims << " rows, row " << e;
     }
   }
-  for (const int condim : {1, 3, 4, 6})
+  for (const int condim : {1, 3, 4, 5, 6}) {
     for (int e = 0; e < 6; ++e)
       EXPECT_EQ(ContactRows::has<T>(e, T(condim)), e < 3 || (e == 3 && condim >= 4) || condim == 6)
           << "condim " << condim << ", row " << e;
+    EXPECT_EQ(ContactRows::count(condim), condim == 6 ? 6 : condim >= 4 ? 4 : 3) << "condim " << condim;
+  }
   // without warm starting a contact starts from nothing
   p.use_warmstarting = false;
   T d[9], warm[6];
