@@ -16,10 +16,17 @@
 
 namespace novaphy {
 
-// the per-unit stages of a step, in order: kinematics and forces, mass and factor, the unconstrained velocity
-// (Dynamics); the unit's own rows and their solve (Rows); integration and the guard's test (Integrate); the new
-// state written out (Store)
-enum class Stage : int { Dynamics = 0, Rows = 1, Integrate = 2, Store = 3 };
+// the stages of a step after its inputs and contacts, in physics order (this order is the only place it is
+// written). A unit's stage runs on every unit of every route, a unit's stages one after another on one thread
+// (run_unit): kinematics and forces, mass and factor, the unconstrained velocity (Dynamics); the unit's own rows
+// and their solve (Rows); integration and the guard's test (Integrate); the new state written out (Store). A
+// step's stage runs once for the whole step: the islands' rows and their solve (Islands); the diverged worlds
+// raised, kept or reset (Guard). The solver runs the unit stages in passes over the units, broken only before a
+// step's stage that the unit stages after it wait for (StepContext::waits_for)
+enum class Stage : int { Dynamics = 0, Rows = 1, Islands = 2, Integrate = 3, Guard = 4, Store = 5 };
+inline constexpr Stage kStages[] = {Stage::Dynamics,  Stage::Rows,  Stage::Islands,
+                                    Stage::Integrate, Stage::Guard, Stage::Store};
+constexpr bool unit_stage(Stage s) { return s != Stage::Islands && s != Stage::Guard; }
 
 struct ArticulationIndex;
 struct ShapeContacts;
@@ -55,9 +62,13 @@ struct StepContext {
   bool stream = false;
   // H and its factor kept for later steps
   bool keep_factor() const { return settings.update_mass_matrix_interval > 1; }
-  // Store follows Integrate in its pass: each world written as it is stepped, unless it diverged or its factor
-  // failed (else the guard comes first, and nothing is written on divergence)
-  bool store_in_pass() const { return settings.on_divergence != DivergencePolicy::Raise; }
+  // whether a step's stage runs this step: the islands where some rows are theirs (`split`), the guard always
+  bool runs(Stage s) const { return s != Stage::Islands || split; }
+  // whether the unit stages after step's stage s wait for it (the pass is broken before it), else it follows the
+  // pass: Integrate reads the islands' impulses; Store waits for the guard only where a divergence raises (nothing
+  // is written), else each world is written as it is stepped, unless it diverged or its factor failed, and the
+  // guard then keeps or resets those
+  bool waits_for(Stage s) const { return s == Stage::Islands || settings.on_divergence == DivergencePolicy::Raise; }
 
   // the rows and the guard
   PgsSettings pgs;  // the sweeps' (kernels/pgs.h) of the settings; the row parts read the settings themselves
@@ -149,25 +160,25 @@ class StepRoute {
   virtual std::size_t bytes() const = 0;
 };
 
-// the physics order, written once: the stages of one unit's pass in turn, each timed into `seconds` where it is
-// not null
+// one unit's pass: its unit stages from pass.first to pass.last in their order, each timed into `seconds` where it
+// is not null (Store's time counts as Integrate's)
 inline void run_unit(StepRoute& route, const UnitPass& pass, const StepContext& step, const UnitInputs& inputs,
                      UnitStageSeconds* seconds) {
-  if (pass.runs(Stage::Dynamics)) {
-    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->dynamics : nullptr);
-    route.dynamics(pass, step, inputs);
-  }
-  if (pass.runs(Stage::Rows)) {
-    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->rows : nullptr);
-    route.rows(pass, step);
-  }
-  if (pass.runs(Stage::Integrate)) {
-    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->integrate : nullptr);
-    route.integrate(pass, step);
-  }
-  if (pass.runs(Stage::Store)) {
-    const ParallelTimer timer(seconds != nullptr, seconds ? &seconds->integrate : nullptr);
-    route.store(pass, step);
+  for (const Stage s : kStages) {
+    if (!unit_stage(s) || !pass.runs(s)) continue;
+    double* total = !seconds               ? nullptr
+                    : s == Stage::Dynamics ? &seconds->dynamics
+                    : s == Stage::Rows     ? &seconds->rows
+                                           : &seconds->integrate;
+    const ParallelTimer timer(seconds != nullptr, total);
+    switch (s) {
+      case Stage::Dynamics: route.dynamics(pass, step, inputs); break;
+      case Stage::Rows: route.rows(pass, step); break;
+      case Stage::Integrate: route.integrate(pass, step); break;
+      case Stage::Store: route.store(pass, step); break;
+      case Stage::Islands:
+      case Stage::Guard: break;  // the step's stages, not a unit's
+    }
   }
 }
 

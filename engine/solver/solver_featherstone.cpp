@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <type_traits>
 
@@ -125,29 +126,49 @@ int SolverFeatherstone::thread_count() const {
 void SolverFeatherstone::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
   const ExclusiveCall exclusive(busy_, "SolverFeatherstone.step");
   const std::int64_t start = settings.count_serial_time ? now_ns() : 0;
+  // check the arguments; the inputs: the routes planned, the step's options, the actuators' joint forces; each
+  // contact to its unit or the islands; then the stages in physics order (route.h: kinematics and forces, mass and
+  // factor; rows and solve; the islands; integrate; guard; store)
   check_step(in, out, control, contacts, dt);
   plan();
   StepContext step = begin_step(in, out, control, contacts, dt);
   actuate(control, step);
   list_contacts(contacts, step);
-  // each unit: kinematics and forces, mass and factor (Dynamics); its rows and their solve (Rows); integrate
-  // (Integrate); store (Store). A unit's stages run back to back on its thread, the pass broken only where a stage
-  // of the whole step comes between: the islands' rows and solve (split), the guard before any world is written
-  // (on_divergence Raise)
-  const Stage last = step.store_in_pass() ? Stage::Store : Stage::Integrate;
-  if (step.split) {
-    pass(step, Stage::Dynamics, Stage::Rows);
-    solve_islands(step);
-    pass(step, Stage::Integrate, last);
-  } else {
-    pass(step, Stage::Dynamics, last);
-  }
-  guard(step);
-  if (last != Stage::Store) pass(step, Stage::Store, Stage::Store);
+  run_stages(step);
   end_step(in, out, step);
   if (!settings.count_serial_time) return;
   serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
   ++serial_seconds_.steps;
+}
+
+void SolverFeatherstone::run_stages(const StepContext& step) {
+  // the unit stages since the last step's stage they wait for make one pass; a step's stage they do not wait for
+  // follows the last pass
+  std::optional<Stage> first;
+  Stage last = Stage::Dynamics;
+  std::array<Stage, std::size(kStages)> after_pass;
+  int after_pass_count = 0;
+  for (const Stage s : kStages) {
+    if (unit_stage(s)) {
+      if (!first) first = s;
+      last = s;
+    } else if (step.runs(s) && !step.waits_for(s)) {
+      after_pass[after_pass_count++] = s;
+    } else if (step.runs(s)) {
+      if (first) pass(step, *first, last);
+      first.reset();
+      step_stage(s, step);
+    }
+  }
+  if (first) pass(step, *first, last);
+  for (int i = 0; i < after_pass_count; ++i) step_stage(after_pass[i], step);
+}
+
+void SolverFeatherstone::step_stage(Stage s, const StepContext& step) {
+  if (s == Stage::Islands)
+    solve_islands(step);
+  else
+    guard(step);
 }
 
 void SolverFeatherstone::plan() {

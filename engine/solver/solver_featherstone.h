@@ -140,7 +140,12 @@ class SolverFeatherstone {
   // data_.touched: the articulations a contact joins to another moving articulation (throws for a contact between
   // two worlds, which no CollisionPipeline makes); returns whether a contact touched any
   bool touch_articulations(const Contacts& contacts, int threads);
-  // the stages first..last of every unit of both routes, a unit's in turn on its thread (run_unit); after
+  // the stages from Dynamics to Store (route.h's kStages): the unit stages in passes, each step's stage that runs
+  // this step where the units wait for it or after the last pass
+  void run_stages(const StepContext& step);
+  // step's stage s: the islands' rows and solve, or the guard
+  void step_stage(Stage s, const StepContext& step);
+  // the unit stages first..last of every unit of both routes, a unit's in turn on its thread (run_unit); after
   // Dynamics the factors checked
   void pass(const StepContext& step, Stage first, Stage last);
   // the islands' rows: the dense route's articulations' and those of the articulations contacts join
