@@ -1,8 +1,9 @@
 """Two builds' SolverFeatherstone.step side by side: Go1 (../shared/robots), the quadruped and humanoid.xml, float32
 and float64, on one thread (pinned to CPU 0) and two, a build's run and the other's alternating before, after,
-after, before in each round so that a slow spell of the machine lands on both. Each run is a fresh process that
-replicates the robot, settles it 50 steps and times `steps` steps `reps` times (its median); a round's ratio is the
-before build's time over the after build's (above 1: after is faster), the table their median over the rounds.
+after, before in each round so that a slow spell of the machine lands on both, every case in each round. Each run
+is a fresh process that replicates the robot, settles it 50 steps and times `steps` steps `reps` times (its
+median); a round's ratio is the before build's time over the after build's (above 1: after is faster), the table
+their median over the rounds.
     build/venv/bin/python bench/ab_builds.py BEFORE/build/python AFTER/build/python [--rounds 5] > table.md"""
 import argparse
 import json
@@ -76,22 +77,31 @@ def main():
     parser.add_argument("--precisions", default="Float32,Float64")
     parser.add_argument("--threads", default="1,2")
     args = parser.parse_args()
+    cases = [(scene, precision, threads) for scene in args.scenes.split(",")
+             for precision in args.precisions.split(",") for threads in map(int, args.threads.split(","))]
+    # the rounds outermost, every case in each, so that a slow spell of the machine lands on many cases' rounds
+    # rather than on all of one case's
+    ratios = {case: [] for case in cases}
+    before = {case: [] for case in cases}
+    after = {case: [] for case in cases}
+    for r in range(args.rounds):
+        for case in cases:
+            b1 = run(args.before, *case, args)
+            a1 = run(args.after, *case, args)
+            a2 = run(args.after, *case, args)
+            b2 = run(args.before, *case, args)
+            before[case] += [b1, b2]
+            after[case] += [a1, a2]
+            ratios[case].append((b1 + b2) / (a1 + a2))
+            print(f"round {r + 1} {' '.join(map(str, case))}: {ratios[case][-1]:.3f}", file=sys.stderr, flush=True)
     print(f"| scene | precision | threads | before ms | after ms | before / after (median of {args.rounds} rounds) |")
     print("|---|---|---|---|---|---|")
-    for scene in args.scenes.split(","):
-        for precision in args.precisions.split(","):
-            for threads in map(int, args.threads.split(",")):
-                ratios, before, after = [], [], []
-                for _ in range(args.rounds):
-                    b1 = run(args.before, scene, precision, threads, args)
-                    a1 = run(args.after, scene, precision, threads, args)
-                    a2 = run(args.after, scene, precision, threads, args)
-                    b2 = run(args.before, scene, precision, threads, args)
-                    before += [b1, b2]
-                    after += [a1, a2]
-                    ratios.append((b1 + b2) / (a1 + a2))
-                print(f"| {scene} | {precision} | {threads} | {1e3 * statistics.median(before):.3f} | "
-                      f"{1e3 * statistics.median(after):.3f} | {statistics.median(ratios):.3f} |", flush=True)
+    for case in cases:
+        scene, precision, threads = case
+        print(f"| {scene} | {precision} | {threads} | {1e3 * statistics.median(before[case]):.3f} | "
+              f"{1e3 * statistics.median(after[case]):.3f} | {statistics.median(ratios[case]):.3f} |")
+    everything = [x for case in cases for x in ratios[case]]
+    print(f"\nall {len(everything)} rounds of every case: median {statistics.median(everything):.3f}")
 
 
 if __name__ == "__main__":
