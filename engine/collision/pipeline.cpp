@@ -23,6 +23,16 @@ void size_previous(Contacts& c) {
   c.previous_match.assign(c.contact_capacity, -1);
 }
 
+// options checked, contact_capacity 0 replaced by its default (8 per shape, at least 64)
+CollisionOptions checked_options(const Model& model, CollisionOptions options) {
+  if (options.contact_capacity < 0) fail("contact_capacity must be >= 0, got ", options.contact_capacity);
+  if (!(options.margin >= 0) || !std::isfinite(options.margin))
+    fail("margin must be finite and >= 0, got ", options.margin);
+  if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
+  if (options.contact_capacity == 0) options.contact_capacity = std::max(64, 8 * model.shape_count);
+  return options;
+}
+
 // the box in a shape's frame that holds it, for boxes_apart: the box of its scale, as the broad phase bounds it
 // (bounds_kind), but a capsule's, whose scale leaves out its caps (along y)
 Vec3 holding_box(ShapeType type, const Vec3& scale) {
@@ -32,132 +42,33 @@ Vec3 holding_box(ShapeType type, const Vec3& scale) {
 }  // namespace
 
 CollisionPipeline::CollisionPipeline(const Model& model, const CollisionOptions& options)
-    : model_(model), options_(options) {
-  if (options.contact_capacity < 0) fail("contact_capacity must be >= 0, got ", options.contact_capacity);
-  if (!(options.margin >= 0) || !std::isfinite(options.margin))
-    fail("margin must be finite and >= 0, got ", options.margin);
-  if (options.num_threads < 0) fail("num_threads must be >= 0 (0: OpenMP's default), got ", options.num_threads);
-  if (options_.contact_capacity == 0) options_.contact_capacity = std::max(64, 8 * model.shape_count);
+    : model_(model),
+      options_(checked_options(model, options)),
+      filter_(model, options_.self_collision),
+      shapes_(model, filter_),
+      groups_(model, filter_, shapes_) {
   reach_ = options_.margin;
   for (int s = 0; s < model.shape_count; ++s) reach_ = std::max(reach_, model.shape_margin[s]);
-  list_exclusions();
-  link_bodies();
-  sort_shapes();
-  mask_pairs();
-  group_worlds();
-  describe_groups();
   place_static_planes();
-  shared_boxes_.resize(shared_others_.size());
-}
-
-void CollisionPipeline::link_bodies() {
-  const Model& model = model_;
-  body_parent_.assign(model.body_count, -1);
-  body_articulation_.assign(model.body_count, -1);
-  for (int j = 0; j < model.joint_count; ++j) {
-    // the parent through massless links (a MuJoCo body with several joints is a chain of them)
-    int parent = model.joint_parent[j];
-    while (parent >= 0 && model.body_mass[parent] == 0) parent = body_parent_[parent];
-    body_parent_[model.joint_child[j]] = parent;
-    body_articulation_[model.joint_child[j]] = model.joint_articulation[j];
-  }
-}
-
-bool CollisionPipeline::visual_only(int s) const {
-  const int group = model_.shape_collision_group[s], mask = model_.shape_collision_mask[s];
-  return model_.collision_filter == CollisionFilter::Mujoco ? group == 0 && mask == 0 : group == 0 || mask == 0;
-}
-
-void CollisionPipeline::list_exclusions() {
-  // per shape, the shapes it is excluded with, ascending
-  const Model& model = model_;
-  exclude_start_.assign(model.shape_count + 1, 0);
-  for (int e = 0; e < model.exclude_count; ++e)
-    for (int k = 0; k < 2; ++k) {
-      const int s = model.exclude_shape[2 * e + k];
-      if (s < 0 || s >= model.shape_count)
-        fail("exclude_shape[", e, "] names shape ", s, ", the model has ", model.shape_count);
-      ++exclude_start_[s + 1];
-    }
-  for (int s = 0; s < model.shape_count; ++s) exclude_start_[s + 1] += exclude_start_[s];
-  exclude_other_.resize(exclude_start_.back());
-  std::vector<int> next(exclude_start_.begin(), exclude_start_.end() - 1);
-  for (int e = 0; e < model.exclude_count; ++e) {
-    const int a = model.exclude_shape[2 * e], b = model.exclude_shape[2 * e + 1];
-    exclude_other_[next[a]++] = b;
-    exclude_other_[next[b]++] = a;
-  }
-  for (int s = 0; s < model.shape_count; ++s)
-    std::sort(exclude_other_.begin() + exclude_start_[s], exclude_other_.begin() + exclude_start_[s + 1]);
-}
-
-bool CollisionPipeline::excluded(int a, int b) const {
-  const auto begin = exclude_other_.begin() + exclude_start_[a], end = exclude_other_.begin() + exclude_start_[a + 1];
-  return begin != end && std::binary_search(begin, end, b);
-}
-
-void CollisionPipeline::sort_shapes() {
-  const Model& model = model_;
-  world_others_.resize(model.world_count);
-  world_planes_.resize(model.world_count);
-  shape_part_.assign(model.shape_count, -1);
-  for (int s = 0; s < model.shape_count; ++s) {
-    if (visual_only(s)) continue;  // the broad phase never sees it
-    const int w = model.shape_world[s];
-    if (model.shape_type[s] == static_cast<int>(ShapeType::Plane)) {
-      planes_.push_back(s);
-      (w < 0 ? shared_planes_ : world_planes_[w]).push_back(s);
-      continue;
-    }
-    (w < 0 ? shared_others_ : world_others_[w]).push_back(s);
-    shape_part_[s] = w;
-  }
-}
-
-void CollisionPipeline::mask_pairs() {
-  const Model& model = model_;
+  shared_boxes_.resize(shapes_.shared_others.size());
   world_sweep_.resize(model.world_count);
-  world_pair_start_.assign(model.world_count, -1);
   for (int w = 0; w < model.world_count; ++w) {
-    const std::vector<int>& shapes = world_others_[w];
-    if (shapes.size() > kMaskedWorldShapes) {
-      world_sweep_[w].resize(shapes.size());
-      std::iota(world_sweep_[w].begin(), world_sweep_[w].end(), 0);
-      continue;
-    }
-    world_pair_start_[w] = static_cast<int>(world_pairs_.size());
-    for (size_t i = 0; i < shapes.size(); ++i) {
-      std::uint64_t mask = 0;
-      for (size_t j = i + 1; j < shapes.size(); ++j)
-        if (may_collide(shapes[i], shapes[j])) mask |= std::uint64_t{1} << j;
-      world_pairs_.push_back(mask);
-    }
+    if (shapes_.world_pair_start[w] >= 0) continue;  // (it tests its masked pairs)
+    world_sweep_[w].resize(shapes_.world_others[w].size());
+    std::iota(world_sweep_[w].begin(), world_sweep_[w].end(), 0);
   }
 }
 
 void CollisionPipeline::place_static_planes() {
-  // a plane on no body stays where the model put it; those on bodies move
+  // a plane on no body stays where the model put it; those on bodies move (place_shared)
   const Model& model = model_;
   plane_pose_.resize(model.shape_count);
   plane_normal_.resize(model.shape_count);
-  for (const int p : planes_) {
-    if (model.shape_body[p] >= 0) {
-      moving_planes_.push_back(p);
-      continue;
-    }
+  for (const int p : shapes_.planes) {
+    if (model.shape_body[p] >= 0) continue;
     plane_pose_[p] = Transform::from_array(&model.shape_transform[7 * p]);
     plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();
   }
-}
-
-std::vector<int> CollisionPipeline::plane_order(int w) const {
-  const std::vector<int>& own = world_planes_[w];
-  std::vector<int> order;
-  for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
-    const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
-    order.push_back(take_own ? static_cast<int>(i++) : -1 - static_cast<int>(j++));
-  }
-  return order;
 }
 
 Contacts CollisionPipeline::contacts() const {
@@ -169,20 +80,6 @@ Contacts CollisionPipeline::contacts() const {
 #undef NOVAPHY_ALLOCATE_CONTACT
   size_previous(c);
   return c;
-}
-
-bool CollisionPipeline::may_collide(int a, int b) const {
-  const int ba = model_.shape_body[a], bb = model_.shape_body[b];
-  if (ba == bb) return false;
-  const int wa = model_.shape_world[a], wb = model_.shape_world[b];
-  if (wa >= 0 && wb >= 0 && wa != wb) return false;
-  const bool ab = (model_.shape_collision_group[a] & model_.shape_collision_mask[b]) != 0;
-  const bool ba_ = (model_.shape_collision_group[b] & model_.shape_collision_mask[a]) != 0;
-  if (model_.collision_filter == CollisionFilter::Mujoco ? !(ab || ba_) : !(ab && ba_)) return false;
-  if (excluded(a, b)) return false;
-  if (ba < 0 || bb < 0) return true;
-  if (body_parent_[ba] == bb || body_parent_[bb] == ba) return false;
-  return options_.self_collision || body_articulation_[ba] != body_articulation_[bb];
 }
 
 void CollisionPipeline::collide(const State& state, Contacts& contacts) {
@@ -211,8 +108,8 @@ void CollisionPipeline::collide(const State& state, Contacts& contacts) {
   // Then the shapes of no world against each other, and every plane against them. Groups of worlds (and
   // shared shapes, and planes) spread over threads, in one parallel region (find_on_thread)
   place_shared(state);
-  const int groups = static_cast<int>(group_first_.size()) - 1, previous = contacts.contact_count;
-  const int shared = static_cast<int>(shared_others_.size()), planes = static_cast<int>(planes_.size());
+  const int groups = groups_.count(), previous = contacts.contact_count;
+  const int shared = static_cast<int>(shapes_.shared_others.size()), planes = static_cast<int>(shapes_.planes.size());
   const int threads = std::max({team(groups, kWorldsPerThread / kLanes<Scalar>), team(shared, kWorldsPerThread),
                                 team(planes, kWorldsPerThread), team(previous, kKeptPerThread)});
   if (static_cast<int>(scratch_.size()) < threads) scratch_.resize(threads);
@@ -255,20 +152,20 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
   const int t = omp_get_thread_num(), n = omp_get_num_threads();
   Scratch& scratch = scratch_[t];
   scratch.found.clear();
-  const int previous = contacts.contact_count, groups = static_cast<int>(group_first_.size()) - 1;
-  const int shared = static_cast<int>(shared_others_.size()), planes = static_cast<int>(planes_.size());
+  const int previous = contacts.contact_count, groups = groups_.count();
+  const int shared = static_cast<int>(shapes_.shared_others.size()), planes = static_cast<int>(shapes_.planes.size());
 #pragma omp for schedule(static) nowait
   for (int g = 0; g < groups; ++g) group_contacts(state, g, scratch);
   scratch.loop_end[0] = scratch.found.size();
 #pragma omp for schedule(static) nowait
   for (int i = 0; i < shared; ++i)
     for (int k = i + 1; k < shared; ++k)
-      test_pair(shared_others_[i], shared_boxes_[i], shared_others_[k], shared_boxes_[k], scratch.found,
-                shared_others_[i], shared_others_[k]);
+      test_pair(shapes_.shared_others[i], shared_boxes_[i], shapes_.shared_others[k], shared_boxes_[k], scratch.found,
+                shapes_.shared_others[i], shapes_.shared_others[k]);
   scratch.loop_end[1] = scratch.found.size();
 #pragma omp for schedule(static) nowait
   for (int i = 0; i < planes; ++i)
-    against_plane(planes_[i], shared_others_.data(), shared_boxes_.data(), shared, scratch.found);
+    against_plane(shapes_.planes[i], shapes_.shared_others.data(), shared_boxes_.data(), shared, scratch.found);
   scratch.loop_end[2] = scratch.found.size();
 #pragma omp barrier
   std::size_t total = 0;
@@ -327,33 +224,33 @@ void CollisionPipeline::write_contact(const Found& found, int c, Contacts& conta
 }
 
 void CollisionPipeline::place_shared(const State& state) {
-  for (const int p : moving_planes_) {
+  for (const int p : shapes_.moving_planes) {
     plane_pose_[p] = box(state, p).pose;
     plane_normal_[p] = plane_pose_[p].q * Vec3::UnitY();
   }
-  for (size_t i = 0; i < shared_others_.size(); ++i) shared_boxes_[i] = box(state, shared_others_[i]);
+  for (size_t i = 0; i < shapes_.shared_others.size(); ++i) shared_boxes_[i] = box(state, shapes_.shared_others[i]);
 }
 
 void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scratch) {
-  const int first = group_first_[g], count = group_first_[g + 1] - first;
+  const int first = groups_.first[g], count = groups_.first[g + 1] - first;
   if (count == 1) {
     world_contacts(state, first, scratch, nullptr);
     return;
   }
   group_boxes(state, g, scratch);
   group_planes(g, scratch);
-  const int start = group_plane_start_[g], planes = group_plane_start_[g + 1] - start;
-  const int* plane_lanes = group_plane_lanes_.data() + start * kLanes<Scalar>;
+  const int start = groups_.plane_start[g], planes = groups_.plane_start[g + 1] - start;
+  const int* plane_lanes = groups_.plane_lanes.data() + start * kLanes<Scalar>;
   // the narrow phase reads a shape alike in every world of the group from the group's read world (in cache)
-  scratch.read_same = group_same_[g];
-  scratch.read_shapes = world_others_[group_read_[g]].data();
+  scratch.read_same = groups_.same[g];
+  scratch.read_shapes = shapes_.world_others[groups_.read_world[g]].data();
   for (int l = 0; l < count; ++l) {
-    const std::vector<int>& shapes = world_others_[first + l];
+    const std::vector<int>& shapes = shapes_.world_others[first + l];
     const int n = static_cast<int>(shapes.size());
     const std::uint64_t* hits = scratch.hits.data() + l * n;
     // the boxes the lane's narrow phase reads: the shapes of its pairs and those reaching its planes (all of
     // them where shapes of no world meet every shape)
-    std::uint64_t needed = shared_others_.empty() || n == 0 ? 0 : ~std::uint64_t{0} >> (64 - n);
+    std::uint64_t needed = shapes_.shared_others.empty() || n == 0 ? 0 : ~std::uint64_t{0} >> (64 - n);
     for (int i = 0; i < n; ++i)
       if (hits[i] != 0) needed |= hits[i] | std::uint64_t{1} << i;
     for (int k = 0; k < planes; ++k) needed |= scratch.plane_hits[l * planes + k] & ~scratch.spheres;
@@ -362,8 +259,8 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
     for (int k = 0; k < planes; ++k) {
       // (a plane's pose and normal, where fixed alike in all worlds, and its entries, where alike, from the plane
       // read for all)
-      const int p = plane_lanes[k * kLanes<Scalar> + l], read = group_plane_read_[start + k];
-      const int read_p = read >= 0 ? read : p, placed = group_plane_still_[start + k] ? read : p;
+      const int p = plane_lanes[k * kLanes<Scalar> + l], read = groups_.plane_read[start + k];
+      const int read_p = read >= 0 ? read : p, placed = groups_.plane_still[start + k] ? read : p;
       for (std::uint64_t m = scratch.plane_hits[l * planes + k]; m != 0; m &= m - 1) {
         const int i = __builtin_ctzll(m);
         if (scratch.spheres >> i & 1) {  // (found in lanes by group_planes)
@@ -384,7 +281,7 @@ void CollisionPipeline::group_contacts(const State& state, int g, Scratch& scrat
 
 void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scratch, const std::uint64_t* hits) {
   std::vector<Found>& out = scratch.found;
-  const std::vector<int>& shapes = world_others_[w];
+  const std::vector<int>& shapes = shapes_.world_others[w];
   const int n = static_cast<int>(shapes.size());
   auto read = [&](int i) { return hits ? scratch.read(i, shapes) : shapes[i]; };
   std::vector<Box>& boxes = scratch.boxes;
@@ -392,8 +289,8 @@ void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scrat
     if (static_cast<int>(boxes.size()) < n) boxes.resize(n);
     for (int i = 0; i < n; ++i) boxes[i] = box(state, shapes[i]);
   }
-  if (hits || world_pair_start_[w] >= 0) {
-    const std::uint64_t* mask = hits ? hits : world_pairs_.data() + world_pair_start_[w];
+  if (hits || shapes_.world_pair_start[w] >= 0) {
+    const std::uint64_t* mask = hits ? hits : shapes_.world_pairs.data() + shapes_.world_pair_start[w];
     for (int i = 0; i < n; ++i)
       for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
         const int j = __builtin_ctzll(m);
@@ -403,29 +300,17 @@ void CollisionPipeline::world_contacts(const State& state, int w, Scratch& scrat
   } else {
     sweep_world(w, boxes, out);
   }
-  for (size_t i = 0; i < shared_others_.size(); ++i)
+  for (size_t i = 0; i < shapes_.shared_others.size(); ++i)
     for (int j = 0; j < n; ++j)
-      test_pair(shared_others_[i], shared_boxes_[i], shapes[j], boxes[j], out, shared_others_[i], read(j));
+      test_pair(shapes_.shared_others[i], shared_boxes_[i], shapes[j], boxes[j], out, shapes_.shared_others[i],
+                read(j));
   if (hits) return;  // (its group's planes follow)
   // the world's planes and the shared ones, in index order
-  const std::vector<int>& own = world_planes_[w];
-  for (size_t i = 0, j = 0; i < own.size() || j < shared_planes_.size();) {
-    const bool take_own = j == shared_planes_.size() || (i < own.size() && own[i] < shared_planes_[j]);
-    against_plane(take_own ? own[i++] : shared_planes_[j++], shapes.data(), boxes.data(), n, out);
+  const std::vector<int>& own = shapes_.world_planes[w];
+  for (size_t i = 0, j = 0; i < own.size() || j < shapes_.shared_planes.size();) {
+    const bool take_own = j == shapes_.shared_planes.size() || (i < own.size() && own[i] < shapes_.shared_planes[j]);
+    against_plane(take_own ? own[i++] : shapes_.shared_planes[j++], shapes.data(), boxes.data(), n, out);
   }
-}
-
-void CollisionPipeline::sweep_world(int w, const std::vector<Box>& boxes, std::vector<Found>& out) {
-  const std::vector<int>& shapes = world_others_[w];
-  const int n = static_cast<int>(shapes.size());
-  std::vector<int>& order = world_sweep_[w];  // local indices
-  std::sort(order.begin(), order.end(), [&](int x, int y) {
-    return boxes[x].lower.x() < boxes[y].lower.x() || (boxes[x].lower.x() == boxes[y].lower.x() && x < y);
-  });
-  for (int i = 0; i < n; ++i)
-    for (int j = i + 1; j < n && boxes[order[j]].lower.x() <= boxes[order[i]].upper.x(); ++j)
-      test_pair(shapes[order[i]], boxes[order[i]], shapes[order[j]], boxes[order[j]], out, shapes[order[i]],
-                shapes[order[j]]);
 }
 
 void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes, int count,
@@ -434,14 +319,14 @@ void CollisionPipeline::against_plane(int p, const int* shapes, const Box* boxes
   for (int i = 0; i < count; ++i) {
     const Box& b = boxes[i];
     const Scalar distance = plane_box_distance(X.p.data(), plane_normal_[p].data(), b.lower.data(), b.upper.data());
-    if (distance <= 0 && may_collide(p, shapes[i])) narrow_phase(p, X, shapes[i], b.pose, out, p, shapes[i]);
+    if (distance <= 0 && filter_.may_collide(p, shapes[i])) narrow_phase(p, X, shapes[i], b.pose, out, p, shapes[i]);
   }
 }
 
 int CollisionPipeline::list_part(std::uint64_t key) const {
   const auto a = static_cast<std::int64_t>(key >> 40), b = static_cast<std::int64_t>((key >> 16) & 0xffffff);
   if (a >= model_.shape_count || b >= model_.shape_count) return std::numeric_limits<int>::max();
-  const int part = std::max(shape_part_[a], shape_part_[b]);
+  const int part = std::max(shapes_.shape_part[a], shapes_.shape_part[b]);
   return part >= 0 ? part : std::numeric_limits<int>::max();
 }
 

@@ -1,6 +1,8 @@
 // CollisionPipeline: broad phase (masked pairs or sweep and prune per world, planes against their world;
 // worlds alike a group at a time, a world per lane) and the narrow-phase kernels of kernels/collide,
-// writing into a Contacts buffer allocated once.
+// writing into a Contacts buffer allocated once. What it builds once for the model stands in three layers, each on
+// those before: ShapeFilter (the pairs that may ever collide), WorldShapes (the colliding shapes per world),
+// WorldGroups (worlds alike in groups of lanes).
 #pragma once
 
 #include <atomic>
@@ -8,6 +10,9 @@
 #include <memory>
 #include <vector>
 
+#include "engine/collision/shape_filter.h"
+#include "engine/collision/world_groups.h"
+#include "engine/collision/world_shapes.h"
 #include "engine/model/model.h"
 #include "engine/threads/parallel.h"
 #include "kernels/collide.h"
@@ -107,9 +112,6 @@ class CollisionPipeline {
   void reset_serial_seconds() { serial_seconds_ = {}; }
 
  private:
-  bool may_collide(int a, int b) const;
-  // shape s collides with no shape by the model's filter (its group or mask empty, both under Mujoco's rule)
-  bool visual_only(int s) const;
   // a contact found by the narrow phase, on its way into the contacts buffer
   struct Found {
     int a, b;
@@ -139,18 +141,10 @@ class CollisionPipeline {
   // lane l's boxes of the shapes set in `needed` (a bit per shape) from scratch.lanes into scratch.boxes
   void lane_boxes(int l, std::uint64_t needed, Scratch& scratch) const;
   // the planes of group g against its worlds' shapes, in lanes (scratch.lanes): for each of the group's
-  // planes, in the order its worlds meet them (group_plane_lanes_), the shapes that may reach it, into
+  // planes, in the order its worlds meet them (WorldGroups::plane_lanes), the shapes that may reach it, into
   // scratch.plane_hits ([lane][plane]: a bit for each shape); the spheres' contacts with them into
   // scratch.plane_spheres ([plane][shape], where a lane may reach it; scratch.spheres: a bit for each sphere)
   void group_planes(int g, Scratch& scratch) const;
-  // group g's runs of bodies into group_run_ and group_local_, where its worlds have them
-  void group_runs(int g);
-  // whether worlds v and w can be found together (group_boxes, group_planes)
-  bool alike(int v, int w) const;
-  // world w's planes, its own and those of no world, in index order (the order it meets them): k >= 0
-  // its k-th own plane, -1 - j the j-th of no world
-  std::vector<int> plane_order(int w) const;
-  int plane_of(int w, int code) const { return code >= 0 ? world_planes_[w][code] : shared_planes_[-1 - code]; }
   // shape s (a Mesh) as the narrow phase sees its hull: into *view, returned
   const HullView& hull_view(int s, HullView* view) const;
   // shape s at a pose as the convex narrow phase sees it (a Mesh's hull into *hull)
@@ -159,13 +153,9 @@ class CollisionPipeline {
   // shape_margin) where both are soft (a solref each), else options.margin
   Scalar pair_margin(int a, int b) const;
   // shapes a < b at those poses, reading the model's entries of shapes read_a and read_b (a and b, or shapes the
-  // narrow phase meets alike, narrow_alike, in cache)
+  // narrow phase meets alike, WorldGroups::same, in cache)
   void narrow_phase(int a, const Transform& pose_a, int b, const Transform& pose_b, std::vector<Found>& out, int read_a,
                     int read_b) const;
-  // the narrow phase reads the same of shapes s and a: type, size, mesh, margin and solref
-  bool narrow_alike(int s, int a) const;
-  // and so do the bounds (local pose, size): a group reads shapes alike so from another world
-  bool read_alike(int s, int a) const;
   // the plane p against each of `count` shapes (their boxes) whose AABB reaches it
   void against_plane(int p, const int* shapes, const Box* boxes, int count, std::vector<Found>& out) const;
   // which part of collide's list a contact of this key is in: its world's (the world of its shapes that are not
@@ -173,30 +163,7 @@ class CollisionPipeline {
   int list_part(std::uint64_t key) const;
   // where each contact in [begin, end) of the buffer was among the previous ones (Contacts::previous_match)
   void match_previous(Contacts& contacts, int begin, int end) const;
-  // the constructor's stages, in this order:
-  // each body's parent (skipping massless links) and articulation, for may_collide
-  void link_bodies();
-  // exclude_start_ and exclude_other_ from the model's excluded shape pairs
-  void list_exclusions();
-  // shapes a and b are an excluded pair
-  bool excluded(int a, int b) const;
-  // the colliding shapes into planes and others, per world or of no world
-  void sort_shapes();
-  // per world of few shapes its pairs' masks, per world of many its sweep order
-  void mask_pairs();
-  // consecutive worlds alike into groups found together (group_first_)
-  void group_worlds();
-  // per group of several worlds: its shapes' bodies and sameness, its runs of bodies, its planes' reach
-  void describe_groups();
-  // group g's shapes' bodies in each lane (group_body_), which shapes are the same in all its worlds and the world
-  // it reads them from (group_read_: last_read, the group before's, where they are alike to its own)
-  void group_shapes(int g, int last_read);
-  // group g's planes in the order its worlds meet them, each with the shapes that may reach it, its lanes' planes
-  // and the plane read for them (read_planes: those read by the groups before, a few)
-  void group_plane_reach(int g, std::vector<int>& read_planes);
-  // group g's slots (group_slot_shapes_, group_slot_pairs_)
-  void group_slots(int g);
-  // the poses and normals of the planes on no body; those on bodies listed as moving
+  // the constructor's last stage: the poses and normals of the planes on no body
   void place_static_planes();
   // collide()'s stages:
   // the poses of the planes on bodies and the boxes of the shapes of no world at `state`
@@ -208,7 +175,7 @@ class CollisionPipeline {
   // the narrow phase of shapes a and b (either order) where their boxes overlap and they may collide
   // (reading read_a's and read_b's entries, as narrow_phase)
   void test_pair(int a, const Box& A, int b, const Box& B, std::vector<Found>& out, int read_a, int read_b) const {
-    if (!overlap(A, B) || !may_collide(a, b)) return;
+    if (!overlap(A, B) || !filter_.may_collide(a, b)) return;
     if (a < b)
       narrow_phase(a, A.pose, b, B.pose, out, read_a, read_b);
     else
@@ -241,69 +208,21 @@ class CollisionPipeline {
   static constexpr int kWorldsPerThread = 16;  // worlds (or planes, or shared shapes) a thread at least
   static constexpr int kKeptPerThread = 1024;  // previous contacts a thread at least, where nothing else wakes one
   static constexpr int kMatchStretch = 256;    // contacts matched one after another (match_previous)
-  // a world of at most this many shapes tests the pairs may_collide allows, from a bit mask per shape
-  // worked out once; a larger one sweeps and prunes
-  static constexpr int kMaskedWorldShapes = 64;
 
   const Model& model_;
   CollisionOptions options_;
+  // built once for the model, in this order, and only read after
+  ShapeFilter filter_;
+  WorldShapes shapes_;
+  WorldGroups groups_;
   std::atomic<bool> busy_{false};  // a collide is running (ExclusiveCall)
   Scalar reach_;  // the broad phase's bounds' margin: the larger of options_.margin and every shape_margin
   SerialSeconds serial_seconds_;
-  std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
-  std::vector<int> body_articulation_;
-  std::vector<int> planes_;                     // shape indices of the planes
-  std::vector<int> moving_planes_;              // those on a body
-  std::vector<std::vector<int>> world_others_;  // non-plane shapes of each world, in index order
-  std::vector<std::vector<int>> world_sweep_;   // per world of many shapes: theirs, sorted along x
-  // per world of few shapes, where its masks start in world_pairs_ (-1: it sweeps); per shape of it,
-  // bit j set where it may collide with the world's shape j after it
-  std::vector<int> world_pair_start_;
-  std::vector<std::uint64_t> world_pairs_;
-  std::vector<int> group_first_;  // the first world of each group found together, then world_count
-  // per shape s, the shapes it never collides with, exclude_other_[exclude_start_[s] .. exclude_start_[s + 1])
-  std::vector<int> exclude_start_, exclude_other_;
-  // per group of several worlds: where its bodies start in group_body_ (-1: a world alone); per shape of
-  // its worlds and lane, the shape's body or -1; a bit per shape the same in all its worlds
-  std::vector<int> group_body_start_;
-  std::vector<int> group_body_;
-  std::vector<std::uint64_t> group_same_;
-  // per group of several worlds: the world whose shapes it reads for those the same in all its worlds, the last
-  // group's where they are alike (a replicated robot's groups all read one world's, which stays in cache), else
-  // its first
-  std::vector<int> group_read_;
-  // per group of several worlds whose shapes' bodies lie in a run of bodies each, at the same places in
-  // every run (a replicated robot's): its runs' length (0: no such runs) and each lane's first body; per
-  // shape of the group (from group_body_start_ / kLanes), its body's place in the run, or -1
-  struct BodyRun {
-    int length = 0;
-    int first[kLanes<Scalar>] = {};
-  };
-  std::vector<BodyRun> group_run_;
-  std::vector<int> group_local_;
-  // per group of several worlds, its slots: the shapes on one body in every lane (or a shape on none) share a
-  // slot, whose box joins theirs. [group] where its slots start, then the end; per slot, a bit per shape in it and
-  // a bit per slot whose shapes some shape of it may collide with (after it, as world_pairs_): group_boxes tests
-  // two slots' shapes only where the slots' boxes overlap
-  std::vector<int> group_slot_start_;
-  std::vector<std::uint64_t> group_slot_shapes_, group_slot_pairs_;
-  // [group] where its planes start (in group_plane_shapes_, _read_ and _still_, and a lane each in _lanes_), then
-  // the end; per plane of a group (in plane_order): a bit per shape may_collide lets meet it
-  std::vector<int> group_plane_start_;
-  std::vector<std::uint64_t> group_plane_shapes_;
-  // per plane of a group: each lane's plane ([plane][lane]; lanes past the group's, the first world's); the plane
-  // whose entries the narrow phase reads for every lane where they are narrow_alike in all (one read by a group
-  // before where alike, else the first world's; -1: each its own); 1 where the lanes' planes are fixed (on no
-  // body) at that plane's place, whose pose group_planes then reads for all
-  std::vector<int> group_plane_lanes_, group_plane_read_;
-  std::vector<std::uint8_t> group_plane_still_;
-  std::vector<std::vector<int>> world_planes_;      // planes of each world, in index order
-  std::vector<int> shared_others_, shared_planes_;  // shapes of no world: every world meets them
   // scratch
-  std::vector<Box> shared_boxes_;      // [shared_others_]
-  std::vector<Transform> plane_pose_;  // [shape] of the planes
-  std::vector<Vec3> plane_normal_;     // [shape] of the planes, their normals (+Y) in the world
-  std::vector<int> shape_part_;        // [shape] its world where it is not a plane and has one, else -1
+  std::vector<Box> shared_boxes_;              // [WorldShapes::shared_others]
+  std::vector<Transform> plane_pose_;          // [shape] of the planes
+  std::vector<Vec3> plane_normal_;             // [shape] of the planes, their normals (+Y) in the world
+  std::vector<std::vector<int>> world_sweep_;  // per world that sweeps: its shapes' local indices, sorted along x
   // per thread: the contacts it found, the boxes of the world it is at, of the group of worlds it is at
   // and their pairs' overlaps; on cache lines of its own (each push writes its vector's end, which would
   // otherwise share a line with another thread's)
@@ -313,12 +232,12 @@ class CollisionPipeline {
     std::vector<Box> boxes;
     std::vector<ShapeLanes> lanes;
     std::vector<ShapeLanes> slots;      // a group's slots' boxes (lower, upper)
-    std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (group_run_)
+    std::vector<Lanes<Scalar>> body_q;  // a group's runs of body_q, a number per entry (WorldGroups::run)
     std::vector<std::uint64_t> hits, plane_hits;
     std::vector<SphereOnPlane> plane_spheres;
     std::uint64_t spheres = 0;
     // the group being found: a bit per shape alike in all its worlds, read from its read world's shapes
-    // (group_read_)
+    // (WorldGroups::read_world)
     std::uint64_t read_same = 0;
     const int* read_shapes = nullptr;
     // the shape whose entries the narrow phase reads for shape i of a world of that group (its `shapes`)
