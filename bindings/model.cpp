@@ -2,7 +2,9 @@
 // engine's buffer (no copy). Model views are read-only; State and Control views are writable.
 #include "engine/model/model.h"
 
+#include <functional>
 #include <optional>
+#include <variant>
 
 #include "bindings/bindings.h"
 
@@ -17,29 +19,37 @@ py::array field_view(py::object self, std::vector<T> Owner::*field, int width, b
   return view(data.data(), static_cast<int>(data.size() / width), width, self, writeable);
 }
 
-// to_numpy / from_numpy / copy / assign of a State or Control, driven by its field table
+// to_numpy / from_numpy / copy / assign of a State or Control, driven by its field table (Scalar fields and
+// State::world_reset's flags)
 template <typename Owner>
 struct Checkpoint {
-  std::vector<std::pair<const char*, std::vector<Scalar> Owner::*>> fields;
+  using Field = std::variant<std::vector<Scalar> Owner::*, std::vector<std::uint8_t> Owner::*>;
+  std::vector<std::pair<const char*, Field>> fields;
   std::vector<int> widths;
+
+  static std::vector<py::ssize_t> shape_of(std::size_t size, int width) {
+    return width > 1 ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(size / width), width}
+                     : std::vector<py::ssize_t>{static_cast<py::ssize_t>(size)};
+  }
 
   py::dict to_numpy(const Owner& owner) const {
     py::dict out;
     for (size_t k = 0; k < fields.size(); ++k) {
-      const std::vector<Scalar>& data = owner.*(fields[k].second);
-      const int width = widths[k];
-      py::array_t<Scalar> array(width > 1
-                                    ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size() / width), width}
-                                    : std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size())});
-      std::copy(data.begin(), data.end(), array.mutable_data());
-      out[fields[k].first] = array;
+      std::visit(
+          [&](auto field) {
+            const auto& data = owner.*field;
+            py::array_t<typename std::decay_t<decltype(data)>::value_type> array(shape_of(data.size(), widths[k]));
+            std::copy(data.begin(), data.end(), array.mutable_data());
+            out[fields[k].first] = array;
+          },
+          fields[k].second);
     }
     return out;
   }
 
   void from_numpy(Owner& owner, const py::dict& arrays) const {
     // check everything first: on error nothing is written
-    std::vector<std::pair<std::vector<Scalar>*, py::array_t<Scalar>>> writes;
+    std::vector<std::function<void()>> writes;
     for (const auto& [key, value] : arrays) {
       const std::string name = py::str(key);
       size_t k = 0;
@@ -50,19 +60,22 @@ struct Checkpoint {
         throw py::type_error("from_numpy: field '" + name + "' must be a numeric array, got " +
                              (array ? "an array of dtype " + py::str(array.dtype()).cast<std::string>()
                                     : py::str(py::type::of(value)).cast<std::string>()));
-      std::vector<Scalar>& data = owner.*(fields[k].second);
-      const int width = widths[k];
-      const std::vector<py::ssize_t> expected =
-          width > 1 ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size() / width), width}
-                    : std::vector<py::ssize_t>{static_cast<py::ssize_t>(data.size())};
-      const std::vector<py::ssize_t> shape(array.shape(), array.shape() + array.ndim());
-      if (shape != expected)
-        throw py::value_error("from_numpy: field '" + name + "' has shape " +
-                              py::str(py::tuple(py::cast(shape))).cast<std::string>() + ", expected " +
-                              py::str(py::tuple(py::cast(expected))).cast<std::string>());
-      writes.emplace_back(&data, py::array_t<Scalar, py::array::c_style | py::array::forcecast>::ensure(array));
+      std::visit(
+          [&](auto field) {
+            auto& data = owner.*field;
+            using T = typename std::decay_t<decltype(data)>::value_type;
+            const std::vector<py::ssize_t> expected = shape_of(data.size(), widths[k]);
+            const std::vector<py::ssize_t> shape(array.shape(), array.shape() + array.ndim());
+            if (shape != expected)
+              throw py::value_error("from_numpy: field '" + name + "' has shape " +
+                                    py::str(py::tuple(py::cast(shape))).cast<std::string>() + ", expected " +
+                                    py::str(py::tuple(py::cast(expected))).cast<std::string>());
+            auto cast = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(array);
+            writes.emplace_back([&data, cast] { std::copy(cast.data(), cast.data() + data.size(), data.begin()); });
+          },
+          fields[k].second);
     }
-    for (auto& [data, array] : writes) std::copy(array.data(), array.data() + data->size(), data->begin());
+    for (const auto& write : writes) write();
   }
 };
 
@@ -212,7 +225,53 @@ void bind_model(py::module_& m) {
             return keyframe ? self.control(*keyframe) : self.control();
           },
           py::kw_only(), py::arg("keyframe") = py::none(),
-          "A zeroed control with the model's PD gains, or with the named keyframe's actuator commands.");
+          "A zeroed control with the model's PD gains, or with the named keyframe's actuator commands.")
+      .def(
+          "reset_worlds",
+          [](const Model& self, State& state, const py::object& given, const py::object& keyframe, int threads) {
+            const py::array worlds = py::array::ensure(given);
+            if (!worlds)
+              throw py::type_error("reset_worlds: worlds must be a bool mask or world ids, got " +
+                                   py::str(py::type::of(given)).cast<std::string>());
+            std::vector<int> ids;
+            if (worlds.dtype().kind() == 'b') {
+              if (worlds.ndim() != 1 || worlds.shape(0) != self.world_count)
+                throw py::value_error("reset_worlds: the mask has shape " +
+                                      py::str(py::tuple(py::cast(std::vector<py::ssize_t>(
+                                                  worlds.shape(), worlds.shape() + worlds.ndim()))))
+                                          .cast<std::string>() +
+                                      ", the model has " + std::to_string(self.world_count) + " worlds");
+              const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(worlds);
+              for (int w = 0; w < self.world_count; ++w)
+                if (mask.data()[w]) ids.push_back(w);
+            } else if (worlds.dtype().kind() == 'i' || worlds.dtype().kind() == 'u') {
+              if (worlds.ndim() > 1) throw py::value_error("reset_worlds: world ids must be a 1-d array");
+              const auto given = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(worlds);
+              for (py::ssize_t i = 0; i < given.size(); ++i) {
+                const std::int64_t w = given.data()[i];
+                if (w < 0 || w >= self.world_count)
+                  throw py::index_error("reset_worlds: worlds[" + std::to_string(i) + "] = " + std::to_string(w) +
+                                        " is not a world of the model (0 .. " + std::to_string(self.world_count - 1) +
+                                        ")");
+                ids.push_back(static_cast<int>(w));
+              }
+            } else {
+              throw py::type_error("reset_worlds: worlds must be a bool mask or world ids, got an array of dtype " +
+                                   py::str(worlds.dtype()).cast<std::string>());
+            }
+            int k = -1;
+            if (py::isinstance<py::str>(keyframe))
+              k = self.keyframe(keyframe.cast<std::string>());
+            else if (!keyframe.is_none())
+              k = keyframe.cast<int>();
+            const py::gil_scoped_release release;
+            self.reset_worlds(state, ids, k, threads);
+          },
+          py::arg("state"), py::arg("worlds"), py::arg("keyframe") = py::none(), py::kw_only(), py::arg("threads") = 0,
+          "Worlds of `state` (a bool mask of world_count entries, or world ids) back to joint_q0 at rest, or to the "
+          "keyframe (a name or an index): their joint_q, joint_qd, body_f (zero), body_q and body_qd (FK), and "
+          "world_reset set, so that the next collide and step use none of their history (warm starts, a kept "
+          "factor). Every other world is left as it was.");
 #define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
   NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
 

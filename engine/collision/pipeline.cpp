@@ -205,9 +205,13 @@ void CollisionPipeline::find_on_thread(const State& state, Contacts& contacts, i
   // each contact matched with the previous ones, in stretches of a fixed length (what a stretch finds does not
   // depend on the threads)
   const int stretches = (kept + kMatchStretch - 1) / kMatchStretch;
+  const std::uint8_t* reset =
+      std::find(state.world_reset.begin(), state.world_reset.end(), 1) != state.world_reset.end()
+          ? state.world_reset.data()
+          : nullptr;
 #pragma omp for schedule(static)
   for (int r = 0; r < stretches; ++r)
-    match_previous(contacts, r * kMatchStretch, std::min(kept, (r + 1) * kMatchStretch));
+    match_previous(contacts, r * kMatchStretch, std::min(kept, (r + 1) * kMatchStretch), reset);
 }
 
 void CollisionPipeline::write_contact(const Found& found, int c, Contacts& contacts) const {
@@ -330,16 +334,24 @@ int CollisionPipeline::list_part(std::uint64_t key) const {
   return part >= 0 ? part : std::numeric_limits<int>::max();
 }
 
-void CollisionPipeline::match_previous(Contacts& contacts, int begin, int end) const {
+void CollisionPipeline::match_previous(Contacts& contacts, int begin, int end, const std::uint8_t* reset) const {
   // a contact is most often where the one before it matched, + 1 (the first of a stretch: at its own place);
   // otherwise among the previous contacts of its part of the list (list_part), which are listed together, the
-  // parts ascending
+  // parts ascending. A contact of a world reset matches none
   const int n = contacts.previous_count;
   const std::vector<std::uint64_t>& key = contacts.previous_key;
   int next = begin;
   for (int c = begin; c < end; ++c) {
     const std::uint64_t k = contacts.key_of(c);
     int m = -1;
+    if (reset) {
+      const int part = list_part(k);
+      if (part != std::numeric_limits<int>::max() && reset[part]) {
+        contacts.previous_match[c] = -1;
+        ++next;
+        continue;
+      }
+    }
     if (next < n && key[next] == k) {
       m = next;
     } else {

@@ -161,8 +161,9 @@ class CollisionPipeline {
   // which part of collide's list a contact of this key is in: its world's (the world of its shapes that are not
   // planes), or the last (INT_MAX) where they have none (shapes of no world with each other, planes with them)
   int list_part(std::uint64_t key) const;
-  // where each contact in [begin, end) of the buffer was among the previous ones (Contacts::previous_match)
-  void match_previous(Contacts& contacts, int begin, int end) const;
+  // where each contact in [begin, end) of the buffer was among the previous ones (Contacts::previous_match); none
+  // for a contact of a world `reset` marks (State::world_reset where some world is reset, else nullptr)
+  void match_previous(Contacts& contacts, int begin, int end, const std::uint8_t* reset) const;
   // the constructor's last stage: the poses and normals of the planes on no body
   void place_static_planes();
   // collide()'s stages:

@@ -1,11 +1,14 @@
 #include "engine/model/model.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cstddef>
 #include <cstring>
 
 #include "engine/model/body_kinematics.h"
 #include "engine/model/error.h"
+#include "engine/threads/parallel.h"
 
 namespace novaphy {
 
@@ -152,6 +155,37 @@ State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
 }  // namespace
 
 State Model::state() const { return state_at(*this, joint_q0.data(), nullptr); }
+
+void Model::reset_worlds(State& state, const std::vector<int>& worlds, int keyframe, int threads) const {
+  check(state);
+  if (keyframe < -1 || keyframe >= keyframe_count)
+    fail("reset_worlds: keyframe ", keyframe, " is not one of the model's ", keyframe_count, " keyframes");
+  std::vector<std::uint8_t> reset(world_count, 0);
+  for (size_t i = 0; i < worlds.size(); ++i) {
+    if (worlds[i] < 0 || worlds[i] >= world_count)
+      fail("reset_worlds: worlds[", i, "] = ", worlds[i], " is not a world of the model (0 .. ", world_count - 1, ")");
+    reset[worlds[i]] = 1;
+  }
+  std::vector<int> arts;
+  for (int a = 0; a < articulation_count; ++a) {
+    const int w = body_world[articulation(a).body(0)];
+    if (w >= 0 && reset[w]) arts.push_back(a);
+  }
+  const Scalar* q =
+      keyframe < 0 ? joint_q0.data() : keyframe_q.data() + static_cast<size_t>(keyframe) * joint_coord_count;
+  const Scalar* qd = keyframe < 0 ? nullptr : keyframe_qd.data() + static_cast<size_t>(keyframe) * joint_dof_count;
+  const int team = std::clamp(static_cast<int>(arts.size()), 1, threads > 0 ? threads : omp_get_max_threads());
+  std::vector<ArticulationScratch> scratch(team);
+  parallel_for(team, static_cast<int>(arts.size()), [&](int i) {
+    const ArticulationView art = articulation(arts[i]);
+    std::copy_n(q + art.q_begin(), art.coord_count(), state.joint_q.begin() + art.q_begin());
+    for (int k = art.qd_begin(); k < art.qd_begin() + art.dof_count(); ++k) state.joint_qd[k] = qd ? qd[k] : 0;
+    for (int l = 0; l < art.link_count(); ++l) std::fill_n(state.body_f.begin() + 6 * art.body(l), 6, Scalar(0));
+    ArticulationScratch& s = scratch[omp_get_thread_num()];
+    store_body_state(kinematics(*this, state, arts[i], s), s, state);
+  });
+  for (int w = 0; w < world_count; ++w) state.world_reset[w] |= reset[w];
+}
 
 int Model::keyframe(const std::string& name) const {
   for (int k = 0; k < keyframe_count; ++k)

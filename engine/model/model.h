@@ -136,12 +136,15 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)  \
   X(Scalar, keyframe_ctrl, keyframe_count, actuator_count)
 
+// world_reset: 1 where Model::reset_worlds reset the world: the next collide and step from this state use none of
+// the world's past (its contacts' and rows' warm starts, a kept mass-matrix factor); a step writes 0 into its output
 #define NOVAPHY_STATE_FIELDS(X)            \
   X(Scalar, joint_q, joint_coord_count, 1) \
   X(Scalar, joint_qd, joint_dof_count, 1)  \
   X(Scalar, body_q, body_count, 7)         \
   X(Scalar, body_qd, body_count, 6)        \
-  X(Scalar, body_f, body_count, 6)
+  X(Scalar, body_f, body_count, 6)         \
+  X(std::uint8_t, world_reset, world_count, 1)
 
 // joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped);
 // PD drives per dof: tau = ke (target_pos - q) + kd (target_vel - qd), integrated implicitly by the
@@ -221,6 +224,12 @@ struct Model : ModelCounts {
   // body_q/body_qd from forward kinematics
   State state() const;
   State state(const std::string& keyframe) const;
+  // worlds `worlds` of `state` (world ids, in any order, repeats allowed) back to the initial coordinates joint_q0
+  // at rest, or to keyframe `keyframe`'s coordinates and velocities: their joint_q, joint_qd, body_f (zero),
+  // body_q and body_qd (forward kinematics, the worlds' articulations on `threads` threads, 0: OpenMP's default)
+  // and world_reset (1); every other entry of the state is left as it was. Throws Error naming a world id out of
+  // range, a keyframe the model does not have, or a state of another model, before writing anything
+  void reset_worlds(State& state, const std::vector<int>& worlds, int keyframe = -1, int threads = 0) const;
   // a zeroed control with the model's PD gains (and keyframe `keyframe`'s actuator commands)
   Control control() const;
   Control control(const std::string& keyframe) const;

@@ -192,8 +192,27 @@ void SolverFeatherstone::plan() {
   dense_->assign(dense);
 }
 
+void SolverFeatherstone::forget_reset_worlds(const State& in) {
+  if (std::find(in.world_reset.begin(), in.world_reset.end(), 1) == in.world_reset.end()) return;
+  auto reset = [&](int a) { return a >= 0 && built_.art_world[a] >= 0 && in.world_reset[built_.art_world[a]]; };
+  for (int a = 0; a < model_.articulation_count; ++a) {
+    if (!reset(a)) continue;
+    data_.pgs_converged[a] = 0;
+    const ArticulationView& art = built_.art[a];
+    std::fill_n(data_.friction_impulse.begin() + art.qd_begin(), art.dof_count(), Scalar(0));
+    for (int m = built_.limited_start[a]; m < built_.limited_start[a + 1]; ++m)
+      for (int side = 0; side < 2; ++side) data_.limit_impulse[limit_cell_[2 * m + side]] = 0;
+  }
+  for (int e = 0; e < model_.equality_count; ++e)
+    if (reset(built_.equality_articulation[e])) std::fill_n(data_.equality_impulse.begin() + 6 * e, 6, Scalar(0));
+  for (int t = 0; t < model_.tendon_count; ++t)
+    if (reset(built_.tendon_articulation[t])) std::fill_n(data_.tendon_impulse.begin() + 2 * t, 2, Scalar(0));
+  factor_kept_ = false;
+}
+
 StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Control& control, Contacts& contacts,
                                            Scalar dt) {
+  forget_reset_worlds(in);
   const int interval = settings.update_mass_matrix_interval;
   const bool refactor = steps_since_factor_ % interval == 0 || dt != factored_dt_ || !factor_kept_;
   steps_since_factor_ = refactor ? 1 : steps_since_factor_ + 1;
@@ -425,6 +444,7 @@ void SolverFeatherstone::solve_islands(const StepContext& step) {
 void SolverFeatherstone::end_step(const State& in, State& out, const StepContext& step) {
   if (batches_) batches_->end_step(step);
   if (&out != &in) out.body_f = in.body_f;
+  std::fill(out.world_reset.begin(), out.world_reset.end(), 0);
   stage_seconds_.steps += settings.profile_stages;
 }
 

@@ -121,6 +121,9 @@ class SolverFeatherstone {
   Scalar deepest_contact(int a, const Contacts& contacts) const;
   // the routes: each articulation's, made again when a setting that decides them changed
   void plan();
+  // the worlds `in` marks as reset (State::world_reset) stepped with no history: their rows' warm starts cleared,
+  // the mass matrix factored afresh (for every world: the factor's schedule restarts)
+  void forget_reset_worlds(const State& in);
   StepContext begin_step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt);
   // step.tau: the control's joint forces, or where the model has actuators or tendons the sums each unit makes
   // for its articulations (actuate_unit)

@@ -61,6 +61,7 @@ void SolverModel::index_articulations(const Model& model) {
   }
   index.dof_articulation.resize(model.joint_dof_count);
   for (int a = 0; a < model.articulation_count; ++a) {
+    art_world.push_back(model.body_world[model.articulation(a).body(0)]);
     index.dof_count.push_back(art[a].dof_count());
     std::fill_n(index.dof_articulation.begin() + art[a].qd_begin(), art[a].dof_count(), a);
   }
@@ -170,22 +171,27 @@ void SolverModel::index_limits(const Model& model) {
 
 void SolverModel::mark_constrained(const Model& model) {
   constrained.assign(model.articulation_count, 0);
-  auto mark_body = [&](int body) {
-    if (index.moving(body) >= 0) constrained[index.moving(body)] = 1;
-  };
-  auto mark_dof = [&](int dof) { constrained[index.dof_articulation[dof]] = 1; };
+  equality_articulation.assign(model.equality_count, -1);
+  tendon_articulation.assign(model.tendon_count, -1);
   for (int e = 0; e < model.equality_count; ++e) {
     const int* object = &model.equality_object[2 * e];
     for (int k = 0; k < 2; ++k) {
+      int a = -1;
       if (static_cast<EqualityType>(model.equality_type[e]) != EqualityType::JointCoupling)
-        mark_body(object[k]);
+        a = index.moving(object[k]);
       else if (object[k] >= 0)
-        mark_dof(model.joint_qd_start[object[k]]);
+        a = index.dof_articulation[model.joint_qd_start[object[k]]];
+      if (a < 0) continue;
+      constrained[a] = 1;
+      if (equality_articulation[e] < 0) equality_articulation[e] = a;
     }
   }
-  for (int t = 0; t < model.tendon_count; ++t)
-    if (std::isfinite(model.tendon_limit_lower[t]) || std::isfinite(model.tendon_limit_upper[t]))
-      mark_dof(model.tendon_dof[model.tendon_start[t]]);
+  for (int t = 0; t < model.tendon_count; ++t) {
+    if (model.tendon_start[t] == model.tendon_start[t + 1]) continue;  // (no joints: no rows)
+    const int a = index.dof_articulation[model.tendon_dof[model.tendon_start[t]]];
+    tendon_articulation[t] = a;
+    if (std::isfinite(model.tendon_limit_lower[t]) || std::isfinite(model.tendon_limit_upper[t])) constrained[a] = 1;
+  }
 }
 
 void SolverModel::weigh_energy(const Model& model) {

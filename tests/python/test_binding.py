@@ -155,8 +155,9 @@ def test_state_checkpoints():
     state = model.state()
     state.joint_qd[:] = np.linspace(-1, 1, model.joint_dof_count)
     snapshot = state.to_numpy()
-    assert set(snapshot) == {"joint_q", "joint_qd", "body_q", "body_qd", "body_f"}
+    assert set(snapshot) == {"joint_q", "joint_qd", "body_q", "body_qd", "body_f", "world_reset"}
     assert snapshot["body_q"].shape == (6, 7) and not np.shares_memory(snapshot["joint_qd"], state.joint_qd)
+    assert snapshot["world_reset"].dtype == np.uint8 and snapshot["world_reset"].tolist() == [0]
     copy = state.copy()
     state.joint_qd[:] = 0.0
     np.testing.assert_array_equal(copy.joint_qd, snapshot["joint_qd"])  # the copy is independent
@@ -165,6 +166,8 @@ def test_state_checkpoints():
     state.joint_qd[:] = 0.0
     state.from_numpy({"joint_qd": snapshot["joint_qd"][::-1][::-1], "body_f": np.zeros((6, 6), dtype=np.int64)})
     np.testing.assert_array_equal(state.joint_qd, snapshot["joint_qd"])
+    state.from_numpy({"world_reset": np.ones(1, dtype=np.int64)})
+    assert state.world_reset.tolist() == [1]
     # nothing is written when any array is wrong
     with pytest.raises(ValueError, match=r"from_numpy: field 'body_q' has shape \(7, 6\), expected \(6, 7\)"):
         state.from_numpy({"joint_qd": np.zeros(12), "body_q": np.zeros((7, 6))})

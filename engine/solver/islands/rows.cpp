@@ -92,11 +92,6 @@ void IslandRows::finish_row(int r, Scalar cfm) {
 void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>& articulations) {
   const Scalar dt = step.dt;
   for (const int a : articulations)
-    for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
-      const int r = friction_row_[g];
-      step.friction_impulse[g] = FrictionLossRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
-    }
-  for (const int a : articulations)
     for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
       const int j = limited_joints_[m], g = model_.joint_qd_start[j];
       const Scalar q = step.in->joint_q[model_.joint_q_start[j]];
@@ -293,6 +288,11 @@ void IslandRows::solve(const StepContext& step, const std::vector<int>& articula
     std::copy_n(P + 3, 3, &step.contacts->contact_spin_impulse[3 * c]);
   }
   keep_constraint_impulses(step);
+  for (const int a : articulations)
+    for (int g = art_[a].qd_begin(); g < art_[a].qd_begin() + art_[a].dof_count(); ++g) {
+      const int r = friction_row_[g];
+      step.friction_impulse[g] = FrictionLossRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+    }
   for (const int a : articulations)
     for (int m = limited_start_[a]; m < limited_start_[a + 1]; ++m) {
       const int g = model_.joint_qd_start[limited_joints_[m]];

@@ -1,0 +1,140 @@
+// Model::reset_worlds with the collide and step after it: the worlds reset and only they, and a reset world
+// stepping bit for bit as it would from a fresh start (no warm start, no kept factor of its past)
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "engine/import/mjcf_import.h"
+#include "solver_test_support.h"
+
+namespace novaphy {
+namespace {
+
+using solver_test::Scene;
+
+constexpr int kWorlds = 5;
+
+// `file` replicated into kWorlds worlds in `precision`, with the keyframe "settled": the robot's coordinates after
+// `settle` steps alone (its feet or fingers touching, so a reset world's first contacts meet its old ones' keys)
+ModelBuilder worlds_of(const std::string& file, Precision precision, int settle) {
+  ModelBuilder robot;
+  import_mjcf(robot, file);
+  Scene alone(robot);
+  alone.run(settle * 0.002, 0.002);
+  robot.add_keyframe("settled", alone.state.joint_q);
+  ModelBuilder worlds;
+  worlds.set_precision(precision);
+  worlds.replicate(robot, kWorlds);
+  return worlds;
+}
+
+// the entries of `field` (per-world rows of `width`) that belong to world w: bodies' by body_world, coordinates'
+// and dofs' by their articulation's first body
+template <typename T>
+std::vector<T> world_rows(const Model& model, const std::vector<T>& field, int count, int w) {
+  const int width = static_cast<int>(field.size()) / count;
+  std::vector<T> out;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const ArticulationView art = model.articulation(a);
+    if (model.body_world[art.body(0)] != w) continue;
+    int begin = 0, n = 0;
+    if (count == model.body_count) {
+      for (int l = 0; l < art.link_count(); ++l)
+        out.insert(out.end(), field.begin() + width * art.body(l), field.begin() + width * (art.body(l) + 1));
+      continue;
+    }
+    if (count == model.joint_coord_count) begin = art.q_begin(), n = art.coord_count();
+    if (count == model.joint_dof_count) begin = art.qd_begin(), n = art.dof_count();
+    out.insert(out.end(), field.begin() + begin, field.begin() + begin + n);
+  }
+  return out;
+}
+
+// the state's per-world arrays of world w, end to end
+std::vector<Scalar> world_state(const Model& model, const State& s, int w) {
+  std::vector<Scalar> out;
+  for (const auto& [field, count] :
+       {std::pair{&s.joint_q, model.joint_coord_count}, std::pair{&s.joint_qd, model.joint_dof_count},
+        std::pair{&s.body_q, model.body_count}, std::pair{&s.body_qd, model.body_count},
+        std::pair{&s.body_f, model.body_count}}) {
+    const std::vector<Scalar> rows = world_rows(model, *field, count, w);
+    out.insert(out.end(), rows.begin(), rows.end());
+  }
+  return out;
+}
+
+// random commands for every actuator, the same sequence for every scene given the same seed
+void command(Control& control, std::mt19937& rng) {
+  std::uniform_real_distribution<Scalar> u(-1, 1);
+  for (Scalar& c : control.actuator_ctrl) c = u(rng);
+}
+
+TEST(ResetWorlds, WritesTheWorldsGivenAndNoOther) {
+  Scene scene(worlds_of(NOVAPHY_SCENE_DIR "/quadruped.xml", Precision::Float64, 100));
+  scene.state.body_f.assign(scene.state.body_f.size(), 0.5);
+  scene.run(0.1, 0.002);
+  const State before = scene.state;
+  const int settled = scene.model.keyframe("settled");
+  scene.model.reset_worlds(scene.state, {3, 1, 3}, settled);
+  const State fresh = scene.model.state("settled");
+  for (int w = 0; w < kWorlds; ++w) {
+    const bool reset = w == 1 || w == 3;
+    EXPECT_EQ(scene.state.world_reset[w], reset ? 1 : 0) << "world " << w;
+    std::vector<Scalar> expected = world_state(scene.model, reset ? fresh : before, w);
+    if (reset) {
+      const std::vector<Scalar> f = world_rows(scene.model, fresh.body_f, scene.model.body_count, w);
+      std::fill(expected.end() - static_cast<std::ptrdiff_t>(f.size()), expected.end(), 0);
+    }
+    EXPECT_EQ(world_state(scene.model, scene.state, w), expected) << "world " << w;
+  }
+  // to the initial coordinates at rest
+  scene.model.reset_worlds(scene.state, {0});
+  EXPECT_EQ(world_rows(scene.model, scene.state.joint_q, scene.model.joint_coord_count, 0),
+            world_rows(scene.model, scene.model.joint_q0, scene.model.joint_coord_count, 0));
+  for (const Scalar v : world_rows(scene.model, scene.state.joint_qd, scene.model.joint_dof_count, 0)) EXPECT_EQ(v, 0);
+  // a step writes 0
+  scene.run(0.002, 0.002);
+  for (int w = 0; w < kWorlds; ++w) EXPECT_EQ(scene.state.world_reset[w], 0);
+}
+
+// `scene` stepped `steps` steps of dt 2 ms under random commands from seed `seed`
+void run_commanded(Scene& scene, int steps, unsigned seed) {
+  std::mt19937 rng(seed);
+  for (int k = 0; k < steps; ++k) {
+    command(scene.control, rng);
+    scene.run(0.002, 0.002);
+  }
+}
+
+TEST(ResetWorlds, AResetWorldStepsBitForBitAsFromAFreshStart) {
+  for (const char* file : {NOVAPHY_SCENE_DIR "/quadruped.xml", NOVAPHY_TEST_MODEL_DIR "/arm.xml"}) {
+    bool history_shows = false;  // in some world of either precision (else the test shows nothing)
+    for (const Precision precision : {Precision::Float64, Precision::Float32}) {
+      SCOPED_TRACE(std::string(file) + (precision == Precision::Float32 ? " float32" : " float64"));
+      const ModelBuilder builder = worlds_of(file, precision, 150);
+      // two scenes with one history (the same commands), then worlds 1 and 3 reset: by reset_worlds, and by hand
+      // (the same arrays, world_reset left 0: the steps after it use the worlds' warm starts)
+      Scene reset(builder), by_hand(builder);
+      run_commanded(reset, 60, 7);
+      run_commanded(by_hand, 60, 7);
+      reset.model.reset_worlds(reset.state, {1, 3}, reset.model.keyframe("settled"));
+      by_hand.state = reset.state;
+      std::fill(by_hand.state.world_reset.begin(), by_hand.state.world_reset.end(), 0);
+      // a fresh start from the reset state: a new pipeline, contacts buffer and solver
+      Scene fresh(builder);
+      fresh.state = reset.state;
+      for (Scene* scene : {&reset, &by_hand, &fresh}) run_commanded(*scene, 30, 11);
+      for (const int w : {1, 3}) {
+        const std::vector<Scalar> expected = world_state(fresh.model, fresh.state, w);
+        EXPECT_EQ(world_state(reset.model, reset.state, w), expected) << "world " << w;
+        history_shows |= world_state(by_hand.model, by_hand.state, w) != expected;
+      }
+    }
+    EXPECT_TRUE(history_shows) << file << ": the worlds' history changes nothing: the test shows nothing";
+  }
+}
+
+}  // namespace
+}  // namespace novaphy
