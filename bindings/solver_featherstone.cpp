@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "bindings/bindings.h"
+#include "engine/solver/simulate.h"
 
 namespace novaphy::python {
 
@@ -128,6 +129,10 @@ void bind_solver_featherstone(py::module_& m) {
             return view(flags.data(), static_cast<int>(flags.size()), 1, self, false);
           },
           "Per articulation: 1 where the last step's divergence guard fired (a read-only view).");
+  m.def("simulate", &simulate, py::arg("pipeline"), py::arg("solver"), py::arg("state"), py::arg("control"),
+        py::arg("contacts"), py::arg("substeps") = 1, py::arg("dt") = 0.0, py::call_guard<py::gil_scoped_release>(),
+        "substeps steps of dt (0: the model's timestep) of state, in place: each pipeline.collide(state, contacts), "
+        "then solver.step(state, state, control, contacts, dt), the same bits as that loop; without the GIL.");
 }
 
 }  // namespace novaphy::python

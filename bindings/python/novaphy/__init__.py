@@ -45,6 +45,7 @@ from ._novaphy import (
     inverse_dynamics,
     mass_matrix_crba,
     shard_range,
+    simulate,
     world_layout,
 )
 
@@ -84,6 +85,7 @@ __all__ = [
     "inverse_dynamics",
     "mass_matrix_crba",
     "shard_range",
+    "simulate",
     "solvers",
     "world_layout",
     "world_view",

@@ -255,13 +255,15 @@ TYPED_TEST(RowParts, ContactRowsOfEachLaneAreThoseOfItsContactAlone) {
     if (!one.softness.soft) {
       EXPECT_EQ(cfm_l[0], T(0)) << "lane " << l;
       EXPECT_EQ(target_l[1], T(0)) << "lane " << l;
-      if (vl[0] < -p.restitution_threshold && one.depth - vl[0] * dt >= 0)
+      if (vl[0] < -p.restitution_threshold && one.depth - vl[0] * dt >= 0) {
         EXPECT_GE(target_l[0], T(0.999) * one.restitution * -vl[0]) << "lane " << l;
+      }
     } else {
-      if (one.depth > 0)  // (active: nearer than its margin, 0)
+      if (one.depth > 0) {  // (active: nearer than its margin, 0)
         EXPECT_GT(cfm_l[0], T(0)) << "lane " << l;
-      else
+      } else {
         EXPECT_EQ(cfm_l[0], T(0)) << "lane " << l;
+      }
       EXPECT_NEAR(cfm_l[1], cfm_l[0] / T(kImpratio), 4 * std::numeric_limits<T>::epsilon() * cfm_l[0]) << l;
     }
     EXPECT_GE(warm_l[0], T(0)) << "lane " << l;
