@@ -168,7 +168,7 @@ void Model::reset_worlds(State& state, const std::vector<int>& worlds, int keyfr
   }
   std::vector<int> arts;
   for (int a = 0; a < articulation_count; ++a) {
-    const int w = body_world[articulation(a).body(0)];
+    const int w = articulation_world(a);
     if (w >= 0 && reset[w]) arts.push_back(a);
   }
   const Scalar* q =

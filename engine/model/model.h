@@ -220,6 +220,8 @@ struct Model : ModelCounts {
   void check_sizes() const;
 
   ArticulationView articulation(int a) const;
+  // the world of articulation a (its root body's; -1: none)
+  int articulation_world(int a) const { return body_world[joint_child[articulation_start[a]]]; }
   // a state at the initial coordinates joint_q0 (or keyframe `keyframe`'s coordinates and velocities), with
   // body_q/body_qd from forward kinematics
   State state() const;

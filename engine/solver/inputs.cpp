@@ -136,13 +136,12 @@ void SolverFeatherstone::raise_bad_input(const StepContext& step) {
   const State& in = *step.in;
   const Control& control = *step.control;
   // the world of an entry: of its articulation, found from its dof, coordinate, body or actuator
-  auto art_world = [&](int a) { return model_.body_world[model_.joint_child[model_.articulation_start[a]]]; };
   auto coord_world = [&](int k) {
     int a = 0;
     while (built_.art[a].q_begin() + built_.art[a].coord_count() <= k) ++a;
-    return art_world(a);
+    return model_.articulation_world(a);
   };
-  auto dof_world = [&](int k) { return art_world(built_.index.dof_articulation[k]); };
+  auto dof_world = [&](int k) { return model_.articulation_world(built_.index.dof_articulation[k]); };
   auto body_world = [&](int k) { return model_.body_world[k / 6]; };
   auto actuator_world = [&](int u) {
     const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u];

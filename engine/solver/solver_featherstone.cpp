@@ -194,7 +194,10 @@ void SolverFeatherstone::plan() {
 
 void SolverFeatherstone::forget_reset_worlds(const State& in) {
   if (std::find(in.world_reset.begin(), in.world_reset.end(), 1) == in.world_reset.end()) return;
-  auto reset = [&](int a) { return a >= 0 && built_.art_world[a] >= 0 && in.world_reset[built_.art_world[a]]; };
+  auto reset = [&](int a) {
+    const int w = a >= 0 ? model_.articulation_world(a) : -1;
+    return w >= 0 && in.world_reset[w];
+  };
   for (int a = 0; a < model_.articulation_count; ++a) {
     if (!reset(a)) continue;
     data_.pgs_converged[a] = 0;

@@ -61,7 +61,6 @@ void SolverModel::index_articulations(const Model& model) {
   }
   index.dof_articulation.resize(model.joint_dof_count);
   for (int a = 0; a < model.articulation_count; ++a) {
-    art_world.push_back(model.body_world[model.articulation(a).body(0)]);
     index.dof_count.push_back(art[a].dof_count());
     std::fill_n(index.dof_articulation.begin() + art[a].qd_begin(), art[a].dof_count(), a);
   }

@@ -47,9 +47,8 @@ struct SolverModel {
   // per articulation: 1 where an equality constraint or a tendon limit acts on it (its rows are always the
   // islands')
   std::vector<std::uint8_t> constrained;
-  // per articulation its world (-1: none); per equality and tendon the articulation whose world it is in (the
-  // first it acts on that moves, -1: none)
-  std::vector<int> art_world, equality_articulation, tendon_articulation;
+  // per equality and tendon the articulation whose world it is in (the first it acts on that moves, -1: none)
+  std::vector<int> equality_articulation, tendon_articulation;
   std::vector<Scalar> energy_weight;  // [dof] the guard's (engine/solver/parts/guard.h)
   // per articulation its bodies and actuators as runs ([begin, count] pairs from *_start[a]) and its tendons; the
   // bodies and actuators of none
