@@ -19,24 +19,10 @@ SCENES = {
 }
 
 RUN = r"""
-import json, statistics, sys, time, warnings
-import novaphy
+import json, statistics, sys, time
+from replicated import replicated
 scene, precision, threads, worlds, steps, reps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
-with warnings.catch_warnings():
-    warnings.simplefilter("ignore")
-    robot = novaphy.ModelBuilder()
-    robot.add_mjcf(scene)
-    builder = novaphy.ModelBuilder()
-    builder.precision = getattr(novaphy.Precision, precision)
-    builder.replicate(robot, worlds)
-    model = builder.finalize()
-key = model.keyframes[0] if model.keyframes else None
-state = model.state(keyframe=key) if key else model.state()
-control = model.control(keyframe=key) if key else model.control()
-solver = novaphy.solvers.SolverFeatherstone(model)
-solver.settings.num_threads = threads
-pipeline = novaphy.CollisionPipeline(model, num_threads=threads)
-contacts = pipeline.contacts()
+model, state, control, solver, pipeline, contacts = replicated(scene, precision, threads, worlds)
 dt = 0.002
 for _ in range(50):
     pipeline.collide(state, contacts)
@@ -55,7 +41,8 @@ print(json.dumps(statistics.median(times)))
 
 
 def run(build, scene, precision, threads, args):
-    env = dict(os.environ, PYTHONPATH=build, OMP_WAIT_POLICY="passive")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([build, os.path.dirname(os.path.abspath(__file__))]),
+               OMP_WAIT_POLICY="passive")
     pin = ["taskset", "-c", "0"] if threads == 1 else []
     command = pin + [sys.executable, "-c", RUN, SCENES[scene], precision, str(threads), str(args.worlds),
                      str(args.steps), str(args.reps)]

@@ -107,6 +107,41 @@ void bind_counts(Class& c) {
       .def_readonly("equality_count", &ModelCounts::equality_count);
 }
 
+// the worlds a call names: a bool mask of world_count entries or world ids (an IndexError names an id out of
+// range)
+std::vector<int> world_ids(const Model& self, const py::object& given, const char* call) {
+  const py::array worlds = py::array::ensure(given);
+  if (!worlds)
+    throw py::type_error(std::string(call) + ": worlds must be a bool mask or world ids, got " +
+                         py::str(py::type::of(given)).cast<std::string>());
+  std::vector<int> ids;
+  if (worlds.dtype().kind() == 'b') {
+    if (worlds.ndim() != 1 || worlds.shape(0) != self.world_count)
+      throw py::value_error(
+          std::string(call) + ": the mask has shape " +
+          py::str(py::tuple(py::cast(std::vector<py::ssize_t>(worlds.shape(), worlds.shape() + worlds.ndim()))))
+              .cast<std::string>() +
+          ", the model has " + std::to_string(self.world_count) + " worlds");
+    const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(worlds);
+    for (int w = 0; w < self.world_count; ++w)
+      if (mask.data()[w]) ids.push_back(w);
+  } else if (worlds.dtype().kind() == 'i' || worlds.dtype().kind() == 'u') {
+    if (worlds.ndim() > 1) throw py::value_error(std::string(call) + ": world ids must be a 1-d array");
+    const auto ids_given = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(worlds);
+    for (py::ssize_t i = 0; i < ids_given.size(); ++i) {
+      const std::int64_t w = ids_given.data()[i];
+      if (w < 0 || w >= self.world_count)
+        throw py::index_error(std::string(call) + ": worlds[" + std::to_string(i) + "] = " + std::to_string(w) +
+                              " is not a world of the model (0 .. " + std::to_string(self.world_count - 1) + ")");
+      ids.push_back(static_cast<int>(w));
+    }
+  } else {
+    throw py::type_error(std::string(call) + ": worlds must be a bool mask or world ids, got an array of dtype " +
+                         py::str(worlds.dtype()).cast<std::string>());
+  }
+  return ids;
+}
+
 }  // namespace
 
 void bind_model(py::module_& m) {
@@ -229,36 +264,7 @@ void bind_model(py::module_& m) {
       .def(
           "reset_worlds",
           [](const Model& self, State& state, const py::object& given, const py::object& keyframe, int threads) {
-            const py::array worlds = py::array::ensure(given);
-            if (!worlds)
-              throw py::type_error("reset_worlds: worlds must be a bool mask or world ids, got " +
-                                   py::str(py::type::of(given)).cast<std::string>());
-            std::vector<int> ids;
-            if (worlds.dtype().kind() == 'b') {
-              if (worlds.ndim() != 1 || worlds.shape(0) != self.world_count)
-                throw py::value_error("reset_worlds: the mask has shape " +
-                                      py::str(py::tuple(py::cast(std::vector<py::ssize_t>(
-                                                  worlds.shape(), worlds.shape() + worlds.ndim()))))
-                                          .cast<std::string>() +
-                                      ", the model has " + std::to_string(self.world_count) + " worlds");
-              const auto mask = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(worlds);
-              for (int w = 0; w < self.world_count; ++w)
-                if (mask.data()[w]) ids.push_back(w);
-            } else if (worlds.dtype().kind() == 'i' || worlds.dtype().kind() == 'u') {
-              if (worlds.ndim() > 1) throw py::value_error("reset_worlds: world ids must be a 1-d array");
-              const auto given = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(worlds);
-              for (py::ssize_t i = 0; i < given.size(); ++i) {
-                const std::int64_t w = given.data()[i];
-                if (w < 0 || w >= self.world_count)
-                  throw py::index_error("reset_worlds: worlds[" + std::to_string(i) + "] = " + std::to_string(w) +
-                                        " is not a world of the model (0 .. " + std::to_string(self.world_count - 1) +
-                                        ")");
-                ids.push_back(static_cast<int>(w));
-              }
-            } else {
-              throw py::type_error("reset_worlds: worlds must be a bool mask or world ids, got an array of dtype " +
-                                   py::str(worlds.dtype()).cast<std::string>());
-            }
+            const std::vector<int> ids = world_ids(self, given, "reset_worlds");
             int k = -1;
             if (py::isinstance<py::str>(keyframe))
               k = self.keyframe(keyframe.cast<std::string>());
@@ -271,7 +277,30 @@ void bind_model(py::module_& m) {
           "Worlds of `state` (a bool mask of world_count entries, or world ids) back to joint_q0 at rest, or to the "
           "keyframe (a name or an index): their joint_q, joint_qd, body_f (zero), body_q and body_qd (FK), and "
           "world_reset set, so that the next collide and step use none of their history (warm starts, a kept "
-          "factor). Every other world is left as it was.");
+          "factor). Every other world is left as it was.")
+      .def(
+          "set_parameter",
+          [](Model& self, const std::string& field, const py::object& values, const py::object& worlds) {
+            std::vector<int> ids;
+            if (worlds.is_none())
+              for (int w = 0; w < self.world_count; ++w) ids.push_back(w);
+            else
+              ids = world_ids(self, worlds, ("set_parameter " + field).c_str());
+            const auto given = py::array_t<Scalar, py::array::c_style | py::array::forcecast>::ensure(values);
+            if (!given)
+              throw py::type_error("set_parameter " + field + ": values must be numbers, got " +
+                                   py::str(py::type::of(values)).cast<std::string>());
+            self.set_parameter(field, ids, std::vector<Scalar>(given.data(), given.data() + given.size()));
+          },
+          py::arg("field"), py::arg("values"), py::arg("worlds") = py::none(),
+          "Field `field` (one of Model.parameter_names) of some worlds (a bool mask or world ids; None: every "
+          "world) from `values`: each world's bodies, dofs, shapes (static ones aside) or actuators in the model's "
+          "order, or its own entry for world_gravity, world after world, as world_view(model, model.<field>)[worlds] "
+          "lays them out. Every value is checked before any is written (ValueError naming the world and item); a "
+          "solver reads the new values at its next step.")
+      .def_property_readonly_static(
+          "parameter_names", [](const py::object&) { return Model::parameter_names(); },
+          "The fields set_parameter writes: what may change per world after finalize.");
 #define NOVAPHY_BIND_MODEL_FIELD(T, name, count, width) model NOVAPHY_BIND_FIELD(Model, T, name, width, false);
   NOVAPHY_MODEL_FIELDS(NOVAPHY_BIND_MODEL_FIELD)
 

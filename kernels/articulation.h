@@ -28,6 +28,7 @@ struct ArticulationView {
   const Scalar* body_mass = nullptr;        // [body]
   const Scalar* body_com = nullptr;         // [body][3]
   const Scalar* body_inertia = nullptr;     // [body][9] about the centre of mass, body frame
+  const Scalar* world_gravity = nullptr;    // [3] its world's gravity
 
   int link_count() const { return joint_end - joint_begin; }
   int q_begin() const { return joint_q_start[joint_begin]; }
@@ -48,6 +49,7 @@ struct ArticulationView {
   Transform X_c(int i) const { return Transform::from_array(joint_X_c + 7 * (joint_begin + i)); }
   Vec3 axis(int i) const { return Eigen::Map<const Vec3>(joint_axis + 3 * (joint_begin + i)); }
   int body(int i) const { return joint_child[joint_begin + i]; }
+  Vec3 gravity() const { return Eigen::Map<const Vec3>(world_gravity); }
   Vec3 com(int i) const { return Eigen::Map<const Vec3>(body_com + 3 * body(i)); }
   Mat6 inertia(int i) const {
     const int b = body(i);

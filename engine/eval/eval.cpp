@@ -27,9 +27,9 @@ namespace novaphy {
 namespace {
 
 // RNEA at qdd minus the passive joint forces: tau = H qdd + bias for one articulation
-void articulation_inverse_dynamics(const Model& model, const State& state, const ArticulationView& art,
-                                   ArticulationScratch& s, const Scalar* qdd, Scalar* tau) {
-  rnea(art, qdd, model.gravity, state.body_f.data(), s, tau);
+void articulation_inverse_dynamics(const State& state, const ArticulationView& art, ArticulationScratch& s,
+                                   const Scalar* qdd, Scalar* tau) {
+  rnea(art, qdd, art.gravity(), state.body_f.data(), s, tau);
   VecX passive(art.dof_count());
   passive_force(art, state.joint_q.data() + art.q_begin(), state.joint_qd.data() + art.qd_begin(), passive.data());
   Eigen::Map<VecX>(tau, art.dof_count()) -= passive;
@@ -69,7 +69,8 @@ Scalar eval_energy(const Model& model, const State& state) {
   Scalar e = 0.5 * qd.dot(eval_mass_matrix(model, state) * qd);
   for (int b = 0; b < model.body_count; ++b) {
     const Transform X = Transform::from_array(&state.body_q[7 * b]);
-    e -= model.body_mass[b] * model.gravity.dot(X.p + X.q * Eigen::Map<const Vec3>(&model.body_com[3 * b]));
+    const Vec3 g = Eigen::Map<const Vec3>(&model.world_gravity[3 * model.body_world[b]]);
+    e -= model.body_mass[b] * g.dot(X.p + X.q * Eigen::Map<const Vec3>(&model.body_com[3 * b]));
   }
   return e;
 }
@@ -89,7 +90,7 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
   ArticulationScratch s;
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
-    articulation_inverse_dynamics(model, state, art, s, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
+    articulation_inverse_dynamics(state, art, s, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
   }
   return tau;
 }
@@ -185,7 +186,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
     const auto tau = tau_control.segment(art.qd_begin(), nv);
     if (method == ForwardDynamicsMethod::Crba) {
       const VecX zero = VecX::Zero(nv);
-      articulation_inverse_dynamics(model, state, art, s, zero.data(), qdd_a);
+      articulation_inverse_dynamics(state, art, s, zero.data(), qdd_a);
       Eigen::Map<VecX>(qdd_a, nv) = tau - Eigen::Map<VecX>(qdd_a, nv);
       crba(art, s);
       const int bad = cholesky_factor(s.H);
@@ -196,7 +197,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
       passive_force(art, state.joint_q.data() + art.q_begin(), state.joint_qd.data() + art.qd_begin(),
                     tau_total.data());
       tau_total += tau;
-      const int bad = aba(art, tau_total.data(), model.gravity, state.body_f.data(), s, qdd_a);
+      const int bad = aba(art, tau_total.data(), art.gravity(), state.body_f.data(), s, qdd_a);
       if (bad >= 0) fail_not_positive_definite(model, art, art.qd_start(bad));
     }
   }

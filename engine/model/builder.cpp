@@ -1,6 +1,5 @@
 #include "engine/model/builder.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -10,33 +9,6 @@
 #include "engine/model/error.h"
 
 namespace novaphy {
-
-namespace {
-
-void check_rigid_body(const std::string& item, const RigidBody& body, bool allow_massless) {
-  check_finite(item, "mass", body.mass);
-  check_finite(item, "com", body.com);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      if (!std::isfinite(body.inertia(r, c)))
-        fail(item, ": inertia(", r, ", ", c, ") is not finite: ", body.inertia(r, c));
-  if (allow_massless && body.mass == 0) {
-    if (body.inertia.norm() != 0) fail(item, ": a massless link must have zero inertia");
-    return;
-  }
-  if (!(body.mass > 0)) fail(item, ": mass must be > 0, got ", body.mass);
-  const Scalar scale = body.inertia.cwiseAbs().maxCoeff();
-  if ((body.inertia - body.inertia.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
-    fail(item, ": inertia is not symmetric");
-  const Vec3 eig = Eigen::SelfAdjointEigenSolver<Mat3>(body.inertia, Eigen::EigenvaluesOnly).eigenvalues();
-  if (!(eig[0] > 0)) fail(item, ": inertia is not positive definite (smallest principal moment ", eig[0], ")");
-  // principal moments of a real body: each at most the sum of the other two
-  if (eig[2] > eig[0] + eig[1] + 1e-9 * eig[2])
-    fail(item, ": inertia violates the triangle inequality (principal moments ", eig[0], ", ", eig[1], ", ", eig[2],
-         ")");
-}
-
-}  // namespace
 
 RigidBody RigidBody::from_box(Scalar mass, const Vec3& half_extents) {
   const Vec3 s = 4 * half_extents.cwiseProduct(half_extents);  // full extents squared
@@ -491,7 +463,6 @@ void ModelBuilder::lay_out_bodies(Model& model) const {
     Eigen::Map<Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&model.body_inertia[9 * b]) = body_inertia_[b];
   }
   model.body_name = body_name_;
-  model.world_count = std::max(world_count_, 1);
   model.body_world = body_world_;
   model.shape_world = shape_world_;
 }
@@ -529,7 +500,9 @@ Model ModelBuilder::finalize() const {
   model.gravity = gravity_;
   model.precision = precision_;
   model.timestep = timestep_;
+  model.world_count = std::max(world_count_, 1);
   model.allocate();
+  for (int w = 0; w < model.world_count; ++w) Eigen::Map<Vec3>(&model.world_gravity[3 * w]) = gravity_;
 
   lay_out_joints(joints, model);
   lay_out_bodies(model);

@@ -2,7 +2,9 @@
 // item ("joint 3 ('knee')") and the argument. Internal to the builder's files (builder*.cpp).
 #pragma once
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "engine/model/builder.h"
@@ -49,6 +51,51 @@ inline void check_positive(const std::string& item, const char* what, Scalar x) 
 inline void check_range(const std::string& item, const char* what, Scalar lower, Scalar upper) {
   if (std::isnan(lower) || std::isnan(upper) || lower > upper)
     fail(item, ": ", what, " must satisfy lower <= upper, got [", lower, ", ", upper, "]");
+}
+
+// what is wrong with a body's mass, centre of mass and inertia ("" where nothing is): each finite; mass > 0 (or 0
+// with zero inertia where allow_massless) and an inertia a real body has (symmetric, positive definite, the triangle
+// inequality)
+inline std::string rigid_body_problem(const RigidBody& body, bool allow_massless) {
+  auto problem = [](const auto&... parts) {
+    std::ostringstream os;
+    os.precision(17);
+    (os << ... << parts);
+    return os.str();
+  };
+  if (!std::isfinite(body.mass)) return problem("mass is not finite: ", body.mass);
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(body.com[k])) return problem("com[", k, "] is not finite: ", body.com[k]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(body.inertia(r, c)))
+        return problem("inertia(", r, ", ", c, ") is not finite: ", body.inertia(r, c));
+  if (allow_massless && body.mass == 0) return body.inertia.norm() != 0 ? "a massless link must have zero inertia" : "";
+  if (!(body.mass > 0)) return problem("mass must be > 0, got ", body.mass);
+  const Scalar scale = body.inertia.cwiseAbs().maxCoeff();
+  if ((body.inertia - body.inertia.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return "inertia is not symmetric";
+  // the common case without eigenvalues: I positive definite and C = tr(I) / 2 - I (the mass's second moments,
+  // whose smallest eigenvalue c is half the triangle inequality's slack: I_a + I_b - I_c = 2 c) above -1e-9 / 2
+  // times I's largest diagonal entry (at most its largest principal moment: never looser than the test below);
+  // else the principal moments decide and name the problem
+  const Mat3 C =
+      Mat3::Identity() * (body.inertia.trace() / 2 + 0.5e-9 * body.inertia.diagonal().maxCoeff()) - body.inertia;
+  auto positive_definite = [](const Mat3& A) {  // (Sylvester: the leading minors)
+    return A(0, 0) > 0 && A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) > 0 && A.determinant() > 0;
+  };
+  if (positive_definite(body.inertia) && positive_definite(C)) return "";
+  const Vec3 eig = Eigen::SelfAdjointEigenSolver<Mat3>(body.inertia, Eigen::EigenvaluesOnly).eigenvalues();
+  if (!(eig[0] > 0)) return problem("inertia is not positive definite (smallest principal moment ", eig[0], ")");
+  // principal moments of a real body: each at most the sum of the other two
+  if (eig[2] > eig[0] + eig[1] + 1e-9 * eig[2])
+    return problem("inertia violates the triangle inequality (principal moments ", eig[0], ", ", eig[1], ", ", eig[2],
+                   ")");
+  return "";
+}
+
+inline void check_rigid_body(const std::string& item, const RigidBody& body, bool allow_massless) {
+  const std::string problem = rigid_body_problem(body, allow_massless);
+  if (!problem.empty()) fail(item, ": ", problem);
 }
 
 inline void check_actuator(const std::string& item, const ActuatorOptions& options) {

@@ -73,6 +73,7 @@ void Control::assign(const Control& other) {
 void Model::allocate() {
 #define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
   NOVAPHY_MODEL_FIELDS(NOVAPHY_ALLOCATE)
+  world_parameter_write.assign(world_count, 0);
 }
 
 namespace {
@@ -134,6 +135,7 @@ ArticulationView Model::articulation(int a) const {
   art.body_mass = body_mass.data();
   art.body_com = body_com.data();
   art.body_inertia = body_inertia.data();
+  art.world_gravity = world_gravity.data() + 3 * articulation_world(a);
   return art;
 }
 

@@ -57,7 +57,10 @@ const char* shape_type_name(ShapeType type);
 // mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the vertices' mean), its faces
 // [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
 // corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the mesh,
-// counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types.
+// counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types. world_gravity: each
+// world's gravity (the builder's gravity in every world at finalize).
+// The parameters learning randomises may change per world after finalize, through Model::set_parameter only
+// (engine/model/parameters.cpp lists them); every other field is the model's structure and stays as finalized.
 #define NOVAPHY_MODEL_FIELDS(X)                            \
   X(Scalar, body_mass, body_count, 1)                      \
   X(Scalar, body_com, body_count, 3)                       \
@@ -132,6 +135,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, actuator_ctrl_upper, actuator_count, 1)        \
   X(Scalar, actuator_force_lower, actuator_count, 1)       \
   X(Scalar, actuator_force_upper, actuator_count, 1)       \
+  X(Scalar, world_gravity, world_count, 3)                 \
   X(Scalar, keyframe_q, keyframe_count, joint_coord_count) \
   X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)  \
   X(Scalar, keyframe_ctrl, keyframe_count, actuator_count)
@@ -196,7 +200,7 @@ struct Control : ModelCounts {
 };
 
 struct Model : ModelCounts {
-  Vec3 gravity = Vec3(0, -9.81, 0);
+  Vec3 gravity = Vec3(0, -9.81, 0);  // the builder's: every world's world_gravity at finalize
   Precision precision = Precision::Float64;
   CollisionFilter collision_filter = CollisionFilter::GroupAndMask;  // exclude_shape: pairs that never collide
   FrictionRule friction_rule = FrictionRule::GeometricMean;
@@ -237,6 +241,26 @@ struct Model : ModelCounts {
   Control control(const std::string& keyframe) const;
   // the index of the keyframe of that name; throws Error listing the model's keyframes when there is none
   int keyframe(const std::string& name) const;
+
+  // per-world parameters at run time (engine/model/parameters.cpp): field `field`'s entries of worlds `worlds`
+  // (each world's bodies, dofs, shapes or actuators in the model's order, or the world's own entry; `width`
+  // numbers each) from `values`, world after world, checked first (finite; a moving body's mass positive and its
+  // inertia a body's; gains, damping, armature, friction loss, stiffness and friction coefficients not negative;
+  // lower ranges not above upper ones), then written, and the worlds marked changed. Throws Error naming the
+  // field, world and item, writing nothing, for a field that is not a parameter, a world out of range, a wrong
+  // count of values or a bad value. A solver reads the new values at its next step
+  void set_parameter(const std::string& field, const std::vector<int>& worlds, const std::vector<Scalar>& values);
+  // the fields set_parameter writes, in its order
+  static const std::vector<std::string>& parameter_names();
+  // the entries of field `field` that world w's values go to, in order (its bodies, dofs, shapes or actuators, or
+  // w itself); throws Error for a field that is not a parameter or a world out of range
+  std::vector<int> parameter_entries(const std::string& field, int w) const;
+  // those fields copied from `other`, a model of the same bodies, dofs, shapes, actuators and worlds
+  void copy_parameters(const Model& other);
+  // the number of set_parameter calls so far, and per world the count when one last wrote into it (0: never): a
+  // reader that has seen the values up to count n rereads the worlds whose entry is above n
+  std::uint64_t parameter_writes = 0;
+  std::vector<std::uint64_t> world_parameter_write;
 
   // throws Error naming the array unless `state` / `control` was made for this model
   void check(const State& state) const;

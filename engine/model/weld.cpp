@@ -36,6 +36,26 @@ MassProperties combine(const MassProperties& a, const MassProperties& b) {
 
 }  // namespace
 
+void weld_masses(const Model& model, WeldedModel& w, const std::vector<std::uint8_t>& worlds) {
+  auto merge = [&](int b) { return worlds.empty() || worlds[model.body_world[b]] != 0; };
+  std::vector<MassProperties> merged(model.body_count);
+  for (int b = 0; b < model.body_count; ++b)
+    if (merge(b)) merged[b] = body_in_link(model, b, Transform::identity());
+  for (const int child : w.welded_bodies) {  // (in the order of their joints)
+    if (!merge(child)) continue;
+    const int link = w.link_body[child];
+    merged[link] = combine(merged[link], body_in_link(model, child, w.offset[child]));
+    merged[child] = MassProperties{};
+  }
+  Model& m = w.model;
+  for (int b = 0; b < model.body_count; ++b) {
+    if (!merge(b)) continue;
+    m.body_mass[b] = merged[b].mass;
+    Eigen::Map<Vec3>(&m.body_com[3 * b]) = merged[b].com;
+    Eigen::Map<Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&m.body_inertia[9 * b]) = merged[b].inertia;
+  }
+}
+
 WeldedModel weld_fixed_joints(const Model& model, bool weld) {
   WeldedModel w;
   w.link_body.resize(model.body_count);
@@ -48,8 +68,6 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
   w.model = model;
   Model& m = w.model;
 
-  std::vector<MassProperties> merged(model.body_count);
-  for (int b = 0; b < model.body_count; ++b) merged[b] = body_in_link(model, b, Transform::identity());
   std::vector<int> kept, new_index(model.joint_count, -1);
   std::vector<Transform> X_p(model.joint_count);
   for (int j = 0; j < model.joint_count; ++j) {
@@ -60,8 +78,6 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
       const int link = w.link_body[parent];
       w.link_body[child] = link;
       w.offset[child] = X_p[j] * Transform::from_array(&model.joint_X_c[7 * j]).inverse();
-      merged[link] = combine(merged[link], body_in_link(model, child, w.offset[child]));
-      merged[child] = MassProperties{};
       w.welded_bodies.push_back(child);
       continue;
     }
@@ -69,11 +85,7 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
     kept.push_back(j);
   }
 
-  for (int b = 0; b < model.body_count; ++b) {
-    m.body_mass[b] = merged[b].mass;
-    Eigen::Map<Vec3>(&m.body_com[3 * b]) = merged[b].com;
-    Eigen::Map<Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&m.body_inertia[9 * b]) = merged[b].inertia;
-  }
+  weld_masses(model, w, {});
   std::vector<int> body_joint(model.body_count, -1);
   for (const int j : kept) body_joint[model.joint_child[j]] = new_index[j];
   m.joint_count = static_cast<int>(kept.size());

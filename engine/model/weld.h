@@ -4,6 +4,7 @@
 // their indices (a Fixed joint has none); bodies keep theirs.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "engine/model/model.h"
@@ -21,5 +22,9 @@ struct WeldedModel {
 // Fixed joints whose parent is a body are welded (with weld false: none, the model as it is); a
 // Fixed joint to the world stays (its body is static)
 WeldedModel weld_fixed_joints(const Model& model, bool weld = true);
+
+// the links' merged mass, centre of mass and inertia in w.model from model's bodies, for the worlds w with
+// worlds[w] != 0 (empty: every world); w made by weld_fixed_joints(model) with something welded
+void weld_masses(const Model& model, WeldedModel& w, const std::vector<std::uint8_t>& worlds);
 
 }  // namespace novaphy

@@ -56,7 +56,10 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
 // ---- made once: the routes and their data over what is built once for the model (SolverModel)
 
 SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
-    : settings(settings_), model_(model), built_(model, settings_.weld_fixed_joints) {
+    : settings(settings_),
+      model_(model),
+      built_(model, settings_.weld_fixed_joints),
+      parameters_read_(model.parameter_writes) {
   settings.check();
   max_threads_ = std::max(1, omp_get_max_threads());
   if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
@@ -130,6 +133,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   // contact to its unit or the islands; then the stages in physics order (route.h: kinematics and forces, mass and
   // factor; rows and solve; the islands; integrate; guard; store)
   check_step(in, out, control, contacts, dt);
+  read_parameters();
   plan();
   StepContext step = begin_step(in, out, control, contacts, dt);
   actuate(control, step);
@@ -169,6 +173,24 @@ void SolverFeatherstone::step_stage(Stage s, const StepContext& step) {
     solve_islands(step);
   else
     guard(step);
+}
+
+void SolverFeatherstone::read_parameters() {
+  if (model_.parameter_writes == parameters_read_) return;
+  std::vector<std::uint8_t> worlds(model_.world_count), articulations(model_.articulation_count);
+  for (int w = 0; w < model_.world_count; ++w) worlds[w] = model_.world_parameter_write[w] > parameters_read_;
+  for (int a = 0; a < model_.articulation_count; ++a) articulations[a] = worlds[model_.articulation_world(a)];
+  parameters_read_ = model_.parameter_writes;
+  built_.read_parameters(model_, worlds);
+  if (batches_)
+    batches_->read_parameters(built_.welded.welded_bodies.empty() ? model_ : built_.welded.model, model_.body_com,
+                              articulations);
+  // the contact materials' pairs made again at the next dt (ShapeContacts: one material per shape now)
+  shape_contacts_.materials = built_.contact_materials.data();
+  shape_contacts_.material_count = static_cast<int>(built_.contact_materials.size());
+  shape_contacts_.pairs = nullptr;
+  shape_contacts_.dt = 0;
+  factor_kept_ = false;
 }
 
 void SolverFeatherstone::plan() {

@@ -120,6 +120,9 @@ class SolverFeatherstone {
   // the deepest contact of articulation a among the step's
   Scalar deepest_contact(int a, const Contacts& contacts) const;
   // the routes: each articulation's, made again when a setting that decides them changed
+  // what depends on the model's per-world parameters read again for the worlds Model::set_parameter wrote since
+  // the last step (SolverModel, the blocks' lanes, the contact pairs), and the factor made again
+  void read_parameters();
   void plan();
   // the worlds `in` marks as reset (State::world_reset) stepped with no history: their rows' warm starts cleared,
   // the mass matrix factored afresh (for every world: the factor's schedule restarts)
@@ -166,7 +169,7 @@ class SolverFeatherstone {
   int thread_count() const;
 
   const Model& model_;
-  SolverModel built_;  // what is built once for the model (read-only once made)
+  SolverModel built_;  // what is built once for the model (read again only where parameters change)
   // the routes, their scratch and where their limit impulses sit in data_.limit_impulse ([2 m + side] for the
   // limited joint m)
   std::unique_ptr<ArticulationBatches> batches_;
@@ -190,7 +193,8 @@ class SolverFeatherstone {
   int trouble_ = 0;  // 1 where a unit's world failed its factor or diverged this step (its units' passes mark it)
   // the factor's schedule (update_mass_matrix_interval)
   int steps_since_factor_ = 0;
-  bool factor_kept_ = false;  // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
+  std::uint64_t parameters_read_ = 0;  // the model's parameter_writes when the solver last read its parameters
+  bool factor_kept_ = false;           // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
   Scalar factored_dt_ = 0;
   std::vector<Scalar> reset_q_, reset_qd_;  // the reset state's joint_q and joint_qd (set_reset_state)
   std::atomic<bool> busy_{false};           // a step is running (ExclusiveCall)

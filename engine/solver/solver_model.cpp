@@ -42,6 +42,29 @@ SolverModel::SolverModel(const Model& model, bool weld) : welded(weld_fixed_join
   weigh_energy(model);
 }
 
+void SolverModel::read_parameters(const Model& model, const std::vector<std::uint8_t>& worlds) {
+  if (!welded.welded_bodies.empty()) {
+    welded.model.copy_parameters(model);
+    weld_masses(model, welded, worlds);
+  }
+  const bool shared = actuator_params.size() != dof_actuators.size();
+  if (shared) actuator_params.resize(dof_actuators.size());
+  for (int d = 0; d < model.joint_dof_count; ++d) {
+    const bool changed = worlds[model.articulation_world(index.dof_articulation[d])] != 0;
+    for (int k = dof_actuator_start[d]; k < dof_actuator_start[d + 1]; ++k) {
+      dof_actuators[k].params = k;
+      if (shared || changed) actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
+    }
+  }
+  const bool shared_materials = contact_materials.size() != shape_material.size();
+  if (shared_materials) contact_materials.resize(shape_material.size());
+  for (int s = 0; s < model.shape_count; ++s) {
+    shape_material[s] = s;
+    const int w = model.shape_world[s];
+    if (shared_materials || (w >= 0 && worlds[w] != 0)) contact_materials[s] = contact_material(model, s);
+  }
+}
+
 void SolverModel::index_articulations(const Model& model) {
   const Model& kernel_model = welded.welded_bodies.empty() ? model : welded.model;
   for (int a = 0; a < model.articulation_count; ++a) art.push_back(kernel_model.articulation(a));

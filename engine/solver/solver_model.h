@@ -19,6 +19,10 @@ namespace novaphy {
 struct SolverModel {
   // `weld`: bodies held by Fixed joints merged into their parent's link (settings.weld_fixed_joints)
   SolverModel(const Model& model, bool weld);
+  // what depends on the parameters Model::set_parameter writes, read again for the worlds w with worlds[w] != 0:
+  // the welded links' masses, the actuators' and shapes' numbers (from the first change on, each actuator and
+  // shape has its own entry in actuator_params and contact_materials: randomised worlds share none)
+  void read_parameters(const Model& model, const std::vector<std::uint8_t>& worlds);
 
   WeldedModel welded;  // what the kernels see: art views its arrays
   std::vector<ArticulationView> art;

@@ -157,6 +157,7 @@ void batch_set_params(const BatchTopology<T>& topo, const ArticulationView& art,
     const int c = topo.coord_of_dof[k];  // spring rest positions of the one-coordinate joints
     x[at.q_ref + k][lane] = static_cast<T>(c < 0 ? 0 : art.joint_q_ref[art.q_begin() + c]);
   }
+  for (int m = 0; m < 3; ++m) x[at.gravity + m][lane] = static_cast<T>(art.world_gravity[m]);
 }
 
 template <typename T>

@@ -67,7 +67,8 @@ struct BatchTopology {
 // H's packed lower triangle: entry (i, j), j <= i
 inline int packed_index(int i, int j) { return i * (i + 1) / 2 + j; }
 
-// one block's per-world parameters (read from the model when the solver is made) as a field table,
+// one block's per-world parameters (read from the model when the solver is made, and again for the worlds whose
+// parameters change: Model::set_parameter) as a field table,
 // X(name, count, doc), `count` over the topology's n links and nv dofs: the fields lie in one buffer of
 // batch_param_count lanes in the table's order
 #define NOVAPHY_BATCH_PARAMS(X)                                                         \
@@ -77,7 +78,8 @@ inline int packed_index(int i, int j) { return i * (i + 1) / 2 + j; }
   X(armature, nv, "[dof]")                                                              \
   X(damping, nv, "[dof]")                                                               \
   X(stiffness, nv, "[dof]")                                                             \
-  X(q_ref, nv, "[dof] spring rest position (Revolute, Prismatic)")
+  X(q_ref, nv, "[dof] spring rest position (Revolute, Prismatic)")                      \
+  X(gravity, 3, "[3] the world's gravity")
 
 template <typename T>
 struct BatchParams {

@@ -32,6 +32,7 @@ def _rows_per_world(model, layout, rows):
         "joint_dof_count": layout.joint_dof_count,
         "articulation_count": layout.articulation_count,
         "actuator_count": layout.actuator_count,
+        "world_count": 1,
     }
     if model.joint_count % model.world_count == 0:
         per_world["joint_count"] = model.joint_count // model.world_count

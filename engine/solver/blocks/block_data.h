@@ -195,9 +195,8 @@ inline void weld_pose(const typename BatchGroup<T>::Weld& weld, const BatchWork<
 // actuators. With qdd, M^-1 (tau - bias ...) itself is written
 // there instead of any velocity (forward dynamics)
 template <typename T>
-void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const Vec3& gravity,
-                    const StepContext& step, const UnitInputs& inputs, BatchWork<T>& w, bool carry_on,
-                    Scalar* qdd = nullptr);
+void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const StepContext& step,
+                    const UnitInputs& inputs, BatchWork<T>& w, bool carry_on, Scalar* qdd = nullptr);
 
 // Rows: the block's joint-limit rows and its worlds' listed contacts, swept by batch_pgs_solve, in the
 // lanes of worlds whose rows are not the islands'; w.qd updated, impulses kept. `carried`: w.q and w.qd

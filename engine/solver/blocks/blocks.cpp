@@ -47,7 +47,7 @@ class Batches final : public ArticulationBatches {
   Batches(const Model& model, const std::vector<ArticulationView>& art, const std::vector<std::uint8_t>& batched,
           const std::vector<std::vector<WeldedBody>>& welded, const std::vector<Scalar>& com,
           const std::vector<int>& limit_slot)
-      : art_(art), gravity_(model.gravity), slot_(art.size()) {
+      : art_(art), slot_(art.size()) {
     group_articulations(batched, welded);
     for (int g = 0; g < static_cast<int>(groups_.size()); ++g) {
       lay_out(groups_[g], g, welded);
@@ -57,6 +57,30 @@ class Batches final : public ArticulationBatches {
     }
     size_scratch();
     enable(std::numeric_limits<int>::max());
+  }
+
+  void read_parameters(const Model& model, const std::vector<Scalar>& com,
+                       const std::vector<std::uint8_t>& changed) override {
+    bool more_rows = false;
+    for (BatchGroup<T>& G : groups_) {
+      bool any = false;
+      for (const int a : G.arts) any |= changed[a] != 0;
+      if (!any) continue;
+      if (G.shared_params) {  // one copy for every block no more
+        G.params.resize(static_cast<size_t>(G.blocks) * G.param_size);
+        for (int b = 1; b < G.blocks; ++b)
+          std::copy_n(G.params.begin(), G.param_size, G.params.begin() + static_cast<size_t>(b) * G.param_size);
+        G.shared_params = false;
+      }
+      for (int b = 0; b < G.blocks; ++b)
+        for (int l = 0; l < W; ++l)
+          if (changed[G.arts[b * W + l]]) set_lane_params(G, b, l, com);
+      // dry friction on a dof that had none in any world: the group's friction rows laid out again
+      const size_t nf = G.frictional.size();
+      lay_out_friction(G, model);
+      more_rows |= G.frictional.size() > nf;
+    }
+    if (more_rows) size_scratch();
   }
 
   void enable(int max_dofs) override {
@@ -103,7 +127,7 @@ class Batches final : public ArticulationBatches {
   void dynamics(const UnitPass& pass, const StepContext& step, const UnitInputs& inputs) override {
     const auto [g, b] = units_[pass.unit];
     ThreadScratch<T>& scratch = scratch_[omp_get_thread_num()];
-    block_dynamics(groups_[g], b, kinematics(pass, scratch, step), gravity_, step, inputs, scratch.work[g],
+    block_dynamics(groups_[g], b, kinematics(pass, scratch, step), step, inputs, scratch.work[g],
                    pass.carry_on(Stage::Dynamics));
   }
   void rows(const UnitPass& pass, const StepContext& step) override {
@@ -156,7 +180,7 @@ class Batches final : public ArticulationBatches {
     for (const auto& [g, b] : units_) {
       BatchGroup<T>& G = groups_[g];
       const BlockKinematics<T> kin{G.block_H(b), G.block_S(b), &G.origin[3 * b]};
-      block_dynamics(G, b, kin, gravity_, step, inputs, scratch.work[g], false, qdd);
+      block_dynamics(G, b, kin, step, inputs, scratch.work[g], false, qdd);
     }
     end_step(step);
   }
@@ -288,6 +312,19 @@ class Batches final : public ArticulationBatches {
     }
   }
 
+  // block b's lane l's parameters from its articulation's model arrays (and with welded bodies every body's own
+  // centre of mass from com)
+  void set_lane_params(BatchGroup<T>& G, int b, int l, const std::vector<Scalar>& com) {
+    const int nb = G.bodies();
+    V* x = G.params.data() + static_cast<size_t>(b) * G.param_size;
+    batch_set_params(G.topo, art_[G.arts[b * W + l]], l, x);
+    if (G.welds.empty()) return;
+    V* own_com = x + batch_param_count(G.topo);
+    const int* body = &G.body[static_cast<size_t>(b * W + l) * nb];
+    for (int k = 0; k < nb; ++k)
+      for (int m = 0; m < 3; ++m) own_com[3 * k + m][l] = static_cast<T>(com[3 * body[k] + m]);
+  }
+
   // every block's parameters; worlds that do not differ (no domain randomisation) share one copy
   void gather_params(BatchGroup<T>& G, const std::vector<Scalar>& com) {
     const int nb = G.bodies();
@@ -296,17 +333,8 @@ class Batches final : public ArticulationBatches {
     G.H.resize(static_cast<size_t>(G.blocks) * G.topo.packed_size());
     G.S.resize(static_cast<size_t>(G.blocks) * 6 * G.topo.dof_count);
     G.origin.resize(static_cast<size_t>(G.blocks) * 3);
-    for (int b = 0; b < G.blocks; ++b) {
-      V* x = G.params.data() + static_cast<size_t>(b) * G.param_size;
-      V* own_com = x + batch_param_count(G.topo);  // with welded bodies: every body's own centre of mass
-      for (int l = 0; l < W; ++l) {
-        batch_set_params(G.topo, art_[G.arts[b * W + l]], l, x);
-        const int* body = &G.body[static_cast<size_t>(b * W + l) * nb];
-        if (!G.welds.empty())
-          for (int k = 0; k < nb; ++k)
-            for (int m = 0; m < 3; ++m) own_com[3 * k + m][l] = static_cast<T>(com[3 * body[k] + m]);
-      }
-    }
+    for (int b = 0; b < G.blocks; ++b)
+      for (int l = 0; l < W; ++l) set_lane_params(G, b, l, com);
     bool same = true;
     for (int b = 1; b < G.blocks && same; ++b)
       same = std::memcmp(&G.params[0], &G.params[static_cast<size_t>(b) * G.param_size], sizeof(V) * G.param_size) == 0;
@@ -349,6 +377,7 @@ class Batches final : public ArticulationBatches {
 
   // the group's dofs with dry friction and its blocks' frictionloss
   void lay_out_friction(BatchGroup<T>& G, const Model& model) {
+    G.frictional.clear();
     for (int k = 0; k < G.topo.dof_count; ++k) {
       bool any = false;
       for (const int a : G.arts) any |= model.joint_frictionloss[art_[a].qd_begin() + k] > 0;
@@ -388,7 +417,6 @@ class Batches final : public ArticulationBatches {
   }
 
   const std::vector<ArticulationView>& art_;
-  Vec3 gravity_;
   std::uint64_t step_ = 0;  // steps so far: a factor copied out before this one is stale
   std::vector<BatchGroup<T>> groups_;
   std::vector<std::pair<int, int>> units_;  // (group, block) of the groups that are on

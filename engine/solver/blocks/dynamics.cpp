@@ -95,8 +95,8 @@ Lanes<T> scale_in_double(const Lanes<T>& x, Scalar s) {
 }  // namespace
 
 template <typename T>
-void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const Vec3& gravity,
-                    const StepContext& step, const UnitInputs& inputs, BatchWork<T>& w, bool carry_on, Scalar* qdd) {
+void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, const StepContext& step,
+                    const UnitInputs& inputs, BatchWork<T>& w, bool carry_on, Scalar* qdd) {
   using V = Lanes<T>;
   constexpr int W = kLanes<T>;
   const BatchTopology<T>& topo = G.topo;
@@ -110,9 +110,7 @@ void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, cons
   batch_velocity(topo, kin.S, w.qd.data(), w);
   batch_link_inertia(topo, P, kin.o, w);
   const bool pushed = inputs.wrenches && gather_wrenches(G, b, step.in->body_f.data(), kin.o, w);
-  V g[3];
-  for (int k = 0; k < 3; ++k) g[k] = splat<V>(static_cast<T>(gravity[k]));
-  batch_bias(topo, kin.S, g, pushed ? w.f_ext.data() : nullptr, w, w.tau.data());
+  batch_bias(topo, kin.S, P.gravity, pushed ? w.f_ext.data() : nullptr, w, w.tau.data());
   add_joint_forces(G, b, P, step, inputs, w);
 
   V* x = w.x.data();
@@ -143,9 +141,9 @@ void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, cons
   if (!carry_on) scatter_lanes<T>(qd_off, w.qd.data(), nv, real_lanes(G, b), step.qd);
 }
 
-template void block_dynamics(BatchGroup<float>&, int, const BlockKinematics<float>&, const Vec3&, const StepContext&,
+template void block_dynamics(BatchGroup<float>&, int, const BlockKinematics<float>&, const StepContext&,
                              const UnitInputs&, BatchWork<float>&, bool, Scalar*);
-template void block_dynamics(BatchGroup<double>&, int, const BlockKinematics<double>&, const Vec3&, const StepContext&,
+template void block_dynamics(BatchGroup<double>&, int, const BlockKinematics<double>&, const StepContext&,
                              const UnitInputs&, BatchWork<double>&, bool, Scalar*);
 
 }  // namespace novaphy

@@ -53,7 +53,8 @@ struct ContactRows {
 
   // contact c's input: its depth, its pair's friction and restitution (ShapeContacts), its softness, the impulses
   // it kept. Inlined into the row builders' loops over contacts: called, it took 3 % of a step (house.md)
-  [[gnu::always_inline]] static ContactInput<Scalar> read(const Contacts& contacts, int c, const ShapeContacts& shapes, Scalar impratio) {
+  [[gnu::always_inline]] static ContactInput<Scalar> read(const Contacts& contacts, int c, const ShapeContacts& shapes,
+                                                          Scalar impratio) {
     ContactInput<Scalar> in;
     ContactPair made;  // (a pair past the table: ShapeContacts::pair)
     const int sa = contacts.contact_shape_a[c], sb = contacts.contact_shape_b[c];

@@ -13,6 +13,8 @@ namespace novaphy {
 namespace {
 
 using solver_test::Scene;
+using solver_test::world_rows;
+using solver_test::world_state;
 
 constexpr int kWorlds = 5;
 
@@ -28,41 +30,6 @@ ModelBuilder worlds_of(const std::string& file, Precision precision, int settle)
   worlds.set_precision(precision);
   worlds.replicate(robot, kWorlds);
   return worlds;
-}
-
-// the entries of `field` (per-world rows of `width`) that belong to world w: bodies' by body_world, coordinates'
-// and dofs' by their articulation's first body
-template <typename T>
-std::vector<T> world_rows(const Model& model, const std::vector<T>& field, int count, int w) {
-  const int width = static_cast<int>(field.size()) / count;
-  std::vector<T> out;
-  for (int a = 0; a < model.articulation_count; ++a) {
-    const ArticulationView art = model.articulation(a);
-    if (model.body_world[art.body(0)] != w) continue;
-    int begin = 0, n = 0;
-    if (count == model.body_count) {
-      for (int l = 0; l < art.link_count(); ++l)
-        out.insert(out.end(), field.begin() + width * art.body(l), field.begin() + width * (art.body(l) + 1));
-      continue;
-    }
-    if (count == model.joint_coord_count) begin = art.q_begin(), n = art.coord_count();
-    if (count == model.joint_dof_count) begin = art.qd_begin(), n = art.dof_count();
-    out.insert(out.end(), field.begin() + begin, field.begin() + begin + n);
-  }
-  return out;
-}
-
-// the state's per-world arrays of world w, end to end
-std::vector<Scalar> world_state(const Model& model, const State& s, int w) {
-  std::vector<Scalar> out;
-  for (const auto& [field, count] :
-       {std::pair{&s.joint_q, model.joint_coord_count}, std::pair{&s.joint_qd, model.joint_dof_count},
-        std::pair{&s.body_q, model.body_count}, std::pair{&s.body_qd, model.body_count},
-        std::pair{&s.body_f, model.body_count}}) {
-    const std::vector<Scalar> rows = world_rows(model, *field, count, w);
-    out.insert(out.end(), rows.begin(), rows.end());
-  }
-  return out;
 }
 
 // random commands for every actuator, the same sequence for every scene given the same seed

@@ -1,0 +1,245 @@
+// Per-world parameters at run time: the Model fields learning randomises, what each one counts per world, the
+// checks a value passes, and Model::set_parameter, which writes them for some worlds and marks those worlds
+// changed (a solver rereads what depends on them at its next step: SolverFeatherstone::read_parameters).
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "engine/model/builder_checks.h"
+#include "engine/model/error.h"
+#include "engine/model/model.h"
+
+namespace novaphy {
+
+namespace {
+
+// what a parameter's entries run over: a world's bodies, dofs, shapes or actuators, or the world itself
+enum class Over { Body, Dof, Shape, Actuator, World };
+
+// the check each value passes: Finite; NotNegative; Body (the body's mass, centre of mass and inertia together
+// a body's, check_rigid_body); Lower / Upper (the range with the partner field's entry: lower <= upper, no NaN);
+// Integer (a whole number, for an int field)
+enum class Check { Finite, NotNegative, Body, Lower, Upper, Integer };
+
+struct Parameter {
+  const char* name;
+  Over over;
+  int width;
+  Check check;
+  std::vector<Scalar> Model::*real;     // the field (nullptr for an int field)
+  std::vector<int> Model::*whole;       // the int field
+  std::vector<Scalar> Model::*partner;  // Lower / Upper: the other end of the range
+};
+
+#define NOVAPHY_REAL(name, over, width, check) \
+  { #name, Over::over, width, Check::check, &Model::name, nullptr, nullptr }
+#define NOVAPHY_RANGE(name, over, check, partner) \
+  { #name, Over::over, 1, Check::check, &Model::name, nullptr, &Model::partner }
+const Parameter kParameters[] = {
+    NOVAPHY_REAL(body_mass, Body, 1, Body),
+    NOVAPHY_REAL(body_com, Body, 3, Finite),
+    NOVAPHY_REAL(body_inertia, Body, 9, Body),
+    NOVAPHY_REAL(joint_armature, Dof, 1, NotNegative),
+    NOVAPHY_REAL(joint_damping, Dof, 1, NotNegative),
+    NOVAPHY_REAL(joint_frictionloss, Dof, 1, NotNegative),
+    NOVAPHY_REAL(joint_stiffness, Dof, 1, NotNegative),
+    NOVAPHY_REAL(shape_mu, Shape, 1, NotNegative),
+    NOVAPHY_REAL(shape_mu_torsion, Shape, 1, NotNegative),
+    NOVAPHY_REAL(shape_mu_rolling, Shape, 1, NotNegative),
+    {"shape_priority", Over::Shape, 1, Check::Integer, nullptr, &Model::shape_priority, nullptr},
+    NOVAPHY_REAL(actuator_gain, Actuator, 1, NotNegative),
+    NOVAPHY_REAL(actuator_bias, Actuator, 3, Finite),
+    NOVAPHY_RANGE(actuator_ctrl_lower, Actuator, Lower, actuator_ctrl_upper),
+    NOVAPHY_RANGE(actuator_ctrl_upper, Actuator, Upper, actuator_ctrl_lower),
+    NOVAPHY_RANGE(actuator_force_lower, Actuator, Lower, actuator_force_upper),
+    NOVAPHY_RANGE(actuator_force_upper, Actuator, Upper, actuator_force_lower),
+    NOVAPHY_REAL(world_gravity, World, 3, Finite),
+};
+#undef NOVAPHY_REAL
+#undef NOVAPHY_RANGE
+
+const char* over_name(Over over) {
+  switch (over) {
+    case Over::Body: return "bodies";
+    case Over::Dof: return "dofs";
+    case Over::Shape: return "shapes";
+    case Over::Actuator: return "actuators";
+    case Over::World: return "entries";
+  }
+  return "";
+}
+
+// the world of each entry a parameter runs over (-1: none, as a static shape's)
+std::vector<int> entry_worlds(const Model& model, Over over) {
+  auto joint_world = [&](int j) { return model.body_world[model.joint_child[j]]; };
+  std::vector<int> world;
+  switch (over) {
+    case Over::Body: return model.body_world;
+    case Over::Shape: return model.shape_world;
+    case Over::World:
+      world.resize(model.world_count);
+      for (int w = 0; w < model.world_count; ++w) world[w] = w;
+      return world;
+    case Over::Dof:
+      world.resize(model.joint_dof_count);
+      for (int j = 0; j < model.joint_count; ++j)
+        std::fill(world.begin() + model.joint_qd_start[j], world.begin() + model.joint_qd_start[j + 1], joint_world(j));
+      return world;
+    case Over::Actuator:
+      world.resize(model.actuator_count);
+      for (int u = 0; u < model.actuator_count; ++u) {
+        const int j = model.actuator_joint[u], t = model.actuator_tendon[u];
+        if (j >= 0) {
+          world[u] = joint_world(j);
+        } else {
+          // a tendon's world: its first joint's
+          const int dof = model.tendon_dof[model.tendon_start[t]];
+          int joint = 0;
+          while (model.joint_qd_start[joint + 1] <= dof) ++joint;
+          world[u] = joint_world(joint);
+        }
+      }
+      return world;
+  }
+  return world;
+}
+
+// the parameter of that name; throws Error naming the parameters for any other
+const Parameter& parameter(const std::string& field) {
+  for (const Parameter& p : kParameters)
+    if (field == p.name) return p;
+  std::string names;
+  for (const Parameter& p : kParameters) names += (names.empty() ? "" : ", ") + std::string(p.name);
+  fail("set_parameter: '", field, "' is not a per-world parameter (the model's structure stays as finalized); ",
+       "the parameters are: ", names);
+}
+
+// the entries of each world in the model's order: world w's are entries[start[w] .. start[w + 1])
+struct WorldEntries {
+  std::vector<int> start, entries;
+  WorldEntries(const Model& model, Over over) {
+    const std::vector<int> world_of = entry_worlds(model, over);
+    start.assign(model.world_count + 1, 0);
+    entries.resize(world_of.size());
+    for (const int w : world_of)
+      if (w >= 0) ++start[w + 1];
+    for (int w = 0; w < model.world_count; ++w) start[w + 1] += start[w];
+    std::vector<int> next(start.begin(), start.end() - 1);
+    for (int i = 0; i < static_cast<int>(world_of.size()); ++i)
+      if (world_of[i] >= 0) entries[next[world_of[i]]++] = i;
+  }
+};
+
+void check_world(const Model& model, const std::string& field, int w) {
+  if (w < 0 || w >= model.world_count)
+    fail("set_parameter ", field, ": world id ", w, " out of range [0, ", model.world_count, ")");
+}
+
+std::string entry_label(const Model& model, Over over, int i) {
+  switch (over) {
+    case Over::Body: return label("body", i, model.body_name[i]);
+    case Over::Shape: return label("shape", i, model.shape_name[i]);
+    case Over::Actuator: return label("actuator", i, model.actuator_name[i]);
+    case Over::World: return "world " + std::to_string(i);
+    case Over::Dof: {
+      int j = 0;
+      while (model.joint_qd_start[j + 1] <= i) ++j;
+      return "dof " + std::to_string(i) + " of " + label("joint", j, model.joint_name[j]);
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+const std::vector<std::string>& Model::parameter_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const Parameter& p : kParameters) out.emplace_back(p.name);
+    return out;
+  }();
+  return names;
+}
+
+std::vector<int> Model::parameter_entries(const std::string& field, int w) const {
+  const Parameter& p = parameter(field);
+  check_world(*this, field, w);
+  const WorldEntries by_world(*this, p.over);
+  return {by_world.entries.begin() + by_world.start[w], by_world.entries.begin() + by_world.start[w + 1]};
+}
+
+void Model::copy_parameters(const Model& other) {
+  for (const Parameter& p : kParameters) {
+    if (p.whole)
+      this->*p.whole = other.*p.whole;
+    else
+      this->*p.real = other.*p.real;
+  }
+}
+
+void Model::set_parameter(const std::string& field, const std::vector<int>& worlds, const std::vector<Scalar>& values) {
+  const Parameter& p = parameter(field);
+  for (const int w : worlds) check_world(*this, field, w);
+
+  const WorldEntries by_world(*this, p.over);
+  const std::vector<int>& start = by_world.start;
+  const std::vector<int>& entries = by_world.entries;
+  size_t expected = 0;
+  for (const int w : worlds) expected += static_cast<size_t>(start[w + 1] - start[w]) * p.width;
+  if (values.size() != expected)
+    fail("set_parameter ", field, ": ", values.size(), " values for ", worlds.size(), " worlds, expected ", expected,
+         " (each world's ", over_name(p.over), " times ", p.width, ")");
+
+  // check every value before writing any
+  size_t k = 0;
+  for (const int w : worlds)
+    for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
+      const int i = entries[e];
+      const Scalar* x = &values[k];
+      auto item = [&] {
+        return "set_parameter " + field + ": world " + std::to_string(w) + ", " + entry_label(*this, p.over, i);
+      };
+      for (int m = 0; m < p.width; ++m) {
+        const Scalar v = x[m];
+        if (p.check == Check::Integer) {
+          if (!(std::isfinite(v) && v == std::round(v) && std::abs(v) < 1e9))
+            fail(item(), ": must be a whole number, got ", v);
+        } else if (p.check == Check::NotNegative) {
+          if (!(v >= 0) || !std::isfinite(v)) fail(item(), ": the value must be finite and >= 0, got ", v);
+        } else if (p.check == Check::Lower || p.check == Check::Upper) {
+          const Scalar other = (this->*p.partner)[i];
+          const Scalar lower = p.check == Check::Lower ? v : other, upper = p.check == Check::Lower ? other : v;
+          if (std::isnan(lower) || std::isnan(upper) || lower > upper)
+            fail(item(), ": the range must satisfy lower <= upper, got [", lower, ", ", upper, "]");
+        } else if (p.check == Check::Finite) {
+          if (!std::isfinite(v)) fail(item(), ": the value is not finite: ", v);
+        }
+      }
+      if (p.check == Check::Body) {
+        RigidBody body;
+        body.mass = p.real == &Model::body_mass ? x[0] : body_mass[i];
+        body.com = Eigen::Map<const Vec3>(&body_com[3 * i]);
+        body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
+            p.real == &Model::body_inertia ? x : &body_inertia[9 * i]);
+        // a massless link (a frame between joints) stays massless: the collision filter walks through it
+        const std::string problem = rigid_body_problem(body, body_mass[i] == 0);
+        if (!problem.empty()) fail(item(), ": ", problem);
+      }
+    }
+
+  k = 0;
+  for (const int w : worlds)
+    for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
+      const int i = entries[e];
+      for (int m = 0; m < p.width; ++m) {
+        if (p.whole)
+          (this->*p.whole)[static_cast<size_t>(i) * p.width + m] = static_cast<int>(values[k + m]);
+        else
+          (this->*p.real)[static_cast<size_t>(i) * p.width + m] = values[k + m];
+      }
+    }
+  ++parameter_writes;
+  for (const int w : worlds) world_parameter_write[w] = parameter_writes;
+}
+
+}  // namespace novaphy
