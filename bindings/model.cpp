@@ -290,7 +290,7 @@ void bind_model(py::module_& m) {
             if (!given)
               throw py::type_error("set_parameter " + field + ": values must be numbers, got " +
                                    py::str(py::type::of(values)).cast<std::string>());
-            self.set_parameter(field, ids, std::vector<Scalar>(given.data(), given.data() + given.size()));
+            self.set_parameter(field, ids, given.data(), static_cast<size_t>(given.size()));
           },
           py::arg("field"), py::arg("values"), py::arg("worlds") = py::none(),
           "Field `field` (one of Model.parameter_names) of some worlds (a bool mask or world ids; None: every "

@@ -521,6 +521,7 @@ Model ModelBuilder::finalize() const {
   model.check_sizes();
   set_body_invweight0(model);
   model.set_model_id();
+  model.index_parameters();
   return model;
 }
 

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -199,6 +201,8 @@ struct Control : ModelCounts {
   void assign(const Control& other);
 };
 
+struct ParameterIndex;  // engine/model/parameters.cpp
+
 struct Model : ModelCounts {
   Vec3 gravity = Vec3(0, -9.81, 0);  // the builder's: every world's world_gravity at finalize
   Precision precision = Precision::Float64;
@@ -249,18 +253,24 @@ struct Model : ModelCounts {
   // lower ranges not above upper ones), then written, and the worlds marked changed. Throws Error naming the
   // field, world and item, writing nothing, for a field that is not a parameter, a world out of range, a wrong
   // count of values or a bad value. A solver reads the new values at its next step
-  void set_parameter(const std::string& field, const std::vector<int>& worlds, const std::vector<Scalar>& values);
+  void set_parameter(const std::string& field, const std::vector<int>& worlds, const Scalar* values, size_t count);
+  void set_parameter(const std::string& field, const std::vector<int>& worlds, const std::vector<Scalar>& values) {
+    set_parameter(field, worlds, values.data(), values.size());
+  }
   // the fields set_parameter writes, in its order
   static const std::vector<std::string>& parameter_names();
   // the entries of field `field` that world w's values go to, in order (its bodies, dofs, shapes or actuators, or
   // w itself); throws Error for a field that is not a parameter or a world out of range
-  std::vector<int> parameter_entries(const std::string& field, int w) const;
+  std::span<const int> parameter_entries(const std::string& field, int w) const;
+  // each world's entries of each kind (bodies, dofs, shapes, actuators) listed once the layout is final (finalize)
+  void index_parameters();
   // those fields copied from `other`, a model of the same bodies, dofs, shapes, actuators and worlds
   void copy_parameters(const Model& other);
   // the number of set_parameter calls so far, and per world the count when one last wrote into it (0: never): a
   // reader that has seen the values up to count n rereads the worlds whose entry is above n
   std::uint64_t parameter_writes = 0;
   std::vector<std::uint64_t> world_parameter_write;
+  std::shared_ptr<const ParameterIndex> parameter_index;  // (index_parameters; copies of the model share it)
 
   // throws Error naming the array unless `state` / `control` was made for this model
   void check(const State& state) const;

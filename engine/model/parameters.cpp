@@ -3,6 +3,7 @@
 // changed (a solver rereads what depends on them at its next step: SolverFeatherstone::read_parameters).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "engine/model/builder_checks.h"
@@ -117,6 +118,7 @@ const Parameter& parameter(const std::string& field) {
 // the entries of each world in the model's order: world w's are entries[start[w] .. start[w + 1])
 struct WorldEntries {
   std::vector<int> start, entries;
+  WorldEntries() = default;
   WorldEntries(const Model& model, Over over) {
     const std::vector<int> world_of = entry_worlds(model, over);
     start.assign(model.world_count + 1, 0);
@@ -127,6 +129,7 @@ struct WorldEntries {
     std::vector<int> next(start.begin(), start.end() - 1);
     for (int i = 0; i < static_cast<int>(world_of.size()); ++i)
       if (world_of[i] >= 0) entries[next[world_of[i]]++] = i;
+    entries.resize(start[model.world_count]);
   }
 };
 
@@ -152,6 +155,26 @@ std::string entry_label(const Model& model, Over over, int i) {
 
 }  // namespace
 
+struct ParameterIndex {
+  WorldEntries of[static_cast<int>(Over::World) + 1];  // by Over
+};
+
+namespace {
+
+const WorldEntries& world_entries(const Model& model, Over over) {
+  if (!model.parameter_index) fail("set_parameter: the model is not finalized (its parameters are not indexed)");
+  return model.parameter_index->of[static_cast<int>(over)];
+}
+
+}  // namespace
+
+void Model::index_parameters() {
+  auto index = std::make_shared<ParameterIndex>();
+  for (const Over over : {Over::Body, Over::Dof, Over::Shape, Over::Actuator, Over::World})
+    index->of[static_cast<int>(over)] = WorldEntries(*this, over);
+  parameter_index = std::move(index);
+}
+
 const std::vector<std::string>& Model::parameter_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> out;
@@ -161,11 +184,11 @@ const std::vector<std::string>& Model::parameter_names() {
   return names;
 }
 
-std::vector<int> Model::parameter_entries(const std::string& field, int w) const {
+std::span<const int> Model::parameter_entries(const std::string& field, int w) const {
   const Parameter& p = parameter(field);
   check_world(*this, field, w);
-  const WorldEntries by_world(*this, p.over);
-  return {by_world.entries.begin() + by_world.start[w], by_world.entries.begin() + by_world.start[w + 1]};
+  const WorldEntries& by_world = world_entries(*this, p.over);
+  return {by_world.entries.data() + by_world.start[w], by_world.entries.data() + by_world.start[w + 1]};
 }
 
 void Model::copy_parameters(const Model& other) {
@@ -177,17 +200,18 @@ void Model::copy_parameters(const Model& other) {
   }
 }
 
-void Model::set_parameter(const std::string& field, const std::vector<int>& worlds, const std::vector<Scalar>& values) {
+void Model::set_parameter(const std::string& field, const std::vector<int>& worlds, const Scalar* values,
+                          size_t count) {
   const Parameter& p = parameter(field);
   for (const int w : worlds) check_world(*this, field, w);
 
-  const WorldEntries by_world(*this, p.over);
+  const WorldEntries& by_world = world_entries(*this, p.over);
   const std::vector<int>& start = by_world.start;
   const std::vector<int>& entries = by_world.entries;
   size_t expected = 0;
   for (const int w : worlds) expected += static_cast<size_t>(start[w + 1] - start[w]) * p.width;
-  if (values.size() != expected)
-    fail("set_parameter ", field, ": ", values.size(), " values for ", worlds.size(), " worlds, expected ", expected,
+  if (count != expected)
+    fail("set_parameter ", field, ": ", count, " values for ", worlds.size(), " worlds, expected ", expected,
          " (each world's ", over_name(p.over), " times ", p.width, ")");
 
   // check every value before writing any
@@ -195,7 +219,7 @@ void Model::set_parameter(const std::string& field, const std::vector<int>& worl
   for (const int w : worlds)
     for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
       const int i = entries[e];
-      const Scalar* x = &values[k];
+      const Scalar* x = values + k;
       auto item = [&] {
         return "set_parameter " + field + ": world " + std::to_string(w) + ", " + entry_label(*this, p.over, i);
       };

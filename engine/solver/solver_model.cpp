@@ -47,21 +47,32 @@ void SolverModel::read_parameters(const Model& model, const std::vector<std::uin
     welded.model.copy_parameters(model);
     weld_masses(model, welded, worlds);
   }
+  // from the first change on, one entry per actuator and shape (randomised worlds share none): every one made once
   const bool shared = actuator_params.size() != dof_actuators.size();
-  if (shared) actuator_params.resize(dof_actuators.size());
-  for (int d = 0; d < model.joint_dof_count; ++d) {
-    const bool changed = worlds[model.articulation_world(index.dof_articulation[d])] != 0;
-    for (int k = dof_actuator_start[d]; k < dof_actuator_start[d + 1]; ++k) {
-      dof_actuators[k].params = k;
-      if (shared || changed) actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
+  if (shared) {
+    actuator_params.resize(dof_actuators.size());
+    for (size_t k = 0; k < dof_actuators.size(); ++k) {
+      dof_actuators[k].params = static_cast<int>(k);
+      actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
     }
   }
   const bool shared_materials = contact_materials.size() != shape_material.size();
-  if (shared_materials) contact_materials.resize(shape_material.size());
-  for (int s = 0; s < model.shape_count; ++s) {
-    shape_material[s] = s;
-    const int w = model.shape_world[s];
-    if (shared_materials || (w >= 0 && worlds[w] != 0)) contact_materials[s] = contact_material(model, s);
+  if (shared_materials) {
+    contact_materials.resize(shape_material.size());
+    for (int s = 0; s < model.shape_count; ++s) {
+      shape_material[s] = s;
+      contact_materials[s] = contact_material(model, s);
+    }
+  }
+  if (shared && shared_materials) return;
+  for (int w = 0; w < model.world_count; ++w) {
+    if (!worlds[w]) continue;
+    if (!shared)
+      for (const int d : model.parameter_entries("joint_damping", w))
+        for (int k = dof_actuator_start[d]; k < dof_actuator_start[d + 1]; ++k)
+          actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
+    if (!shared_materials)
+      for (const int s : model.parameter_entries("shape_mu", w)) contact_materials[s] = contact_material(model, s);
   }
 }
 

@@ -72,13 +72,22 @@ class Batches final : public ArticulationBatches {
           std::copy_n(G.params.begin(), G.param_size, G.params.begin() + static_cast<size_t>(b) * G.param_size);
         G.shared_params = false;
       }
+      // a changed lane's parameters and dry friction; dry friction on a dof that had none in any world: the group's
+      // friction rows laid out again
+      const int nf = static_cast<int>(G.frictional.size());
+      bool more = false;
       for (int b = 0; b < G.blocks; ++b)
-        for (int l = 0; l < W; ++l)
-          if (changed[G.arts[b * W + l]]) set_lane_params(G, b, l, com);
-      // dry friction on a dof that had none in any world: the group's friction rows laid out again
-      const size_t nf = G.frictional.size();
-      lay_out_friction(G, model);
-      more_rows |= G.frictional.size() > nf;
+        for (int l = 0; l < W; ++l) {
+          const int a = G.arts[b * W + l];
+          if (!changed[a]) continue;
+          set_lane_params(G, b, l, com);
+          const Scalar* loss = model.joint_frictionloss.data() + art_[a].qd_begin();
+          for (int m = 0; m < nf; ++m) G.frictionloss[b * nf + m][l] = static_cast<T>(loss[G.frictional[m]]);
+          for (int k = 0; k < G.topo.dof_count; ++k)
+            more |= loss[k] > 0 && std::find(G.frictional.begin(), G.frictional.end(), k) == G.frictional.end();
+        }
+      if (more) lay_out_friction(G, model);
+      more_rows |= more;
     }
     if (more_rows) size_scratch();
   }
