@@ -1,0 +1,310 @@
+"""Gymnasium vector environments on NovaPhy: `import novaphy.envs` registers
+
+- ``NovaPhy/Go1Joystick-v0``: the Unitree Go1 tracks a velocity command (forward, sideways, turning) as MuJoCo
+  Playground's Go1 joystick task defines it: its observation (local linear velocity, gyro, projected gravity, joint
+  angles from the home pose, joint velocities, last action, command: 48 numbers), its action (12 joint targets about
+  the home pose, scaled by 0.5), its control (Kp 35, Kd 0.5, 0.02 s control steps of five 0.004 s steps), its
+  reward terms and scales and its termination (the trunk upside down); the feet terms (clearance, slip, air time)
+  are not among them;
+- ``NovaPhy/Go1Stand-v0``: the same robot and observation with a zero command, rewarded for standing in its home
+  pose.
+
+Both are vector environments only: ``gymnasium.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``.
+Each of the N worlds is a Go1 in one NovaPhy model; a step sets the actuators' targets of every world, runs the
+substeps in one call without the GIL (``novaphy.simulate``), and computes observations and rewards with numpy over
+``world_view`` arrays. Worlds that end reset in the same step (``autoreset_mode`` SAME_STEP: the returned observation
+is the new episode's first, ``info["final_obs"]`` the ended one's), each to the home keyframe with new per-world
+parameters (foot friction, link masses, trunk centre of mass, armature, friction loss; see
+``randomize_worlds``) and a new command. The robot is ../shared/robots/unitree_go1 or the installed Menagerie's
+(``robot=`` or NOVAPHY_GO1_SCENE give another scene file)."""
+import os
+from pathlib import Path
+
+import numpy as np
+import gymnasium
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+import novaphy
+from .worlds import world_view
+
+__all__ = ["Go1Joystick", "Go1Stand", "go1_scene"]
+
+# MuJoCo Playground's Go1 joystick task (reward weights, command ranges, noise scales)
+REWARD_SCALES = {
+    "tracking_lin_vel": 1.0,
+    "tracking_ang_vel": 0.5,
+    "lin_vel_z": -0.5,
+    "ang_vel_xy": -0.05,
+    "orientation": -5.0,
+    "dof_pos_limits": -1.0,
+    "pose": 0.5,
+    "termination": -1.0,
+    "stand_still": -1.0,
+    "torques": -0.0002,
+    "action_rate": -0.01,
+    "energy": -0.001,
+}
+TRACKING_SIGMA = 0.25
+COMMAND_AMPLITUDE = np.array([1.5, 0.8, 1.2])  # forward, sideways (m/s), turning (rad/s)
+COMMAND_KEPT = np.array([0.9, 0.25, 0.5])  # the chance each is not zeroed
+NOISE = {"joint_pos": 0.03, "joint_vel": 1.5, "gyro": 0.2, "gravity": 0.05, "linvel": 0.1}
+KP, KD = 35.0, 0.5
+ACTION_SCALE = 0.5
+CTRL_DT, SIM_DT = 0.02, 0.004
+EPISODE_STEPS = 1000
+SOFT_LIMIT = 0.95
+POSE_WEIGHTS = np.tile([1.0, 1.0, 0.1], 4)
+FEET = ("FR", "FL", "RR", "RL")
+
+
+def go1_scene():
+    """The Go1 scene file: NOVAPHY_GO1_SCENE, else ../shared/robots/unitree_go1 beside this checkout, else the
+    mujoco_menagerie package's copy where it is on disk (nothing is downloaded)."""
+    given = os.environ.get("NOVAPHY_GO1_SCENE")
+    if given:
+        return given
+    for parent in Path(__file__).resolve().parents:
+        candidate = parent / "shared" / "robots" / "unitree_go1" / "scene.xml"
+        if candidate.is_file():
+            return str(candidate)
+    try:
+        import mujoco_menagerie
+
+        cache = mujoco_menagerie.Cache()
+        root = cache.root / "unitree_go1" if cache.root is not None else None
+        if root is not None and (root / "scene.xml").is_file():
+            return str(root / "scene.xml")
+    except Exception:  # (no menagerie package, or none on disk)
+        pass
+    raise FileNotFoundError("NovaPhy's Go1 environments need the Menagerie Go1: pass robot='.../unitree_go1/scene.xml' "
+                            "or set NOVAPHY_GO1_SCENE")
+
+
+def _rotate_into(q, v):
+    """v (n, 3) in the frames of unit quaternions q (n, 4) [x, y, z, w]: R^T v."""
+    u, w = -q[:, :3], q[:, 3:4]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+class Go1Joystick(VectorEnv):
+    """num_envs Go1 worlds tracking velocity commands (module doc). precision: "Float32" (default) or "Float64";
+    threads: the solver's and pipeline's (0: OpenMP's default); noise: Playground's observation noise;
+    randomize: new per-world parameters at each reset; command: a fixed (forward, sideways, turning) command for
+    every world instead of random ones."""
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
+    stand = False
+
+    def __init__(self, num_envs=1, *, precision="Float32", threads=0, noise=True, randomize=True, command=None,
+                 robot=None, episode_steps=EPISODE_STEPS):
+        if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"{type(self).__name__}: num_envs must be a positive integer, got {num_envs!r}")
+        self.num_envs = int(num_envs)
+        self.noise, self.randomize, self.episode_steps = noise, randomize, int(episode_steps)
+        self.fixed_command = None if command is None else np.asarray(command, dtype=np.float64).reshape(3)
+        robot_builder = novaphy.ModelBuilder()
+        robot_builder.add_mjcf(robot or go1_scene())
+        builder = novaphy.ModelBuilder()
+        builder.precision = getattr(novaphy.Precision, precision)
+        builder.replicate(robot_builder, self.num_envs)
+        model = self.model = builder.finalize()
+        n = self.num_envs
+        # Playground's position servos: Kp 35, Kd 0.5 (the Menagerie file's are Kp 100 without damping)
+        model.set_parameter("actuator_gain", np.full((n, 12), KP))
+        model.set_parameter("actuator_bias", np.tile([0.0, -KP, -KD], (n, 12, 1)))
+        # the feet's friction decides their contacts with the shared floor (priority over its)
+        self._shape_names = np.array(model.shape_name)[np.asarray(model.shape_world) >= 0].reshape(n, -1)[0]
+        priority = np.zeros((n, len(self._shape_names)))
+        priority[:, np.isin(self._shape_names, FEET)] = 1
+        model.set_parameter("shape_priority", priority)
+        self._nominal = {name: world_view(model, getattr(model, name)).copy()
+                         for name in ("body_mass", "body_com", "body_inertia", "joint_armature", "joint_frictionloss")}
+        self._nominal["shape_mu"] = np.asarray(model.shape_mu)[np.asarray(model.shape_world) >= 0].reshape(n, -1)
+        home = list(model.keyframes).index("home")
+        self._home_q = np.array(model.keyframe_q)[home].reshape(n, -1)[0]
+        self._default = self._home_q[7:]
+        lower = world_view(model, model.joint_limit_lower)[0, 6:]
+        upper = world_view(model, model.joint_limit_upper)[0, 6:]
+        self._force_lower = world_view(model, model.actuator_force_lower)[0]
+        self._force_upper = world_view(model, model.actuator_force_upper)[0]
+        middle, half = (lower + upper) / 2, (upper - lower) / 2
+        self._soft_lower, self._soft_upper = middle - SOFT_LIMIT * half, middle + SOFT_LIMIT * half
+
+        self.state = model.state(keyframe="home")
+        self.control = model.control(keyframe="home")
+        self.solver = novaphy.solvers.SolverFeatherstone(model)
+        self.solver.settings.num_threads = threads
+        self.pipeline = novaphy.CollisionPipeline(model, num_threads=threads)
+        self.contacts = self.pipeline.contacts()
+        self._q = world_view(model, self.state.joint_q)
+        self._qd = world_view(model, self.state.joint_qd)
+        self._body_q = world_view(model, self.state.body_q)
+        self._body_qd = world_view(model, self.state.body_qd)
+        self._ctrl = world_view(model, self.control.actuator_ctrl)
+
+        self.single_observation_space = gymnasium.spaces.Box(-np.inf, np.inf, (48,), np.float32)
+        self.single_action_space = gymnasium.spaces.Box(-1.0, 1.0, (12,), np.float32)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+        self._rng = np.random.default_rng()
+        self._command = np.zeros((n, 3))
+        self._last_action = np.zeros((n, 12))
+        self._steps = np.zeros(n, dtype=np.int64)
+
+    # ---- the task
+
+    def _sample_commands(self, count):
+        if self.stand:
+            return np.zeros((count, 3))
+        if self.fixed_command is not None:
+            return np.tile(self.fixed_command, (count, 1))
+        amplitude = self._rng.uniform(-1.0, 1.0, (count, 3)) * COMMAND_AMPLITUDE
+        return amplitude * (self._rng.uniform(size=(count, 3)) < COMMAND_KEPT)
+
+    def randomize_worlds(self, worlds):
+        """New per-world parameters for `worlds` (ids), as Playground's Go1 randomisation: foot friction U(0.4, 1),
+        link masses x U(0.9, 1.1) and the trunk's + U(-1, 1) kg, the trunk's centre of mass + U(-0.05, 0.05) m,
+        armature x U(1, 1.05), friction loss x U(0.9, 1.1)."""
+        k = len(worlds)
+        if k == 0:
+            return
+        rng = self._rng
+        mu = self._nominal["shape_mu"][worlds].copy()
+        feet = np.isin(self._shape_names, FEET)
+        mu[:, feet] = rng.uniform(0.4, 1.0, (k, 1))
+        mass = self._nominal["body_mass"][worlds] * rng.uniform(0.9, 1.1, (k, 13))
+        mass[:, 0] += rng.uniform(-1.0, 1.0, k)
+        com = self._nominal["body_com"][worlds].copy()
+        com[:, 0] += rng.uniform(-0.05, 0.05, (k, 3))
+        inertia = self._nominal["body_inertia"][worlds] * (mass / self._nominal["body_mass"][worlds])[..., None]
+        self.model.set_parameter("shape_mu", mu, worlds=worlds)
+        self.model.set_parameter("body_inertia", inertia, worlds=worlds)
+        self.model.set_parameter("body_mass", mass, worlds=worlds)
+        self.model.set_parameter("body_com", com, worlds=worlds)
+        self.model.set_parameter("joint_armature",
+                                 self._nominal["joint_armature"][worlds] * rng.uniform(1.0, 1.05, (k, 18)),
+                                 worlds=worlds)
+        self.model.set_parameter("joint_frictionloss",
+                                 self._nominal["joint_frictionloss"][worlds] * rng.uniform(0.9, 1.1, (k, 18)),
+                                 worlds=worlds)
+
+    def _reset_worlds(self, worlds):
+        """worlds (ids) at the home keyframe with new parameters and a new command (on a flat floor, with commands in
+        the trunk's frame, Playground's random yaw and position change nothing the task sees)"""
+        if len(worlds) == 0:
+            return
+        self.model.reset_worlds(self.state, worlds, "home")
+        if self.randomize:
+            self.randomize_worlds(worlds)
+        self._command[worlds] = self._sample_commands(len(worlds))
+        self._last_action[worlds] = 0.0
+        self._steps[worlds] = 0
+        self._ctrl[worlds] = self._default
+
+    def _observe(self):
+        trunk_q, trunk_qd = self._body_q[:, 0], self._body_qd[:, 0]
+        quat = trunk_q[:, 3:7]
+        linvel = _rotate_into(quat, trunk_qd[:, :3])
+        gyro = _rotate_into(quat, trunk_qd[:, 3:6])
+        gravity = _rotate_into(quat, np.tile([0.0, 0.0, -1.0], (self.num_envs, 1)))
+        joint_pos = self._q[:, 7:] - self._default
+        joint_vel = self._qd[:, 6:]
+        parts = [linvel, gyro, gravity, joint_pos, joint_vel]
+        if self.noise:
+            rng = self._rng
+            parts = [x + rng.uniform(-1.0, 1.0, x.shape) * NOISE[name]
+                     for x, name in zip(parts, ("linvel", "gyro", "gravity", "joint_pos", "joint_vel"))]
+        return np.concatenate(parts + [self._last_action, self._command], axis=1).astype(np.float32)
+
+    def _rewards(self, action, torque):
+        trunk_q, trunk_qd = self._body_q[:, 0], self._body_qd[:, 0]
+        quat = trunk_q[:, 3:7]
+        local_vel = _rotate_into(quat, trunk_qd[:, :3])
+        gyro = _rotate_into(quat, trunk_qd[:, 3:6])
+        up = -_rotate_into(quat, np.tile([0.0, 0.0, -1.0], (self.num_envs, 1)))  # the world's z in the trunk's frame
+        q, qd = self._q[:, 7:], self._qd[:, 6:]
+        cmd = self._command
+        terms = {
+            "tracking_lin_vel": np.exp(-np.sum((cmd[:, :2] - local_vel[:, :2]) ** 2, axis=1) / TRACKING_SIGMA),
+            "tracking_ang_vel": np.exp(-(cmd[:, 2] - gyro[:, 2]) ** 2 / TRACKING_SIGMA),
+            "lin_vel_z": trunk_qd[:, 2] ** 2,
+            "ang_vel_xy": np.sum(trunk_qd[:, 3:5] ** 2, axis=1),
+            "orientation": np.sum(up[:, :2] ** 2, axis=1),
+            "dof_pos_limits": np.sum(np.clip(self._soft_lower - q, 0, None) + np.clip(q - self._soft_upper, 0, None),
+                                     axis=1),
+            "pose": np.exp(-np.sum((q - self._default) ** 2 * POSE_WEIGHTS, axis=1)),
+            "stand_still": np.sum(np.abs(q - self._default), axis=1) * (np.linalg.norm(cmd, axis=1) < 0.01),
+            "torques": np.sqrt(np.sum(torque ** 2, axis=1)) + np.sum(np.abs(torque), axis=1),
+            "action_rate": np.sum((action - self._last_action) ** 2, axis=1),
+            "energy": np.sum(np.abs(qd * torque), axis=1),
+        }
+        if self.stand:
+            terms["tracking_lin_vel"] = np.exp(-np.sum(local_vel[:, :2] ** 2, axis=1) / TRACKING_SIGMA)
+        return terms, up
+
+    # ---- the Gymnasium interface
+
+    def reset(self, *, seed=None, options=None):
+        """Every world at the start (options={"worlds": mask or ids}: only those); returns (observations, info)."""
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        worlds = np.arange(self.num_envs)
+        if options and "worlds" in options:
+            given = np.asarray(options["worlds"])
+            worlds = np.flatnonzero(given) if given.dtype == bool else given.astype(np.int64)
+        self._reset_worlds(worlds)
+        return self._observe(), {}
+
+    def _checked(self, actions):
+        try:
+            a = np.asarray(actions)
+        except Exception as e:
+            raise TypeError(f"{type(self).__name__}.step: actions must be an array of numbers: {e}") from None
+        if a.dtype.kind not in "fiu":
+            raise TypeError(f"{type(self).__name__}.step: actions must be numbers, got an array of dtype {a.dtype}")
+        if a.shape != (self.num_envs, 12):
+            raise ValueError(f"{type(self).__name__}.step: actions have shape {a.shape}, expected ({self.num_envs}, 12)")
+        bad = ~np.isfinite(a)
+        if bad.any():
+            w, k = np.argwhere(bad)[0]
+            raise ValueError(f"{type(self).__name__}.step: actions[{w}, {k}] is not finite: {a[w, k]}")
+        return a.astype(np.float64)
+
+    def step(self, actions):
+        """One control step of every world: (observations, rewards, terminated, truncated, info)."""
+        action = np.clip(self._checked(actions), -1.0, 1.0)
+        self._ctrl[:] = self._default + ACTION_SCALE * action
+        novaphy.simulate(self.pipeline, self.solver, self.state, self.control, self.contacts,
+                         int(round(CTRL_DT / SIM_DT)), SIM_DT)
+        # the servos' forces at the step's end (MuJoCo's actuator_force after its last substep)
+        torque = np.clip(KP * (self._ctrl - self._q[:, 7:]) - KD * self._qd[:, 6:], self._force_lower,
+                         self._force_upper)
+        terms, up = self._rewards(action, torque)
+        terminated = up[:, 2] < 0.0
+        terms["termination"] = terminated.astype(np.float64)
+        reward = sum(REWARD_SCALES[name] * value for name, value in terms.items())
+        reward = np.clip(reward * CTRL_DT, 0.0, 10000.0).astype(np.float32)
+        self._last_action = action
+        self._steps += 1
+        truncated = (self._steps >= self.episode_steps) & ~terminated
+        observation = self._observe()
+        info = {}
+        done = np.flatnonzero(terminated | truncated)
+        if len(done):
+            info["final_obs"] = observation.copy()
+            info["_final_obs"] = terminated | truncated
+            self._reset_worlds(done)
+            observation = self._observe()
+        return observation, reward, terminated, truncated, info
+
+
+class Go1Stand(Go1Joystick):
+    """num_envs Go1 worlds standing in their home pose: Go1Joystick with a zero command."""
+
+    stand = True
+
+
+gymnasium.register("NovaPhy/Go1Joystick-v0", vector_entry_point="novaphy.envs:Go1Joystick")
+gymnasium.register("NovaPhy/Go1Stand-v0", vector_entry_point="novaphy.envs:Go1Stand")
