@@ -92,3 +92,30 @@ def test_gif_needs_frames(tmp_path):
     recorder = novaphy.viewer.Recorder(builder.finalize())
     with pytest.raises(ValueError, match="no frames to render"):
         recorder.save_gif(str(tmp_path / "empty.gif"))
+
+
+def test_chosen_worlds_side_by_side(tmp_path):
+    robot = novaphy.ModelBuilder()
+    body = robot.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1), xform=novaphy.Transform([0.0, 0.5, 0.0]))
+    robot.add_shape_box(body, [0.2, 0.2, 0.2])
+    builder = novaphy.ModelBuilder()
+    builder.add_ground_plane(0.0)
+    builder.replicate(robot, 4)  # four worlds in one place
+    model = builder.finalize()
+    state = model.state()
+    frames, drawn = novaphy.viewer.arrange_worlds(model, [np.asarray(state.body_q)], [3, 1])
+    np.testing.assert_array_equal(drawn, [False, True, False, True])
+    across = novaphy.viewer.display_basis(model.gravity)[0]
+    # world 3 first, world 1 next to it, 0.5 m apart (a world of one body has no width)
+    assert frames[0][3, :3] @ across == pytest.approx(0.0)
+    assert frames[0][1, :3] @ across == pytest.approx(0.5)
+    one = np.asarray(Image.open(novaphy.viewer.render_png(model, state.body_q, str(tmp_path / "one.png"),
+                                                          worlds=[0])).convert("RGB"))
+    two = np.asarray(Image.open(novaphy.viewer.render_png(model, state.body_q, str(tmp_path / "two.png"),
+                                                          worlds=[0, 2])).convert("RGB"))
+    assert body_pixels(Image.fromarray(two)) > 1.5 * body_pixels(Image.fromarray(one))
+    recorder = novaphy.viewer.Recorder(model, worlds=[0, 1, 2])
+    recorder.record(state)
+    recorder.save_gif(str(tmp_path / "three.gif"))
+    with pytest.raises(ValueError, match="world 7 is not a world of the model"):
+        novaphy.viewer.render_png(model, state.body_q, str(tmp_path / "bad.png"), worlds=[7])

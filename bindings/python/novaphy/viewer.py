@@ -7,7 +7,9 @@
     recorder.save_gif("run.gif")
 
 Boxes, spheres, capsules and planes are drawn from ``body_q`` with matplotlib (Agg, no display needed);
-the view looks along the horizontal with the model's up axis (against gravity) pointing up.
+the view looks along the horizontal with the model's up axis (against gravity) pointing up. ``worlds=[...]`` (on
+Recorder, render_png and save_gif) draws only those worlds of a model of many, side by side across the view in the
+order given (``arrange_worlds``), with the static shapes (a shared floor) under them all.
 """
 
 import matplotlib
@@ -97,12 +99,42 @@ def capsule_profile(radius, half_height, rings=2):
     return bottom + top
 
 
-class Recorder:
-    """Keeps a copy of body_q every `every` calls to record(); renders them as PNG frames or a GIF."""
+def arrange_worlds(model, frames, worlds):
+    """Frames (body_q arrays) with worlds `worlds` (ids, in the order to lay them out) moved side by side across the
+    view, each world's centre `spacing` apart along the display's horizontal axis (spacing: the widest world's extent
+    plus 0.5 m), and the mask of the bodies to draw (those worlds'): (frames, drawn)."""
+    body_world = np.asarray(model.body_world)
+    worlds = [int(w) for w in worlds]
+    for w in worlds:
+        if not 0 <= w < model.world_count:
+            raise ValueError(f"viewer: world {w} is not a world of the model (0 .. {model.world_count - 1})")
+    if len(set(worlds)) != len(worlds):
+        raise ValueError(f"viewer: worlds {worlds} name a world twice")
+    drawn = np.isin(body_world, worlds)
+    across = display_basis(model.gravity)[0]  # the display's horizontal axis, in the world
+    first = np.asarray(frames[0])[:, :3] @ across
+    centre = {w: first[body_world == w].mean() if (body_world == w).any() else 0.0 for w in worlds}
+    extent = max((np.ptp(first[body_world == w]) if (body_world == w).any() else 0.0) for w in worlds)
+    spacing = extent + 0.5
+    shift = np.zeros((model.body_count, 3))
+    for slot, w in enumerate(worlds):
+        shift[body_world == w] = (slot * spacing - centre[w]) * across
+    arranged = []
+    for f in frames:
+        f = np.array(f, copy=True)
+        f[:, :3] += shift
+        arranged.append(f)
+    return arranged, drawn
 
-    def __init__(self, model, every=1):
+
+class Recorder:
+    """Keeps a copy of body_q every `every` calls to record(); renders them as PNG frames or a GIF (of worlds
+    `worlds` only, side by side, where given)."""
+
+    def __init__(self, model, every=1, worlds=None):
         self.model = model
         self.every = max(1, int(every))
+        self.worlds = worlds
         self.frames = []
         self._calls = 0
 
@@ -112,21 +144,32 @@ class Recorder:
         self._calls += 1
 
     def save_png(self, path, frame=-1, **view):
-        render_png(self.model, self.frames[frame], path, bounds=self.bounds(), **view)
+        frames, drawn = self._arranged()
+        render_png(self.model, frames[frame], path, bounds=scene_bounds(self.model, frames, drawn), drawn=drawn,
+                   **view)
         return path
 
     def save_gif(self, path, fps=20, **view):
-        save_gif(self.model, self.frames, path, fps=fps, **view)
+        save_gif(self.model, self.frames, path, fps=fps, worlds=self.worlds, **view)
         return path
 
     def bounds(self):
-        return scene_bounds(self.model, self.frames)
+        frames, drawn = self._arranged()
+        return scene_bounds(self.model, frames, drawn)
+
+    def _arranged(self):
+        if self.worlds is None:
+            return self.frames, None
+        return arrange_worlds(self.model, self.frames, self.worlds)
 
 
-def joint_segments(model, body_q):
-    """World segments from each joint's anchor on its parent (or the world) to its child's origin."""
+def joint_segments(model, body_q, drawn=None):
+    """World segments from each joint's anchor on its parent (or the world) to its child's origin (the joints of the
+    drawn bodies only, where a mask is given)."""
     segments = []
     for j in range(model.joint_count):
+        if drawn is not None and not drawn[model.joint_child[j]]:
+            continue
         parent = model.joint_parent[j]
         X_p = model.joint_X_p[j]
         anchor = compose(body_q[parent], X_p)[0] if parent >= 0 else X_p[:3]
@@ -136,25 +179,28 @@ def joint_segments(model, body_q):
     return segments
 
 
-def scene_bounds(model, frames):
-    """Centre and half size (display frame) of where the bodies and joints mostly are, at least 1 m across."""
+def scene_bounds(model, frames, drawn=None):
+    """Centre and half size (display frame) of where the (drawn) bodies and joints mostly are, at least 1 m across."""
     basis = display_basis(model.gravity)
     points = []
     for f in frames:
-        points.append(f[:, :3])
-        points += [np.array(seg) for seg in joint_segments(model, f)]
+        points.append(f[:, :3] if drawn is None else f[drawn, :3])
+        points += [np.array(seg) for seg in joint_segments(model, f, drawn)]
     points = np.concatenate(points) @ basis.T if points else np.zeros((1, 3))
     # bodies flung far away leave the view rather than shrink the scene
     lo, hi = np.percentile(points, 2, axis=0) - 0.3, np.percentile(points, 98, axis=0) + 0.3
     return (lo + hi) / 2, max((hi - lo).max() / 2, 0.5)
 
 
-def shape_faces(model, body_q, basis, bounds):
-    """Polygons (display frame) and their colours for every shape at the poses body_q: (planes, bodies)."""
+def shape_faces(model, body_q, basis, bounds, drawn=None):
+    """Polygons (display frame) and their colours for every shape (of the drawn bodies, and every static one) at the
+    poses body_q: (planes, bodies)."""
     planes, bodies = ([], []), ([], [])
     center, half = bounds
     for s in range(model.shape_count):
         body = model.shape_body[s]
+        if drawn is not None and body >= 0 and not drawn[body]:
+            continue
         local = model.shape_transform[s]
         if body >= 0:
             p, R = compose(body_q[body], local)
@@ -189,16 +235,16 @@ def shape_faces(model, body_q, basis, bounds):
     return planes, bodies
 
 
-def draw(ax, model, body_q, bounds, elevation=20.0, azimuth=-60.0):
+def draw(ax, model, body_q, bounds, elevation=20.0, azimuth=-60.0, drawn=None):
     basis = display_basis(model.gravity)
-    planes, bodies = shape_faces(model, body_q, basis, bounds)
+    planes, bodies = shape_faces(model, body_q, basis, bounds, drawn)
     # planes first, then the bodies over them (depth sorting happens within each collection only)
     ax.computed_zorder = False
     ax.add_collection3d(Poly3DCollection(planes[0], facecolors=planes[1], edgecolors="none", zorder=1))
     ax.add_collection3d(
         Poly3DCollection(bodies[0], facecolors=bodies[1], edgecolors="#333333", linewidths=0.2, zorder=2)
     )
-    segments = [[basis @ a, basis @ b] for a, b in joint_segments(model, body_q)]
+    segments = [[basis @ a, basis @ b] for a, b in joint_segments(model, body_q, drawn)]
     if segments:
         ax.add_collection3d(Line3DCollection(segments, colors="#444444", linewidths=1.0, zorder=3))
     center, half = bounds
@@ -211,7 +257,7 @@ def draw(ax, model, body_q, bounds, elevation=20.0, azimuth=-60.0):
 
 
 def render_image(model, body_q, bounds, size=(400, 400), **view):
-    """One frame as an RGB array of shape (height, width, 3)."""
+    """One frame as an RGB array of shape (height, width, 3) (view: elevation, azimuth, drawn)."""
     dpi = 80
     fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
     ax = fig.add_axes([0, 0, 1, 1], projection="3d")
@@ -222,17 +268,26 @@ def render_image(model, body_q, bounds, size=(400, 400), **view):
     return image
 
 
-def render_png(model, body_q, path, bounds=None, **view):
-    bounds = bounds or scene_bounds(model, [np.asarray(body_q)])
-    Image.fromarray(render_image(model, body_q, bounds, **view)).save(path)
+def render_png(model, body_q, path, bounds=None, worlds=None, **view):
+    """One frame as a PNG (of worlds `worlds` only, side by side, where given)."""
+    frames, drawn = [np.asarray(body_q)], view.pop("drawn", None)
+    if worlds is not None:
+        frames, drawn = arrange_worlds(model, frames, worlds)
+    bounds = bounds or scene_bounds(model, frames, drawn)
+    Image.fromarray(render_image(model, frames[0], bounds, drawn=drawn, **view)).save(path)
     return path
 
 
-def save_gif(model, frames, path, fps=20, **view):
-    """An animated GIF of the recorded body_q frames, all in one fixed view."""
+def save_gif(model, frames, path, fps=20, worlds=None, **view):
+    """An animated GIF of the recorded body_q frames, all in one fixed view (of worlds `worlds` only, side by
+    side, where given)."""
     if len(frames) == 0:
         raise ValueError("no frames to render: record some states first")
-    bounds = scene_bounds(model, frames)
+    drawn = None
+    if worlds is not None:
+        frames, drawn = arrange_worlds(model, frames, worlds)
+    view["drawn"] = drawn
+    bounds = scene_bounds(model, frames, drawn)
     images = [Image.fromarray(render_image(model, f, bounds, **view)) for f in frames]
     images[0].save(path, save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
     return path
