@@ -9,11 +9,6 @@ ShapeFilter::ShapeFilter(const Model& model, bool self_collision) : model_(model
   link_bodies();
 }
 
-bool ShapeFilter::visual_only(int s) const {
-  const int group = model_.shape_collision_group[s], mask = model_.shape_collision_mask[s];
-  return model_.collision_filter == CollisionFilter::Mujoco ? group == 0 && mask == 0 : group == 0 || mask == 0;
-}
-
 void ShapeFilter::list_exclusions() {
   // per shape, the shapes it is excluded with, ascending
   const Model& model = model_;

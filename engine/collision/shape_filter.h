@@ -9,6 +9,12 @@
 
 namespace novaphy {
 
+// shape s collides with no shape by the model's filter (its group or mask empty, both under Mujoco's rule)
+inline bool shape_visual_only(const Model& model, int s) {
+  const int group = model.shape_collision_group[s], mask = model.shape_collision_mask[s];
+  return model.collision_filter == CollisionFilter::Mujoco ? group == 0 && mask == 0 : group == 0 || mask == 0;
+}
+
 // keeps a reference to the model, which must outlive it
 class ShapeFilter {
  public:
@@ -31,8 +37,8 @@ class ShapeFilter {
     if (body_parent_[ba] == bb || body_parent_[bb] == ba) return false;
     return self_collision_ || body_articulation_[ba] != body_articulation_[bb];
   }
-  // shape s collides with no shape by the model's filter (its group or mask empty, both under Mujoco's rule)
-  bool visual_only(int s) const;
+  // shape s collides with no shape (shape_visual_only)
+  bool visual_only(int s) const { return shape_visual_only(model_, s); }
   // shapes a and b are an excluded pair (the model's exclude_shape)
   bool excluded(int a, int b) const {
     const auto begin = exclude_other_.begin() + exclude_start_[a], end = exclude_other_.begin() + exclude_start_[a + 1];

@@ -3,7 +3,9 @@
 // changed (a solver rereads what depends on them at its next step: SolverFeatherstone::read_parameters).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "engine/model/builder_checks.h"
@@ -153,6 +155,40 @@ std::string entry_label(const Model& model, Over over, int i) {
   return "";
 }
 
+// what is wrong with entry i's values x [width] of parameter p ("" where nothing is)
+std::string value_problem(const Model& model, const Parameter& p, int i, const Scalar* x) {
+  auto problem = [](const auto&... parts) {
+    std::ostringstream os;
+    os.precision(17);
+    (os << ... << parts);
+    return os.str();
+  };
+  for (int m = 0; m < p.width; ++m) {
+    const Scalar v = x[m];
+    if (p.check == Check::Integer) {
+      if (!(std::isfinite(v) && v == std::round(v) && std::abs(v) < 1e9))
+        return problem("must be a whole number, got ", v);
+    } else if (p.check == Check::NotNegative) {
+      if (!(v >= 0) || !std::isfinite(v)) return problem("the value must be finite and >= 0, got ", v);
+    } else if (p.check == Check::Lower || p.check == Check::Upper) {
+      const Scalar other = (model.*p.partner)[i];
+      const Scalar lower = p.check == Check::Lower ? v : other, upper = p.check == Check::Lower ? other : v;
+      if (std::isnan(lower) || std::isnan(upper) || lower > upper)
+        return problem("the range must satisfy lower <= upper, got [", lower, ", ", upper, "]");
+    } else if (p.check == Check::Finite) {
+      if (!std::isfinite(v)) return problem("the value is not finite: ", v);
+    }
+  }
+  if (p.check != Check::Body) return "";
+  RigidBody body;
+  body.mass = p.real == &Model::body_mass ? x[0] : model.body_mass[i];
+  body.com = Eigen::Map<const Vec3>(&model.body_com[3 * i]);
+  body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
+      p.real == &Model::body_inertia ? x : &model.body_inertia[9 * i]);
+  // a massless link (a frame between joints) stays massless: the collision filter walks through it
+  return rigid_body_problem(body, model.body_mass[i] == 0);
+}
+
 }  // namespace
 
 struct ParameterIndex {
@@ -214,54 +250,42 @@ void Model::set_parameter(const std::string& field, const std::vector<int>& worl
     fail("set_parameter ", field, ": ", count, " values for ", worlds.size(), " worlds, expected ", expected,
          " (each world's ", over_name(p.over), " times ", p.width, ")");
 
-  // check every value before writing any
-  size_t k = 0;
-  for (const int w : worlds)
-    for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
-      const int i = entries[e];
-      const Scalar* x = values + k;
-      auto item = [&] {
-        return "set_parameter " + field + ": world " + std::to_string(w) + ", " + entry_label(*this, p.over, i);
-      };
-      for (int m = 0; m < p.width; ++m) {
-        const Scalar v = x[m];
-        if (p.check == Check::Integer) {
-          if (!(std::isfinite(v) && v == std::round(v) && std::abs(v) < 1e9))
-            fail(item(), ": must be a whole number, got ", v);
-        } else if (p.check == Check::NotNegative) {
-          if (!(v >= 0) || !std::isfinite(v)) fail(item(), ": the value must be finite and >= 0, got ", v);
-        } else if (p.check == Check::Lower || p.check == Check::Upper) {
-          const Scalar other = (this->*p.partner)[i];
-          const Scalar lower = p.check == Check::Lower ? v : other, upper = p.check == Check::Lower ? other : v;
-          if (std::isnan(lower) || std::isnan(upper) || lower > upper)
-            fail(item(), ": the range must satisfy lower <= upper, got [", lower, ", ", upper, "]");
-        } else if (p.check == Check::Finite) {
-          if (!std::isfinite(v)) fail(item(), ": the value is not finite: ", v);
-        }
-      }
-      if (p.check == Check::Body) {
-        RigidBody body;
-        body.mass = p.real == &Model::body_mass ? x[0] : body_mass[i];
-        body.com = Eigen::Map<const Vec3>(&body_com[3 * i]);
-        body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
-            p.real == &Model::body_inertia ? x : &body_inertia[9 * i]);
-        // a massless link (a frame between joints) stays massless: the collision filter walks through it
-        const std::string problem = rigid_body_problem(body, body_mass[i] == 0);
-        if (!problem.empty()) fail(item(), ": ", problem);
-      }
+  // where each listed world's values begin
+  std::vector<size_t> first(worlds.size() + 1, 0);
+  for (size_t n = 0; n < worlds.size(); ++n)
+    first[n + 1] = first[n] + static_cast<size_t>(start[worlds[n] + 1] - start[worlds[n]]) * p.width;
+  const int listed = static_cast<int>(worlds.size());
+  // check every value before writing any, the worlds on OpenMP's threads: the first bad entry in the order given is
+  // named
+  std::int64_t bad = -1;  // the list position of the first bad world
+  std::vector<std::string> problems(worlds.size());
+#pragma omp parallel for schedule(static)
+  for (int n = 0; n < listed; ++n) {
+    const int w = worlds[n];
+    size_t k = first[n];
+    for (int e = start[w]; e < start[w + 1] && problems[n].empty(); ++e, k += p.width) {
+      problems[n] = value_problem(*this, p, entries[e], values + k);
+      if (!problems[n].empty()) problems[n] = entry_label(*this, p.over, entries[e]) + ": " + problems[n];
     }
+  }
+  for (int n = 0; n < listed && bad < 0; ++n)
+    if (!problems[n].empty()) bad = n;
+  if (bad >= 0) fail("set_parameter ", field, ": world ", worlds[bad], ", ", problems[bad]);
 
-  k = 0;
-  for (const int w : worlds)
+#pragma omp parallel for schedule(static)
+  for (int n = 0; n < listed; ++n) {
+    const int w = worlds[n];
+    size_t k = first[n];
     for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
-      const int i = entries[e];
+      const size_t at = static_cast<size_t>(entries[e]) * p.width;
       for (int m = 0; m < p.width; ++m) {
         if (p.whole)
-          (this->*p.whole)[static_cast<size_t>(i) * p.width + m] = static_cast<int>(values[k + m]);
+          (this->*p.whole)[at + m] = static_cast<int>(values[k + m]);
         else
-          (this->*p.real)[static_cast<size_t>(i) * p.width + m] = values[k + m];
+          (this->*p.real)[at + m] = values[k + m];
       }
     }
+  }
   ++parameter_writes;
   for (const int w : worlds) world_parameter_write[w] = parameter_writes;
 }

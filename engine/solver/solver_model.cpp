@@ -6,6 +6,7 @@
 #include <cstring>
 #include <map>
 
+#include "engine/collision/shape_filter.h"
 #include "kernels/crba.h"
 #include "kernels/fk.h"
 
@@ -56,24 +57,25 @@ void SolverModel::read_parameters(const Model& model, const std::vector<std::uin
       actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
     }
   }
+  // (a visual shape's material is never read: it has no contacts)
   const bool shared_materials = contact_materials.size() != shape_material.size();
   if (shared_materials) {
-    contact_materials.resize(shape_material.size());
+    contact_materials.assign(shape_material.size(), ContactMaterial{});
     for (int s = 0; s < model.shape_count; ++s) {
       shape_material[s] = s;
-      contact_materials[s] = contact_material(model, s);
+      if (!shape_visual_only(model, s)) contact_materials[s] = contact_material(model, s);
     }
   }
-  if (shared && shared_materials) return;
-  for (int w = 0; w < model.world_count; ++w) {
-    if (!worlds[w]) continue;
-    if (!shared)
-      for (const int d : model.parameter_entries("joint_damping", w))
+  if (!shared)
+    for (int d = 0; d < model.joint_dof_count; ++d)
+      if (worlds[model.articulation_world(index.dof_articulation[d])])
         for (int k = dof_actuator_start[d]; k < dof_actuator_start[d + 1]; ++k)
           actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
-    if (!shared_materials)
-      for (const int s : model.parameter_entries("shape_mu", w)) contact_materials[s] = contact_material(model, s);
-  }
+  if (!shared_materials)
+    for (int s = 0; s < model.shape_count; ++s) {
+      const int w = model.shape_world[s];
+      if (w >= 0 && worlds[w] && !shape_visual_only(model, s)) contact_materials[s] = contact_material(model, s);
+    }
 }
 
 void SolverModel::index_articulations(const Model& model) {
