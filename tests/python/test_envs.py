@@ -3,6 +3,8 @@ rewards, autoreset, per-world randomisation on reset, and bad actions named."""
 import numpy as np
 import pytest
 
+import novaphy
+
 gymnasium = pytest.importorskip("gymnasium")
 envs = pytest.importorskip("novaphy.envs")
 
@@ -86,3 +88,15 @@ def test_bad_actions_are_named():
         env.step(actions)
     with pytest.raises(ValueError, match="num_envs must be a positive integer"):
         make(n=0)
+
+
+def test_a_robot_turned_over_is_terminated_and_restarted():
+    env = make(noise=False, randomize=False)
+    env.reset(seed=6)
+    q = novaphy.world_view(env.model, env.state.joint_q)
+    q[1, 2] = 1.0
+    q[1, 3:7] = [1.0, 0.0, 0.0, 0.0]  # half a turn about x: upside down, a metre up
+    obs, reward, terminated, truncated, info = env.step(np.zeros((4, 12)))
+    np.testing.assert_array_equal(terminated, [False, True, False, False])
+    assert info["final_obs"][1, 8] > 0.9  # gravity along the trunk's +z when it ended
+    assert obs[1, 8] < -0.99  # and the new episode's first observation upright

@@ -223,7 +223,8 @@ class Go1Joystick(VectorEnv):
         quat = trunk_q[:, 3:7]
         local_vel = _rotate_into(quat, trunk_qd[:, :3])
         gyro = _rotate_into(quat, trunk_qd[:, 3:6])
-        up = -_rotate_into(quat, np.tile([0.0, 0.0, -1.0], (self.num_envs, 1)))  # the world's z in the trunk's frame
+        # the trunk's z axis in the world (Playground's up vector): its third entry is the world's z in the trunk's
+        up = _rotate_into(quat * [-1.0, -1.0, -1.0, 1.0], np.tile([0.0, 0.0, 1.0], (self.num_envs, 1)))
         q, qd = self._q[:, 7:], self._qd[:, 6:]
         cmd = self._command
         terms = {
@@ -240,8 +241,6 @@ class Go1Joystick(VectorEnv):
             "action_rate": np.sum((action - self._last_action) ** 2, axis=1),
             "energy": np.sum(np.abs(qd * torque), axis=1),
         }
-        if self.stand:
-            terms["tracking_lin_vel"] = np.exp(-np.sum(local_vel[:, :2] ** 2, axis=1) / TRACKING_SIGMA)
         return terms, up
 
     # ---- the Gymnasium interface
