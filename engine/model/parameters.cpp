@@ -10,6 +10,7 @@
 
 #include "engine/model/builder_checks.h"
 #include "engine/model/error.h"
+#include "engine/model/group_by_key.h"
 #include "engine/model/model.h"
 
 namespace novaphy {
@@ -72,6 +73,13 @@ const char* over_name(Over over) {
   return "";
 }
 
+// the joint whose dofs include dof `dof`
+int dof_joint(const Model& model, int dof) {
+  return static_cast<int>(std::upper_bound(model.joint_qd_start.begin(), model.joint_qd_start.end(), dof) -
+                          model.joint_qd_start.begin()) -
+         1;
+}
+
 // the world of each entry a parameter runs over (-1: none, as a static shape's)
 std::vector<int> entry_worlds(const Model& model, Over over) {
   auto joint_world = [&](int j) { return model.body_world[model.joint_child[j]]; };
@@ -96,10 +104,7 @@ std::vector<int> entry_worlds(const Model& model, Over over) {
           world[u] = joint_world(j);
         } else {
           // a tendon's world: its first joint's
-          const int dof = model.tendon_dof[model.tendon_start[t]];
-          int joint = 0;
-          while (model.joint_qd_start[joint + 1] <= dof) ++joint;
-          world[u] = joint_world(joint);
+          world[u] = joint_world(dof_joint(model, model.tendon_dof[model.tendon_start[t]]));
         }
       }
       return world;
@@ -123,14 +128,12 @@ struct WorldEntries {
   WorldEntries() = default;
   WorldEntries(const Model& model, Over over) {
     const std::vector<int> world_of = entry_worlds(model, over);
-    start.assign(model.world_count + 1, 0);
+    start.resize(model.world_count + 1);
     entries.resize(world_of.size());
-    for (const int w : world_of)
-      if (w >= 0) ++start[w + 1];
-    for (int w = 0; w < model.world_count; ++w) start[w + 1] += start[w];
-    std::vector<int> next(start.begin(), start.end() - 1);
-    for (int i = 0; i < static_cast<int>(world_of.size()); ++i)
-      if (world_of[i] >= 0) entries[next[world_of[i]]++] = i;
+    std::vector<int> next(model.world_count + 1);
+    group_by_key(
+        static_cast<int>(world_of.size()), model.world_count, [&](int i) { return world_of[i]; }, start.data(),
+        entries.data(), next.data());
     entries.resize(start[model.world_count]);
   }
 };
@@ -147,8 +150,7 @@ std::string entry_label(const Model& model, Over over, int i) {
     case Over::Actuator: return label("actuator", i, model.actuator_name[i]);
     case Over::World: return "world " + std::to_string(i);
     case Over::Dof: {
-      int j = 0;
-      while (model.joint_qd_start[j + 1] <= i) ++j;
+      const int j = dof_joint(model, i);
       return "dof " + std::to_string(i) + " of " + label("joint", j, model.joint_name[j]);
     }
   }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/model/actuator.h"
+#include "engine/model/group_by_key.h"
 #include "engine/model/weld.h"
 #include "engine/solver/blocks/blocks.h"
 #include "engine/solver/parts/rows.h"
@@ -72,18 +73,5 @@ struct SolverModel {
   // per dof H_kk at joint_q0 over its articulation's mass (its links' and welded bodies')
   void weigh_energy(const Model& model);
 };
-
-// items [0, n) grouped by key (in [0, buckets); a negative key leaves the item out), a counting sort:
-// items[start[k] .. start[k + 1]) are key k's, ascending; `next` is scratch of buckets + 1
-template <typename Key>
-void group_by_key(int n, int buckets, Key key, int* start, int* items, int* next) {
-  std::fill_n(start, buckets + 1, 0);
-  for (int i = 0; i < n; ++i)
-    if (key(i) >= 0) ++start[key(i) + 1];
-  for (int k = 0; k < buckets; ++k) start[k + 1] += start[k];
-  std::copy_n(start, buckets, next);
-  for (int i = 0; i < n; ++i)
-    if (key(i) >= 0) items[next[key(i)]++] = i;
-}
 
 }  // namespace novaphy

@@ -203,12 +203,14 @@ class Go1Joystick(VectorEnv):
         self._steps[worlds] = 0
         self._ctrl[worlds] = self._default
 
-    def _observe(self):
-        trunk_q, trunk_qd = self._body_q[:, 0], self._body_qd[:, 0]
-        quat = trunk_q[:, 3:7]
-        linvel = _rotate_into(quat, trunk_qd[:, :3])
-        gyro = _rotate_into(quat, trunk_qd[:, 3:6])
-        gravity = _rotate_into(quat, np.tile([0.0, 0.0, -1.0], (self.num_envs, 1)))
+    def _trunk(self):
+        """The trunk's linear velocity, angular velocity and gravity's direction, in its own frame, every world."""
+        quat, trunk_qd = self._body_q[:, 0, 3:7], self._body_qd[:, 0]
+        return (_rotate_into(quat, trunk_qd[:, :3]), _rotate_into(quat, trunk_qd[:, 3:6]),
+                _rotate_into(quat, np.tile([0.0, 0.0, -1.0], (self.num_envs, 1))))
+
+    def _observe(self, trunk):
+        linvel, gyro, gravity = trunk
         joint_pos = self._q[:, 7:] - self._default
         joint_vel = self._qd[:, 6:]
         parts = [linvel, gyro, gravity, joint_pos, joint_vel]
@@ -218,11 +220,9 @@ class Go1Joystick(VectorEnv):
                      for x, name in zip(parts, ("linvel", "gyro", "gravity", "joint_pos", "joint_vel"))]
         return np.concatenate(parts + [self._last_action, self._command], axis=1).astype(np.float32)
 
-    def _rewards(self, action, torque):
-        trunk_q, trunk_qd = self._body_q[:, 0], self._body_qd[:, 0]
-        quat = trunk_q[:, 3:7]
-        local_vel = _rotate_into(quat, trunk_qd[:, :3])
-        gyro = _rotate_into(quat, trunk_qd[:, 3:6])
+    def _rewards(self, trunk, action, torque):
+        local_vel, gyro, _ = trunk
+        quat, trunk_qd = self._body_q[:, 0, 3:7], self._body_qd[:, 0]
         # the trunk's z axis in the world (Playground's up vector): its third entry is the world's z in the trunk's
         up = _rotate_into(quat * [-1.0, -1.0, -1.0, 1.0], np.tile([0.0, 0.0, 1.0], (self.num_envs, 1)))
         q, qd = self._q[:, 7:], self._qd[:, 6:]
@@ -254,7 +254,7 @@ class Go1Joystick(VectorEnv):
             given = np.asarray(options["worlds"])
             worlds = np.flatnonzero(given) if given.dtype == bool else given.astype(np.int64)
         self._reset_worlds(worlds)
-        return self._observe(), {}
+        return self._observe(self._trunk()), {}
 
     def _checked(self, actions):
         try:
@@ -280,7 +280,8 @@ class Go1Joystick(VectorEnv):
         # the servos' forces at the step's end (MuJoCo's actuator_force after its last substep)
         torque = np.clip(KP * (self._ctrl - self._q[:, 7:]) - KD * self._qd[:, 6:], self._force_lower,
                          self._force_upper)
-        terms, up = self._rewards(action, torque)
+        trunk = self._trunk()
+        terms, up = self._rewards(trunk, action, torque)
         terminated = up[:, 2] < 0.0
         terms["termination"] = terminated.astype(np.float64)
         reward = sum(REWARD_SCALES[name] * value for name, value in terms.items())
@@ -288,14 +289,14 @@ class Go1Joystick(VectorEnv):
         self._last_action = action
         self._steps += 1
         truncated = (self._steps >= self.episode_steps) & ~terminated
-        observation = self._observe()
+        observation = self._observe(trunk)
         info = {}
         done = np.flatnonzero(terminated | truncated)
         if len(done):
             info["final_obs"] = observation.copy()
             info["_final_obs"] = terminated | truncated
             self._reset_worlds(done)
-            observation = self._observe()
+            observation = self._observe(self._trunk())
         return observation, reward, terminated, truncated, info
 
 
