@@ -10,6 +10,18 @@ namespace novaphy::python {
 
 namespace {
 
+// a sensor type given as a SensorType or as its MJCF name
+SensorType sensor_type_of(const py::object& type) {
+  if (!py::isinstance<py::str>(type)) return type.cast<SensorType>();
+  const std::string name = type.cast<std::string>();
+  std::string names;
+  for (int t = 0; t < kSensorTypeCount; ++t) {
+    if (name == sensor_type_name(static_cast<SensorType>(t))) return static_cast<SensorType>(t);
+    names += std::string(t ? ", " : "") + sensor_type_name(static_cast<SensorType>(t));
+  }
+  throw py::value_error("add_sensor: no sensor type '" + name + "' (types: " + names + ")");
+}
+
 ActuatorOptions actuator_options(Scalar gear, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower,
                                  Scalar force_upper, const std::string& name, Scalar gain = 1,
                                  const Vec3& bias = Vec3::Zero()) {
@@ -249,6 +261,29 @@ void bind_builder(py::module_& m) {
            "Equality (MuJoCo's joint): q1 - q1_0 = poly[0] + poly[1] x + ... + poly[4] x^4, x = q2 - q2_0, for "
            "Revolute/Prismatic joints (joint2 -1: x = 0).")
       .def_property_readonly("equality_count", &ModelBuilder::equality_count)
+      .def(
+          "add_sensor",
+          [](ModelBuilder& self, const py::object& type, int object, const Transform& xform,
+             std::optional<ShapeType> zone_type, const Vec3& zone_size, Scalar cutoff, const std::string& name) {
+            SensorOptions options;
+            options.xform = xform;
+            options.zone_type = zone_type ? static_cast<int>(*zone_type) : -1;
+            options.zone_size = zone_size;
+            options.cutoff = cutoff;
+            options.name = name;
+            return self.add_sensor(sensor_type_of(type), object, options);
+          },
+          py::arg("type"), py::arg("object"), py::kw_only(), py::arg("xform") = Transform::identity(),
+          py::arg("zone_type") = std::nullopt, py::arg("zone_size") = Vec3::Zero(), py::arg("cutoff") = 0.0,
+          py::arg("name") = "",
+          "A sensor (a SensorType, or its name as MJCF writes it: 'gyro') of `object`: a joint (jointpos, jointvel, "
+          "ballquat, ballangvel), a tendon (tendonpos, tendonvel) or a body (-1: the world) with its frame xform in "
+          "the body's frame. A touch sensor sums the normal forces of its body's contacts whose ray meets its zone "
+          "(zone_type Sphere, Box, Ellipsoid, Capsule or Cylinder of zone_size, in the frame; None: the whole body). "
+          "Values are clamped to [-cutoff, cutoff] where cutoff > 0. A solver's step writes them into "
+          "State.sensor_data (from the state it starts from, with its accelerations and contact forces: MuJoCo's "
+          "sensordata after mj_step).")
+      .def_property_readonly("sensor_count", &ModelBuilder::sensor_count)
       .def_property("friction_rule", &ModelBuilder::friction_rule, &ModelBuilder::set_friction_rule,
                     "How contacts combine their shapes' friction; add_mjcf sets Mujoco.")
       .def_property("collision_filter", &ModelBuilder::collision_filter, &ModelBuilder::set_collision_filter,

@@ -104,7 +104,10 @@ void bind_counts(Class& c) {
       .def_readonly("shape_count", &ModelCounts::shape_count)
       .def_readonly("actuator_count", &ModelCounts::actuator_count)
       .def_readonly("tendon_count", &ModelCounts::tendon_count)
-      .def_readonly("equality_count", &ModelCounts::equality_count);
+      .def_readonly("equality_count", &ModelCounts::equality_count)
+      .def_readonly("sensor_count", &ModelCounts::sensor_count)
+      .def_readonly("sensor_value_count", &ModelCounts::sensor_value_count,
+                    "The sensors' values together (State.sensor_data's length).");
 }
 
 // the worlds a call names: a bool mask of world_count entries or world ids (an IndexError names an id out of
@@ -179,6 +182,16 @@ void bind_model(py::module_& m) {
       .value("Ellipsoid", ShapeType::Ellipsoid)
       .value("Mesh", ShapeType::Mesh);
 
+  auto sensor_type =
+      py::enum_<SensorType>(m, "SensorType",
+                            "What a sensor measures (MuJoCo's sensor of the same name, lower case, where MJCF has one; "
+                            "ModelBuilder.add_sensor).");
+  for (int t = 0; t < kSensorTypeCount; ++t)
+    sensor_type.value(sensor_type_label(static_cast<SensorType>(t)), static_cast<SensorType>(t));
+  sensor_type.def_property_readonly(
+      "mjcf_name", [](SensorType type) { return sensor_type_name(type); },
+      "The type's name as MJCF writes it ('gyro'), or NovaPhy's for its own types.");
+
   py::class_<Transform>(m, "Transform", "Rigid transform: position and rotation quaternion [x, y, z, w].")
       .def(py::init([](const Vec3& position, const Eigen::Vector4d& rotation) {
              Transform t;
@@ -243,6 +256,8 @@ void bind_model(py::module_& m) {
       .def_readonly("actuator_name", &Model::actuator_name)
       .def_readonly("tendon_name", &Model::tendon_name)
       .def_readonly("equality_name", &Model::equality_name)
+      .def_readonly("sensor_name", &Model::sensor_name,
+                    "Each sensor's name; its values are State.sensor_data[sensor_start[s]:sensor_start[s + 1]].")
       .def_readonly("collision_filter", &Model::collision_filter, "The rule shape_collision_group/_mask filter by.")
       .def_readonly("friction_rule", &Model::friction_rule, "How contacts combine their shapes' friction.")
       .def_readonly("keyframes", &Model::keyframe_name, "The keyframes' names (rows of keyframe_q, _qd, _ctrl).")

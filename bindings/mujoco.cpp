@@ -1,6 +1,7 @@
 // A compiled mujoco.MjModel of the user's own MuJoCo (PyPI 3.x or 4.x) read into the import's field view
 // (engine/import/mujoco_fields.h) and converted by the same converter as add_mjcf; the state maps both ways.
 #include <algorithm>
+#include <cctype>
 #include <initializer_list>
 #include <optional>
 
@@ -44,6 +45,7 @@ class MjModelFields {
     read_geoms();
     read_tendons_and_actuators();
     read_equalities();
+    read_sites_and_sensors();
     for (auto [count, name] : {std::pair{&f_.nflex, "nflex"}, {&f_.nplugin, "nplugin"}})
       if (py::hasattr(m_, name)) *count = size(name);
   }
@@ -220,8 +222,53 @@ class MjModelFields {
     f_.eq_data = field_of_width<double>("eq_data", ne, {mjNEQDATA, mjNEQDATA + 1}, &f_.eq_data_width);
   }
 
+  // sensor types and object types by name in MuJoCo 2.2.2's numbering (the user's MuJoCo numbers them otherwise)
+  void read_sites_and_sensors() {
+    f_.nsite = size("nsite");
+    f_.nsensor = size("nsensor");
+    const int ns = f_.nsite, nn = f_.nsensor;
+    f_.name_siteadr = field<int>("name_siteadr", ns);
+    f_.name_sensoradr = field<int>("name_sensoradr", nn);
+    f_.site_type = field<int>("site_type", ns);
+    f_.site_bodyid = field<int>("site_bodyid", ns);
+    f_.site_size = field<double>("site_size", ns, 3);
+    f_.site_pos = field<double>("site_pos", ns, 3);
+    f_.site_quat = field<double>("site_quat", ns, 4);
+    const int* type = field<int>("sensor_type", nn);
+    const int* objtype = field<int>("sensor_objtype", nn);
+    f_.sensor_objid = field<int>("sensor_objid", nn);
+    f_.sensor_refid = field<int>("sensor_refid", nn);
+    f_.sensor_dim = field<int>("sensor_dim", nn);
+    f_.sensor_adr = field<int>("sensor_adr", nn);
+    f_.sensor_cutoff = field<double>("sensor_cutoff", nn);
+    const py::module_ mujoco = py::module_::import("mujoco");
+    const std::pair<const char*, int> objects[] = {{"mjOBJ_BODY", mjOBJ_BODY},        {"mjOBJ_XBODY", mjOBJ_XBODY},
+                                                   {"mjOBJ_JOINT", mjOBJ_JOINT},      {"mjOBJ_GEOM", mjOBJ_GEOM},
+                                                   {"mjOBJ_SITE", mjOBJ_SITE},        {"mjOBJ_TENDON", mjOBJ_TENDON},
+                                                   {"mjOBJ_ACTUATOR", mjOBJ_ACTUATOR}};
+    for (int i = 0; i < nn; ++i) {
+      const std::string name = mujoco.attr("mjtSensor")(type[i]).attr("name").cast<std::string>();
+      sensor_type_.push_back(mujoco_sensor_type(name));
+      sensor_type_name_.push_back(name.rfind("mjSENS_", 0) == 0 ? lower(name.substr(7)) : name);
+      const std::string object = mujoco.attr("mjtObj")(objtype[i]).attr("name").cast<std::string>();
+      int value = -1;
+      for (const auto& [n, v] : objects)
+        if (object == n) value = v;
+      sensor_objtype_.push_back(value);
+    }
+    f_.sensor_type = sensor_type_.data();
+    f_.sensor_objtype = sensor_objtype_.data();
+    f_.sensor_type_name = sensor_type_name_.data();
+  }
+  static std::string lower(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  }
+
   py::object m_;
   MujocoFields f_;
+  std::vector<int> sensor_type_, sensor_objtype_;
+  std::vector<std::string> sensor_type_name_;
   std::string names_;
   std::vector<py::array> keep_;
 };
@@ -242,6 +289,8 @@ void bind_mujoco(py::module_& m) {
       .def_readonly("warnings", &MujocoImport::warnings)
       .def_readonly("body_map", &MujocoImport::body_map, "MuJoCo body id -> NovaPhy body (-1: static).")
       .def_readonly("actuator_map", &MujocoImport::actuator_map, "MuJoCo actuator id -> NovaPhy actuator (-1: none).")
+      .def_readonly("sensor_map", &MujocoImport::sensor_map,
+                    "MuJoCo sensor id -> the builder's sensor (-1: not computed, named in the warnings).")
       .def_readonly("q_begin", &MujocoImport::q_begin)
       .def_readonly("qd_begin", &MujocoImport::qd_begin)
       .def(

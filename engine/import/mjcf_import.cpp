@@ -4,6 +4,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "engine/import/mjcf_translate.h"
 #include "engine/import/mujoco_fields.h"
@@ -27,6 +28,58 @@ Transform y_to_z() {
   Transform T;
   T.q = Quat(Eigen::AngleAxis<Scalar>(M_PI / 2, Vec3::UnitX()));
   return T;
+}
+
+}  // namespace
+
+namespace {
+
+// the sensors NovaPhy computes: MuJoCo 2.2.2's mjtSensor value, its name and NovaPhy's type
+struct MujocoSensorType {
+  int mj;
+  const char* name;
+  SensorType type;
+};
+#define NOVAPHY_MJ_SENSOR(mj, type) \
+  { mj, #mj, SensorType::type }
+constexpr MujocoSensorType kMujocoSensorTypes[] = {NOVAPHY_MJ_SENSOR(mjSENS_TOUCH, Touch),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_ACCELEROMETER, Accelerometer),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_VELOCIMETER, Velocimeter),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_GYRO, Gyro),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FORCE, Force),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_TORQUE, Torque),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_JOINTPOS, JointPos),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_JOINTVEL, JointVel),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_TENDONPOS, TendonPos),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_TENDONVEL, TendonVel),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_BALLQUAT, BallQuat),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_BALLANGVEL, BallAngVel),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEPOS, FramePos),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEQUAT, FrameQuat),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEXAXIS, FrameXAxis),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEYAXIS, FrameYAxis),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEZAXIS, FrameZAxis),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMELINVEL, FrameLinVel),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEANGVEL, FrameAngVel),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMELINACC, FrameLinAcc),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_FRAMEANGACC, FrameAngAcc),
+                                                   NOVAPHY_MJ_SENSOR(mjSENS_SUBTREECOM, SubtreeCom)};
+#undef NOVAPHY_MJ_SENSOR
+
+// MuJoCo 2.2.2's sensor types by mjtSensor value, as MJCF names them
+constexpr const char* kMujocoSensorNames[mjSENS_USER + 1] = {
+    "touch",         "accelerometer", "velocimeter",    "gyro",           "force",          "torque",
+    "magnetometer",  "rangefinder",   "jointpos",       "jointvel",       "tendonpos",      "tendonvel",
+    "actuatorpos",   "actuatorvel",   "actuatorfrc",    "ballquat",       "ballangvel",     "jointlimitpos",
+    "jointlimitvel", "jointlimitfrc", "tendonlimitpos", "tendonlimitvel", "tendonlimitfrc", "framepos",
+    "framequat",     "framexaxis",    "frameyaxis",     "framezaxis",     "framelinvel",    "frameangvel",
+    "framelinacc",   "frameangacc",   "subtreecom",     "subtreelinvel",  "subtreeangmom",  "clock",
+    "user"};
+
+std::optional<SensorType> novaphy_sensor_type(int mj_type) {
+  for (const MujocoSensorType& t : kMujocoSensorTypes)
+    if (t.mj == mj_type) return t.type;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -65,6 +118,8 @@ class MjcfImporter {
     for (int u = 0; u < m_.nu; ++u) add_actuator(u);
     for (int k = 0; k < m_.nkey; ++k) add_keyframe(k, joint0, actuator0);
     for (int e = 0; e < m_.neq; ++e) add_equality(e);
+    out_.sensor_map.assign(m_.nsensor, -1);
+    for (int i = 0; i < m_.nsensor; ++i) add_sensor(i);
     report_unmodelled();
     return out_;
   }
@@ -436,6 +491,72 @@ class MjcfImporter {
     builder_.add_weld(body1, body2, name, anchor, relative);
   }
 
+  // sensor i as the builder's sensor of its type, on its object's NovaPhy body (or joint, tendon), its frame the
+  // site's, the geom's or the body's (inertial frame for a body, MuJoCo's mjOBJ_BODY); one NovaPhy does not compute
+  // is reported
+  void add_sensor(int i) {
+    const std::string name = m_.name(MjKind::Sensor, i);
+    const int mj_type = m_.sensor_type[i], objtype = m_.sensor_objtype[i], id = m_.sensor_objid[i];
+    const std::string type_name = m_.sensor_type_name ? m_.sensor_type_name[i]
+                                  : mj_type >= 0      ? kMujocoSensorNames[mj_type]
+                                                      : "unknown";
+    const auto skip = [&](const std::string& why) {
+      out_.warnings.push_back("sensor '" + name + "' (" + type_name + "): " + why + "; it is not computed");
+    };
+    const std::optional<SensorType> type = novaphy_sensor_type(mj_type);
+    if (!type) return skip("NovaPhy has no sensor of this type");
+    const bool frame = *type >= SensorType::FramePos && *type <= SensorType::FrameAngAcc;
+    if (frame && m_.sensor_refid[i] >= 0) return skip("a frame sensor relative to another object's frame");
+    SensorOptions options;
+    options.name = name;
+    options.cutoff = m_.sensor_cutoff[i];
+    int object = -1;
+    switch (sensor_object_kind(*type)) {
+      case SensorObject::Joint: object = joint_index_[id]; break;
+      case SensorObject::Tendon:
+        object = tendon_index_[id];
+        if (object < 0) return skip("its tendon is not modelled");
+        break;
+      case SensorObject::Body: {
+        int body = id;
+        Transform local;
+        if (objtype == mjOBJ_SITE) {
+          body = m_.site_bodyid[id];
+          local = pose(m_.site_pos + 3 * id, m_.site_quat + 4 * id);
+          if (*type == SensorType::Touch) {
+            const int site_type = m_.site_type[id];
+            const std::pair<int, ShapeType> zones[] = {{mjGEOM_SPHERE, ShapeType::Sphere},
+                                                       {mjGEOM_CAPSULE, ShapeType::Capsule},
+                                                       {mjGEOM_ELLIPSOID, ShapeType::Ellipsoid},
+                                                       {mjGEOM_CYLINDER, ShapeType::Cylinder},
+                                                       {mjGEOM_BOX, ShapeType::Box}};
+            for (const auto& [mj, zone] : zones)
+              if (site_type == mj) options.zone_type = static_cast<int>(zone);
+            if (options.zone_type < 0) return skip("its site's type has no volume");
+            options.zone_size = vec3(m_.site_size + 3 * id);
+          }
+        } else if (objtype == mjOBJ_GEOM) {
+          body = m_.geom_bodyid[id];
+          local = pose(m_.geom_pos + 3 * id, m_.geom_quat + 4 * id);
+        } else if (objtype == mjOBJ_BODY) {
+          local = pose(m_.body_ipos + 3 * id, m_.body_iquat + 4 * id);
+        } else if (objtype != mjOBJ_XBODY) {
+          return skip("it is attached to an object that is not a body, geom or site");
+        }
+        if (is_static(body)) {
+          if (*type == SensorType::Touch || *type == SensorType::SubtreeCom)
+            return skip("its body does not move (a static body)");
+          local = static_pose_[body] * local;
+        } else {
+          object = out_.body_map[body];
+        }
+        options.xform = local;
+        break;
+      }
+    }
+    out_.sensor_map[i] = builder_.add_sensor(*type, object, options);
+  }
+
   // what the import left out that changes the motion (sensors, cameras and lights do not)
   void report_unmodelled() {
     for (int b = 0; b < m_.nbody && m_.body_gravcomp; ++b)
@@ -460,6 +581,12 @@ class MjcfImporter {
   std::map<int, int> mesh_index_;       // MuJoCo mesh -> builder mesh
   std::vector<int> tendon_index_;       // MuJoCo tendon -> NovaPhy tendon (-1: not modelled)
 };
+
+int mujoco_sensor_type(const std::string& name) {
+  for (const MujocoSensorType& t : kMujocoSensorTypes)
+    if (name == t.name) return t.mj;
+  return -1;
+}
 
 mjModel* load_mujoco_model(const std::string& path) {
   if (!std::filesystem::exists(path)) fail("cannot load '", path, "': file does not exist");

@@ -8,6 +8,7 @@
 //   on a fixed tendon -> add_tendon_actuator
 //   connect, weld and joint equalities (active ones) -> add_connect, add_weld, add_joint_coupling
 //   fixed tendon over hinges and slides (stiffness, damping, springlength, range) -> add_tendon
+//   sensors NovaPhy computes (model.h's SensorType) -> add_sensor, on the site's, geom's or body's frame
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -30,6 +31,7 @@ struct MujocoImport {
   std::vector<std::string> warnings;  // everything in the file that changes the motion and is not modelled, by name
   std::vector<int> body_map;          // MuJoCo body id -> NovaPhy body (-1: the world or welded to it)
   std::vector<int> actuator_map;      // MuJoCo actuator id -> NovaPhy motor (-1: not imported)
+  std::vector<int> sensor_map;        // MuJoCo sensor id -> the builder's sensor (-1: not computed, in warnings)
   int q_begin = 0;                    // first NovaPhy coordinate / dof of the imported joints
   int qd_begin = 0;
   int nq = 0, nv = 0;               // the MuJoCo model's
@@ -43,6 +45,10 @@ struct MujocoImport {
   // T (nv x nv) with qd = T qvel and qdd = T qacc; H_mujoco = T^T H T, bias_mujoco = T^T bias
   MatX velocity_map(const mjtNum* qpos) const;
 };
+
+// MuJoCo 2.2.2's mjtSensor value of the sensor type of that name ("mjSENS_GYRO") among those NovaPhy computes, -1
+// for any other (a compiled model of another version names its types; their values differ)
+int mujoco_sensor_type(const std::string& name);
 
 // loads an MJCF or URDF file; throws Error with MuJoCo's message when it does not exist or parse
 mjModel* load_mujoco_model(const std::string& path);

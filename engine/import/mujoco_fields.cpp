@@ -19,7 +19,8 @@ constexpr int kJointCoords[kJointTypes] = {7, 4, 1, 1}, kJointDofs[kJointTypes] 
 const char* word(double x) { return std::isnan(x) ? "nan" : x > 0 ? "inf" : "-inf"; }
 
 const char* kind_word(MjKind kind) {
-  constexpr const char* words[] = {"body", "joint", "geom", "mesh", "tendon", "actuator", "keyframe", "equality"};
+  constexpr const char* words[] = {"body",     "joint",    "geom",     "mesh", "tendon",
+                                   "actuator", "keyframe", "equality", "site", "sensor"};
   return words[static_cast<int>(kind)];
 }
 
@@ -37,6 +38,7 @@ class FieldCheck {
     actuators();
     equalities();
     keyframes();
+    sites_and_sensors();
   }
 
  private:
@@ -82,7 +84,9 @@ class FieldCheck {
                                                   {"nnames", m_.nnames},
                                                   {"nmesh", m_.nmesh},
                                                   {"nmeshvert", m_.nmeshvert},
-                                                  {"nwrap", m_.nwrap}};
+                                                  {"nwrap", m_.nwrap},
+                                                  {"nsite", m_.nsite},
+                                                  {"nsensor", m_.nsensor}};
     for (const auto& [name, n] : counts)
       if (n < 0) fail("MjModel ", name, ": ", n, " is negative");
     if (m_.nbody < 1) fail("MjModel nbody: 0, expected at least the world body");
@@ -95,10 +99,12 @@ class FieldCheck {
     const std::pair<const int*, int> adr[] = {{m_.name_bodyadr, m_.nbody},     {m_.name_jntadr, m_.njnt},
                                               {m_.name_geomadr, m_.ngeom},     {m_.name_meshadr, m_.nmesh},
                                               {m_.name_tendonadr, m_.ntendon}, {m_.name_actuatoradr, m_.nu},
-                                              {m_.name_keyadr, m_.nkey},       {m_.name_eqadr, m_.neq}};
+                                              {m_.name_keyadr, m_.nkey},       {m_.name_eqadr, m_.neq},
+                                              {m_.name_siteadr, m_.nsite},     {m_.name_sensoradr, m_.nsensor}};
     constexpr const char* fields[] = {"name_bodyadr",   "name_jntadr",      "name_geomadr", "name_meshadr",
-                                      "name_tendonadr", "name_actuatoradr", "name_keyadr",  "name_eqadr"};
-    for (int kind = 0; kind < 8; ++kind) {
+                                      "name_tendonadr", "name_actuatoradr", "name_keyadr",  "name_eqadr",
+                                      "name_siteadr",   "name_sensoradr"};
+    for (int kind = 0; kind < 10; ++kind) {
       if (!adr[kind].first) continue;
       for (int id = 0; id < adr[kind].second; ++id) {
         const std::string who =
@@ -216,6 +222,29 @@ class FieldCheck {
     }
   }
 
+  // sites on bodies; each sensor's object in range for the object types the converter reads (2.2.2's numbering)
+  void sites_and_sensors() const {
+    for (int i = 0; i < m_.nsite; ++i) {
+      const std::string site = who(MjKind::Site, i);
+      range("site_bodyid", i, site, m_.site_bodyid[i], 0, m_.nbody);
+      range("site_type", i, site, m_.site_type[i], 0, kGeomTypes);
+      finite("site_pos", i, site, m_.site_pos + 3 * i, 3);
+      quaternion("site_quat", i, site, m_.site_quat + 4 * i);
+      finite("site_size", i, site, m_.site_size + 3 * i, 3);
+    }
+    for (int s = 0; s < m_.nsensor; ++s) {
+      const std::string sensor = who(MjKind::Sensor, s);
+      range("sensor_type", s, sensor, m_.sensor_type[s], -1, mjSENS_USER + 1);
+      const std::pair<int, int> counts[] = {{mjOBJ_BODY, m_.nbody}, {mjOBJ_XBODY, m_.nbody}, {mjOBJ_JOINT, m_.njnt},
+                                            {mjOBJ_GEOM, m_.ngeom}, {mjOBJ_SITE, m_.nsite},  {mjOBJ_TENDON, m_.ntendon},
+                                            {mjOBJ_ACTUATOR, m_.nu}};
+      for (const auto& [type, count] : counts)
+        if (m_.sensor_objtype[s] == type) range("sensor_objid", s, sensor, m_.sensor_objid[s], 0, count);
+      range("sensor_dim", s, sensor, m_.sensor_dim[s], 0, 1 << 20);
+      if (!(m_.sensor_cutoff[s] >= 0))
+        fail("MjModel sensor_cutoff[", s, "]", sensor, ": ", m_.sensor_cutoff[s], " is not >= 0");
+    }
+  }
   void keyframes() const {
     for (int k = 0; k < m_.nkey; ++k) {
       const std::string key = who(MjKind::Key, k);
@@ -231,8 +260,8 @@ class FieldCheck {
 }  // namespace
 
 std::string MujocoFields::name(MjKind kind, int id) const {
-  const int* adr[] = {name_bodyadr,   name_jntadr,      name_geomadr, name_meshadr,
-                      name_tendonadr, name_actuatoradr, name_keyadr,  name_eqadr};
+  const int* adr[] = {name_bodyadr,     name_jntadr, name_geomadr, name_meshadr, name_tendonadr,
+                      name_actuatoradr, name_keyadr, name_eqadr,   name_siteadr, name_sensoradr};
   const int* at = adr[static_cast<int>(kind)];
   if (at && names && names[at[id]] != '\0') return names + at[id];
   return std::string(1, '#').append(std::to_string(id));
@@ -281,6 +310,13 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.key_qpos = m->key_qpos, f.key_qvel = m->key_qvel, f.key_ctrl = m->key_ctrl;
   f.eq_type = m->eq_type, f.eq_obj1id = m->eq_obj1id, f.eq_obj2id = m->eq_obj2id, f.eq_active = m->eq_active;
   f.eq_data = m->eq_data;
+  f.nsite = m->nsite, f.nsensor = m->nsensor;
+  f.name_siteadr = m->name_siteadr, f.name_sensoradr = m->name_sensoradr;
+  f.site_type = m->site_type, f.site_bodyid = m->site_bodyid, f.site_size = m->site_size, f.site_pos = m->site_pos;
+  f.site_quat = m->site_quat;
+  f.sensor_type = m->sensor_type, f.sensor_objtype = m->sensor_objtype, f.sensor_objid = m->sensor_objid;
+  f.sensor_refid = m->sensor_refid, f.sensor_dim = m->sensor_dim, f.sensor_adr = m->sensor_adr;
+  f.sensor_cutoff = m->sensor_cutoff;
   return f;
 }
 

@@ -13,11 +13,12 @@ namespace novaphy {
 
 using MjByte = unsigned char;  // MuJoCo's mjtByte, numpy's bool
 
-enum class MjKind { Body, Joint, Geom, Mesh, Tendon, Actuator, Key, Equality };
+enum class MjKind { Body, Joint, Geom, Mesh, Tendon, Actuator, Key, Equality, Site, Sensor };
 
 struct MujocoFields {
   int nq = 0, nv = 0, nu = 0, nbody = 0, njnt = 0, ngeom = 0, ntendon = 0, nkey = 0, neq = 0, nexclude = 0, npair = 0;
   int nnames = 0, nmesh = 0, nmeshvert = 0, nwrap = 0;  // the sizes of names, the mesh arrays, the wrap arrays
+  int nsite = 0, nsensor = 0;
   // options
   const double *gravity = nullptr;  // [3]
   double timestep = 0.002, impratio = 1, density = 0, viscosity = 0;
@@ -26,7 +27,8 @@ struct MujocoFields {
   // names: the null-terminated names at each kind's addresses; an empty one reads "#id"
   const char *names = nullptr;
   const int *name_bodyadr = nullptr, *name_jntadr = nullptr, *name_geomadr = nullptr, *name_meshadr = nullptr,
-            *name_tendonadr = nullptr, *name_actuatoradr = nullptr, *name_keyadr = nullptr, *name_eqadr = nullptr;
+            *name_tendonadr = nullptr, *name_actuatoradr = nullptr, *name_keyadr = nullptr, *name_eqadr = nullptr,
+            *name_siteadr = nullptr, *name_sensoradr = nullptr;
 
   const double *qpos0 = nullptr, *qpos_spring = nullptr;
   const int *body_parentid = nullptr, *body_jntnum = nullptr, *body_jntadr = nullptr;
@@ -59,6 +61,14 @@ struct MujocoFields {
   const double *actuator_ctrlrange = nullptr, *actuator_forcerange = nullptr, *actuator_gear = nullptr,
                *actuator_gainprm = nullptr, *actuator_biasprm = nullptr;
   const double *key_qpos = nullptr, *key_qvel = nullptr, *key_ctrl = nullptr;
+  const int *site_type = nullptr, *site_bodyid = nullptr;
+  const double *site_size = nullptr, *site_pos = nullptr, *site_quat = nullptr;
+  // sensor_type and sensor_objtype in MuJoCo 2.2.2's numbering (mjtSensor, mjtObj), -1 for a type 2.2.2 lacks;
+  // sensor_type_name: each sensor's type as the compiled model's MuJoCo names it (null: 2.2.2's own model)
+  const int *sensor_type = nullptr, *sensor_objtype = nullptr, *sensor_objid = nullptr, *sensor_refid = nullptr,
+            *sensor_dim = nullptr, *sensor_adr = nullptr;
+  const double *sensor_cutoff = nullptr;
+  const std::string *sensor_type_name = nullptr;
   const int *eq_type = nullptr, *eq_obj1id = nullptr, *eq_obj2id = nullptr;
   const MjByte *eq_active = nullptr;  // MuJoCo >= 3: eq_active0
   const double *eq_data = nullptr;

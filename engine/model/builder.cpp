@@ -353,9 +353,19 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
       if (object >= 0) object += offset;
     equalities_.push_back(e);
   }
+  const int tendon0 = tendon_count();
   for (TendonRecord tendon : other.tendons_) {
     for (int& j : tendon.joints) j += joint0;
     tendons_.push_back(std::move(tendon));
+  }
+  for (SensorRecord sensor : other.sensors_) {
+    const SensorObject kind = sensor_object_kind(sensor.type);
+    if (kind == SensorObject::Joint) sensor.object += joint0;
+    if (kind == SensorObject::Tendon) sensor.object += tendon0;
+    if (kind == SensorObject::Body && sensor.object >= 0) sensor.object += body0;
+    if (kind == SensorObject::Body && sensor.object < 0) sensor.options.xform = place * sensor.options.xform;
+    sensor.world = world;
+    sensors_.push_back(std::move(sensor));
   }
   world_count_ = std::max(world_count_, world + 1);
 }
@@ -518,6 +528,7 @@ Model ModelBuilder::finalize() const {
   model.exclude_shape.clear();
   for (const auto& [a, b] : excluded_) model.exclude_shape.insert(model.exclude_shape.end(), {a, b});
   lay_out_equalities(model);
+  lay_out_sensors(model);
   model.check_sizes();
   set_body_invweight0(model);
   model.set_model_id();

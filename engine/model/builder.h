@@ -87,6 +87,17 @@ struct TendonOptions {
   std::string name;
 };
 
+// a sensor's options (add_sensor): its frame on its body, Touch's zone, a cutoff and a name
+struct SensorOptions {
+  Transform xform;  // the sensor's frame in its body's frame (in the world for the world, body -1)
+  // Touch's zone in the frame: -1 the whole body, or Sphere (radius), Box (half extents), Ellipsoid (semi-axes),
+  // Capsule or Cylinder (radius, half length, along the frame's z axis as MuJoCo's sites)
+  int zone_type = -1;
+  Vec3 zone_size = Vec3::Zero();
+  Scalar cutoff = 0;  // values clamped to [-cutoff, cutoff] (Touch: to cutoff); 0: none; never quaternions or axes
+  std::string name;
+};
+
 struct ImportOptions {
   Transform xform;            // places the file's world frame in the builder's world
   bool static_shapes = true;  // geoms of the world body and bodies welded to it (a floor)
@@ -187,6 +198,13 @@ class ModelBuilder {
   // equality)
   int add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly, const std::string& name = "");
 
+  // a sensor (model.h's SensorType) of `object`: a joint (JointPos, JointVel: Revolute or Prismatic; BallQuat,
+  // BallAngVel: Ball), a tendon (TendonPos, TendonVel) or a body, -1 the world (every other type); its values are
+  // State::sensor_data[sensor_start[s] ..), computed by a solver's step from the state it starts from, with the
+  // step's accelerations and contact forces (MuJoCo's sensordata after mj_step)
+  int add_sensor(SensorType type, int object, const SensorOptions& options = {});
+  int sensor_count() const { return static_cast<int>(sensors_.size()); }
+
   // the rule shape_collision_group and shape_collision_mask filter pairs by (model.h); add_mjcf sets Mujoco
   void set_collision_filter(CollisionFilter filter) { collision_filter_ = filter; }
   // how contacts combine their shapes' friction (model.h); add_mjcf sets Mujoco
@@ -279,6 +297,8 @@ class ModelBuilder {
   void lay_out_equalities(Model& model) const;
   // the Model's keyframes, by name in the order first added
   void lay_out_keyframes(Model& model) const;
+  // the Model's sensor table (builder_sensors.cpp)
+  void lay_out_sensors(Model& model) const;
   // add_actuator, its errors naming the kind of actuator ("a motor")
   int add_actuator_of(const char* kind, int joint, const ActuatorOptions& options);
   // fails (item: ...) unless `joint` is the index of a Revolute or Prismatic joint; `needs` says what needs one
@@ -327,6 +347,13 @@ class ModelBuilder {
     std::string name;
   };
   std::vector<EqualityRecord> equalities_;
+  struct SensorRecord {
+    SensorType type;
+    int object;  // joint, tendon or body (-1: the world)
+    SensorOptions options;
+    int world;  // the world of a sensor of the world (object -1)
+  };
+  std::vector<SensorRecord> sensors_;
   std::vector<ActuatorRecord> actuators_;
   // a keyframe's values for joints [joint_begin, joint_end) and actuators from actuator_begin
   struct KeyframeRecord {

@@ -49,11 +49,60 @@ const char* precision_name(Precision precision) {
   return "unknown";
 }
 
+namespace {
+
+struct SensorTypeInfo {
+  const char* name;   // MJCF's
+  const char* label;  // SensorType's
+  int dim;
+  SensorObject object;
+};
+
+constexpr SensorTypeInfo kSensorTypes[kSensorTypeCount] = {
+    {"jointpos", "JointPos", 1, SensorObject::Joint},
+    {"jointvel", "JointVel", 1, SensorObject::Joint},
+    {"ballquat", "BallQuat", 4, SensorObject::Joint},
+    {"ballangvel", "BallAngVel", 3, SensorObject::Joint},
+    {"framepos", "FramePos", 3, SensorObject::Body},
+    {"framequat", "FrameQuat", 4, SensorObject::Body},
+    {"framexaxis", "FrameXAxis", 3, SensorObject::Body},
+    {"frameyaxis", "FrameYAxis", 3, SensorObject::Body},
+    {"framezaxis", "FrameZAxis", 3, SensorObject::Body},
+    {"framelinvel", "FrameLinVel", 3, SensorObject::Body},
+    {"frameangvel", "FrameAngVel", 3, SensorObject::Body},
+    {"framelinacc", "FrameLinAcc", 3, SensorObject::Body},
+    {"frameangacc", "FrameAngAcc", 3, SensorObject::Body},
+    {"gyro", "Gyro", 3, SensorObject::Body},
+    {"velocimeter", "Velocimeter", 3, SensorObject::Body},
+    {"accelerometer", "Accelerometer", 3, SensorObject::Body},
+    {"force", "Force", 3, SensorObject::Body},
+    {"torque", "Torque", 3, SensorObject::Body},
+    {"subtreecom", "SubtreeCom", 3, SensorObject::Body},
+    {"touch", "Touch", 1, SensorObject::Body},
+    {"contactforce", "ContactForce", 3, SensorObject::Body},
+    {"projectedgravity", "ProjectedGravity", 3, SensorObject::Body},
+    {"tendonpos", "TendonPos", 1, SensorObject::Tendon},
+    {"tendonvel", "TendonVel", 1, SensorObject::Tendon},
+};
+
+const SensorTypeInfo& sensor_info(SensorType type) {
+  const int t = static_cast<int>(type);
+  if (t < 0 || t >= kSensorTypeCount) fail("sensor type ", t, " is not a SensorType (0 .. ", kSensorTypeCount - 1, ")");
+  return kSensorTypes[t];
+}
+
+}  // namespace
+
+const char* sensor_type_name(SensorType type) { return sensor_info(type).name; }
+const char* sensor_type_label(SensorType type) { return sensor_info(type).label; }
+int sensor_dim(SensorType type) { return sensor_info(type).dim; }
+SensorObject sensor_object_kind(SensorType type) { return sensor_info(type).object; }
+
 bool same_layout(const ModelCounts& a, const ModelCounts& b) {
   return a.world_count == b.world_count && a.body_count == b.body_count && a.joint_count == b.joint_count &&
          a.joint_coord_count == b.joint_coord_count && a.joint_dof_count == b.joint_dof_count &&
          a.articulation_count == b.articulation_count && a.shape_count == b.shape_count &&
-         a.actuator_count == b.actuator_count;
+         a.actuator_count == b.actuator_count && a.sensor_value_count == b.sensor_value_count;
 }
 
 void State::assign(const State& other) {
@@ -96,7 +145,7 @@ void Model::set_model_id() {
   std::uint64_t h = 0xcbf29ce484222325ull;
   const ModelCounts& counts = *this;
   mix(h, &counts.world_count,
-      offsetof(ModelCounts, mesh_corner_count) + sizeof(int) - offsetof(ModelCounts, world_count));
+      offsetof(ModelCounts, sensor_value_count) + sizeof(int) - offsetof(ModelCounts, world_count));
   const int enums[] = {static_cast<int>(precision), static_cast<int>(collision_filter),
                        static_cast<int>(friction_rule)};
   mix(h, enums, sizeof(enums));
@@ -187,6 +236,9 @@ void Model::reset_worlds(State& state, const std::vector<int>& worlds, int keyfr
     store_body_state(kinematics(*this, state, arts[i], s), s, state);
   });
   for (int w = 0; w < world_count; ++w) state.world_reset[w] |= reset[w];
+  for (int s = 0; s < sensor_count; ++s)
+    if (reset[sensor_world[s]])
+      std::fill(state.sensor_data.begin() + sensor_start[s], state.sensor_data.begin() + sensor_start[s + 1], 0);
 }
 
 int Model::keyframe(const std::string& name) const {

@@ -21,6 +21,54 @@ enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3, Cylind
 enum class EqualityType : int { Connect = 0, JointCoupling = 1, Weld = 2 };
 
 enum class Precision : int { Float64 = 0, Float32 = 1 };
+
+// what a sensor measures (MuJoCo's sensor of the same name where MJCF has one; `frame` is the sensor's frame on its
+// body, MuJoCo's site or the frame of the object it names; velocities and accelerations are the frame origin's):
+// JointPos, JointVel (1): a Revolute or Prismatic joint's coordinate and velocity; BallQuat (4, [w x y z]),
+// BallAngVel (3): a Ball joint's; FramePos (3), FrameQuat (4, [w x y z]), FrameXAxis/YAxis/ZAxis (3), FrameLinVel,
+// FrameAngVel, FrameLinAcc, FrameAngAcc (3): the frame's in the world; Gyro, Velocimeter, Accelerometer (3): the
+// frame's angular velocity, linear velocity and linear acceleration (gravity's reaction included: 9.81 up at
+// rest) in the frame; Force, Torque (3): what the body's parent exerts on the body's subtree, at the frame's
+// origin, in the frame; SubtreeCom (3): the centre of mass of the body's subtree in the world; Touch (1): the
+// normal forces of the body's contacts whose ray (from the contact point, away from the body) meets the zone
+// (sensor_zone; a zone of type -1 is the whole body); ContactForce (3): the force the body's contacts exert on it,
+// in the world; ProjectedGravity (3): the world's gravity direction in the frame; TendonPos, TendonVel (1): a fixed
+// tendon's length and velocity
+enum class SensorType : int {
+  JointPos = 0,
+  JointVel,
+  BallQuat,
+  BallAngVel,
+  FramePos,
+  FrameQuat,
+  FrameXAxis,
+  FrameYAxis,
+  FrameZAxis,
+  FrameLinVel,
+  FrameAngVel,
+  FrameLinAcc,
+  FrameAngAcc,
+  Gyro,
+  Velocimeter,
+  Accelerometer,
+  Force,
+  Torque,
+  SubtreeCom,
+  Touch,
+  ContactForce,
+  ProjectedGravity,
+  TendonPos,
+  TendonVel,
+};
+constexpr int kSensorTypeCount = static_cast<int>(SensorType::TendonVel) + 1;
+// the type's name as MJCF writes it ("gyro"; NovaPhy's own: "contactforce", "projectedgravity"), and as the enum
+const char* sensor_type_name(SensorType type);
+const char* sensor_type_label(SensorType type);
+// the values a sensor of this type gives (1, 3 or 4)
+int sensor_dim(SensorType type);
+// what a sensor's sensor_object names: a joint, a body (-1: the world) or a tendon
+enum class SensorObject : int { Joint = 0, Body = 1, Tendon = 2 };
+SensorObject sensor_object_kind(SensorType type);
 const char* precision_name(Precision precision);
 
 // which shape pairs may collide, from each shape's shape_collision_group and shape_collision_mask:
@@ -140,17 +188,25 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, world_gravity, world_count, 3)                 \
   X(Scalar, keyframe_q, keyframe_count, joint_coord_count) \
   X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)  \
-  X(Scalar, keyframe_ctrl, keyframe_count, actuator_count)
+  X(Scalar, keyframe_ctrl, keyframe_count, actuator_count) \
+  X(int, sensor_type, sensor_count, 1)                     \
+  X(int, sensor_object, sensor_count, 1)                   \
+  X(Scalar, sensor_frame, sensor_count, 7)                 \
+  X(Scalar, sensor_zone, sensor_count, 4)                  \
+  X(Scalar, sensor_cutoff, sensor_count, 1)                \
+  X(int, sensor_world, sensor_count, 1)                    \
+  X(int, sensor_start, sensor_count + 1, 1)
 
 // world_reset: 1 where Model::reset_worlds reset the world: the next collide and step from this state use none of
 // the world's past (its contacts' and rows' warm starts, a kept mass-matrix factor); a step writes 0 into its output
-#define NOVAPHY_STATE_FIELDS(X)            \
-  X(Scalar, joint_q, joint_coord_count, 1) \
-  X(Scalar, joint_qd, joint_dof_count, 1)  \
-  X(Scalar, body_q, body_count, 7)         \
-  X(Scalar, body_qd, body_count, 6)        \
-  X(Scalar, body_f, body_count, 6)         \
-  X(std::uint8_t, world_reset, world_count, 1)
+#define NOVAPHY_STATE_FIELDS(X)                \
+  X(Scalar, joint_q, joint_coord_count, 1)     \
+  X(Scalar, joint_qd, joint_dof_count, 1)      \
+  X(Scalar, body_q, body_count, 7)             \
+  X(Scalar, body_qd, body_count, 6)            \
+  X(Scalar, body_f, body_count, 6)             \
+  X(std::uint8_t, world_reset, world_count, 1) \
+  X(Scalar, sensor_data, sensor_value_count, 1)
 
 // joint_f: generalised forces; actuator_ctrl: motor commands (force = gear * clamp(ctrl), clamped);
 // PD drives per dof: tau = ke (target_pos - q) + kd (target_vel - qd), integrated implicitly by the
@@ -185,6 +241,8 @@ struct ModelCounts {
   int mesh_vertex_count = 0;  // all meshes' hull vertices together
   int mesh_face_count = 0;
   int mesh_corner_count = 0;  // all faces' corners together
+  int sensor_count = 0;
+  int sensor_value_count = 0;  // all sensors' values together
 };
 
 bool same_layout(const ModelCounts& a, const ModelCounts& b);
@@ -218,6 +276,7 @@ struct Model : ModelCounts {
   std::vector<std::string> actuator_name;
   std::vector<std::string> tendon_name;
   std::vector<std::string> equality_name;
+  std::vector<std::string> sensor_name;
   std::vector<std::string> keyframe_name;  // keyframe k's joint_q, joint_qd and actuator_ctrl: row k of keyframe_*
 
   // sizes every field from the counts (fields are zero-filled)
@@ -236,9 +295,9 @@ struct Model : ModelCounts {
   State state(const std::string& keyframe) const;
   // worlds `worlds` of `state` (world ids, in any order, repeats allowed) back to the initial coordinates joint_q0
   // at rest, or to keyframe `keyframe`'s coordinates and velocities: their joint_q, joint_qd, body_f (zero),
-  // body_q and body_qd (forward kinematics, the worlds' articulations on `threads` threads, 0: OpenMP's default)
-  // and world_reset (1); every other entry of the state is left as it was. Throws Error naming a world id out of
-  // range, a keyframe the model does not have, or a state of another model, before writing anything
+  // body_q and body_qd (forward kinematics, the worlds' articulations on `threads` threads, 0: OpenMP's default),
+  // sensor_data (zero) and world_reset (1); every other entry of the state is left as it was. Throws Error naming a
+  // world id out of range, a keyframe the model does not have, or a state of another model, before writing anything
   void reset_worlds(State& state, const std::vector<int>& worlds, int keyframe = -1, int threads = 0) const;
   // a zeroed control with the model's PD gains (and keyframe `keyframe`'s actuator commands)
   Control control() const;

@@ -59,7 +59,8 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
     : settings(settings_),
       model_(model),
       built_(model, settings_.weld_fixed_joints),
-      parameters_read_(model.parameter_writes) {
+      parameters_read_(model.parameter_writes),
+      sensors_(model) {
   settings.check();
   max_threads_ = std::max(1, omp_get_max_threads());
   if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
@@ -133,6 +134,11 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   // contact to its unit or the islands; then the stages in physics order (route.h: kinematics and forces, mass and
   // factor; rows and solve; the islands; integrate; guard; store)
   check_step(in, out, control, contacts, dt);
+  if (!sensors_.empty()) {
+    start_q_ = in.joint_q;
+    start_qd_ = in.joint_qd;
+    start_f_ = in.body_f;
+  }
   read_parameters();
   plan();
   StepContext step = begin_step(in, out, control, contacts, dt);
@@ -140,6 +146,8 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   list_contacts(contacts, step);
   run_stages(step);
   end_step(in, out, step);
+  sensors_.evaluate(start_q_.data(), start_qd_.data(), out.joint_qd.data(), start_f_.data(), contacts, dt,
+                    out.sensor_data.data(), thread_count());
   if (!settings.count_serial_time) return;
   serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
   ++serial_seconds_.steps;

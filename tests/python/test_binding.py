@@ -155,7 +155,7 @@ def test_state_checkpoints():
     state = model.state()
     state.joint_qd[:] = np.linspace(-1, 1, model.joint_dof_count)
     snapshot = state.to_numpy()
-    assert set(snapshot) == {"joint_q", "joint_qd", "body_q", "body_qd", "body_f", "world_reset"}
+    assert set(snapshot) == {"joint_q", "joint_qd", "body_q", "body_qd", "body_f", "world_reset", "sensor_data"}
     assert snapshot["body_q"].shape == (6, 7) and not np.shares_memory(snapshot["joint_qd"], state.joint_qd)
     assert snapshot["world_reset"].dtype == np.uint8 and snapshot["world_reset"].tolist() == [0]
     copy = state.copy()

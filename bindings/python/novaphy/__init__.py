@@ -7,7 +7,7 @@ import numpy as np
 
 from . import _novaphy, solvers
 from ._arguments import name_the_culprits
-from .worlds import world_view
+from .worlds import sensor_view, world_view
 
 name_the_culprits(_novaphy)
 from ._novaphy import (
@@ -27,6 +27,7 @@ from ._novaphy import (
     ModelBuilder,
     Precision,
     RigidBody,
+    SensorType,
     ShapeType,
     State,
     Transform,
@@ -67,6 +68,7 @@ __all__ = [
     "ModelBuilder",
     "Precision",
     "RigidBody",
+    "SensorType",
     "ShapeType",
     "State",
     "Transform",
@@ -84,6 +86,7 @@ __all__ = [
     "forward_kinematics",
     "inverse_dynamics",
     "mass_matrix_crba",
+    "sensor_view",
     "shard_range",
     "simulate",
     "solvers",

@@ -103,6 +103,10 @@ class Control:
     @property
     def model_id(self) -> int: ...
     @property
+    def sensor_count(self) -> int: ...
+    @property
+    def sensor_value_count(self) -> int: ...
+    @property
     def shape_count(self) -> int: ...
     @property
     def tendon_count(self) -> int: ...
@@ -380,6 +384,26 @@ class Model:
     @property
     def precision(self) -> Precision: ...
     def reset_worlds(self, state: State, worlds: object, keyframe: object = ..., *, threads: int = ...) -> None: ...
+    @property
+    def sensor_count(self) -> int: ...
+    @property
+    def sensor_cutoff(self) -> numpy.ndarray: ...
+    @property
+    def sensor_frame(self) -> numpy.ndarray: ...
+    @property
+    def sensor_name(self) -> List[str]: ...
+    @property
+    def sensor_object(self) -> numpy.ndarray: ...
+    @property
+    def sensor_start(self) -> numpy.ndarray: ...
+    @property
+    def sensor_type(self) -> numpy.ndarray: ...
+    @property
+    def sensor_value_count(self) -> int: ...
+    @property
+    def sensor_world(self) -> numpy.ndarray: ...
+    @property
+    def sensor_zone(self) -> numpy.ndarray: ...
     def set_parameter(self, field: str, values: object, worlds: object = ...) -> None: ...
     @property
     def shape_body(self) -> numpy.ndarray: ...
@@ -478,6 +502,7 @@ class ModelBuilder:
     def add_mujoco_model(self, model: object, *, xform: Optional[Transform] = ..., static_shapes: bool = ...) -> MujocoImport: ...
     def add_plane(self, normal: numpy.ndarray, offset: float = ..., *, mu: float = ..., restitution: float = ..., collision_group: int = ..., collision_mask: int = ..., priority: int = ..., condim: int = ..., mu_torsion: float = ..., mu_rolling: float = ..., solref: List[float[2]] = ..., solimp: List[float[5]] = ..., solmix: float = ..., margin: float = ..., gap: float = ..., name: str = ...) -> int: ...
     def add_position(self, joint: int, *, kp: float, kv: float = ..., gear: float = ..., ctrl_lower: float = ..., ctrl_upper: float = ..., force_lower: float = ..., force_upper: float = ..., name: str = ...) -> int: ...
+    def add_sensor(self, type: object, object: int, *, xform: Transform = ..., zone_type: Optional[ShapeType] = ..., zone_size: numpy.ndarray = ..., cutoff: float = ..., name: str = ...) -> int: ...
     def add_shape_box(self, body: int, half_extents: numpy.ndarray, *, xform: Optional[Transform] = ..., mu: float = ..., restitution: float = ..., collision_group: int = ..., collision_mask: int = ..., priority: int = ..., condim: int = ..., mu_torsion: float = ..., mu_rolling: float = ..., solref: List[float[2]] = ..., solimp: List[float[5]] = ..., solmix: float = ..., margin: float = ..., gap: float = ..., name: str = ...) -> int: ...
     def add_shape_capsule(self, body: int, radius: float, half_height: float, *, xform: Optional[Transform] = ..., mu: float = ..., restitution: float = ..., collision_group: int = ..., collision_mask: int = ..., priority: int = ..., condim: int = ..., mu_torsion: float = ..., mu_rolling: float = ..., solref: List[float[2]] = ..., solimp: List[float[5]] = ..., solmix: float = ..., margin: float = ..., gap: float = ..., name: str = ...) -> int: ...
     def add_shape_cylinder(self, body: int, radius: float, half_height: float, *, xform: Optional[Transform] = ..., mu: float = ..., restitution: float = ..., collision_group: int = ..., collision_mask: int = ..., priority: int = ..., condim: int = ..., mu_torsion: float = ..., mu_rolling: float = ..., solref: List[float[2]] = ..., solimp: List[float[5]] = ..., solmix: float = ..., margin: float = ..., gap: float = ..., name: str = ...) -> int: ...
@@ -518,6 +543,8 @@ class ModelBuilder:
     def precision(self, value: Precision) -> None: ...
     def replicate(self, other: ModelBuilder, world_count: int, spacing: numpy.ndarray = ...) -> None: ...
     @property
+    def sensor_count(self) -> int: ...
+    @property
     def shape_count(self) -> int: ...
     @property
     def tendon_count(self) -> int: ...
@@ -538,6 +565,8 @@ class MujocoImport:
     def q_begin(self) -> int: ...
     @property
     def qd_begin(self) -> int: ...
+    @property
+    def sensor_map(self) -> List[int]: ...
     def to_joint_q(self, qpos: numpy.ndarray) -> numpy.ndarray: ...
     def to_joint_qd(self, qpos: numpy.ndarray, qvel: numpy.ndarray) -> numpy.ndarray: ...
     def to_qpos(self, joint_q: numpy.ndarray) -> numpy.ndarray: ...
@@ -577,6 +606,84 @@ class RigidBody:
     def mass(self) -> float: ...
     @mass.setter
     def mass(self, value: float) -> None: ...
+
+class SensorType:
+    """What a sensor measures (MuJoCo's sensor of the same name, lower case, where MJCF has one; ModelBuilder.add_sensor).
+
+Members:
+
+  JointPos
+
+  JointVel
+
+  BallQuat
+
+  BallAngVel
+
+  FramePos
+
+  FrameQuat
+
+  FrameXAxis
+
+  FrameYAxis
+
+  FrameZAxis
+
+  FrameLinVel
+
+  FrameAngVel
+
+  FrameLinAcc
+
+  FrameAngAcc
+
+  Gyro
+
+  Velocimeter
+
+  Accelerometer
+
+  Force
+
+  Torque
+
+  SubtreeCom
+
+  Touch
+
+  ContactForce
+
+  ProjectedGravity
+
+  TendonPos
+
+  TendonVel"""
+    JointPos: ClassVar[SensorType]
+    JointVel: ClassVar[SensorType]
+    BallQuat: ClassVar[SensorType]
+    BallAngVel: ClassVar[SensorType]
+    FramePos: ClassVar[SensorType]
+    FrameQuat: ClassVar[SensorType]
+    FrameXAxis: ClassVar[SensorType]
+    FrameYAxis: ClassVar[SensorType]
+    FrameZAxis: ClassVar[SensorType]
+    FrameLinVel: ClassVar[SensorType]
+    FrameAngVel: ClassVar[SensorType]
+    FrameLinAcc: ClassVar[SensorType]
+    FrameAngAcc: ClassVar[SensorType]
+    Gyro: ClassVar[SensorType]
+    Velocimeter: ClassVar[SensorType]
+    Accelerometer: ClassVar[SensorType]
+    Force: ClassVar[SensorType]
+    Torque: ClassVar[SensorType]
+    SubtreeCom: ClassVar[SensorType]
+    Touch: ClassVar[SensorType]
+    ContactForce: ClassVar[SensorType]
+    ProjectedGravity: ClassVar[SensorType]
+    TendonPos: ClassVar[SensorType]
+    TendonVel: ClassVar[SensorType]
+    def __int__(self) -> int: ...
 
 class ShapeType:
     """Collision shape types.
@@ -768,6 +875,12 @@ class State:
     def joint_qd(self) -> numpy.ndarray: ...
     @property
     def model_id(self) -> int: ...
+    @property
+    def sensor_count(self) -> int: ...
+    @property
+    def sensor_data(self) -> numpy.ndarray: ...
+    @property
+    def sensor_value_count(self) -> int: ...
     @property
     def shape_count(self) -> int: ...
     @property

@@ -3,8 +3,10 @@
     q = novaphy.world_view(model, state.joint_q)     # shape (world_count, coords per world)
     q[3, 0] = 0.5                                     # writes world 3's first coordinate in the engine
 
-Valid for the arrays whose rows are bodies, joints, coordinates, dofs, articulations, actuators or (where no shape
-is static) shapes, when every world has the same layout and its entries are contiguous, as ModelBuilder.replicate
+    gyro = novaphy.sensor_view(model, state, "gyro")  # shape (world_count, 3): that sensor in every world
+
+Valid for the arrays whose rows are bodies, joints, coordinates, dofs, articulations, actuators, sensors (and their
+values) or (where no shape is static) shapes, when every world has the same layout and its entries are contiguous, as ModelBuilder.replicate
 makes them; anything else (contacts, meshes, tendons, keyframes, ...) raises ValueError.
 """
 
@@ -36,6 +38,12 @@ def _rows_per_world(model, layout, rows):
     }
     if model.joint_count % model.world_count == 0:
         per_world["joint_count"] = model.joint_count // model.world_count
+    if rows in ("sensor_count", "sensor_value_count"):
+        worlds = np.asarray(model.sensor_world)
+        if rows == "sensor_value_count":
+            worlds = np.repeat(worlds, np.diff(np.asarray(model.sensor_start)))
+        counts = np.bincount(worlds, minlength=model.world_count)
+        return int(counts[0]) if len(worlds) == 0 or (counts == counts[0]).all() else None
     if rows == "shape_count":
         worlds = np.asarray(model.shape_world)
         counts = np.bincount(worlds[worlds >= 0], minlength=model.world_count)
@@ -97,3 +105,19 @@ def world_view(model, array):
     if n > 0 and not np.shares_memory(view, array):
         raise ValueError("world_view: the array is not contiguous")
     return view
+
+
+def sensor_view(model, state, name):
+    """The values of the sensor called `name` in every world, as (world_count, its values) over state.sensor_data
+    (no copy): each world's sensor of that name, the worlds laid out alike (ModelBuilder.replicate)."""
+    names = list(model.sensor_name)
+    per_world = len(names) // model.world_count if model.world_count else 0
+    first = [s for s in range(per_world) if names[s] == name]
+    if not first:
+        raise KeyError(f"sensor_view: no sensor '{name}' in world 0 (its sensors: {', '.join(names[:per_world])})")
+    if len(first) > 1:
+        raise KeyError(f"sensor_view: {len(first)} sensors of world 0 are called '{name}'")
+    values = world_view(model, state.sensor_data)
+    start = np.asarray(model.sensor_start)
+    s = first[0]
+    return values[:, start[s] : start[s + 1]]
