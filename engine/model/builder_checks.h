@@ -53,10 +53,28 @@ inline void check_range(const std::string& item, const char* what, Scalar lower,
     fail(item, ": ", what, " must satisfy lower <= upper, got [", lower, ", ", upper, "]");
 }
 
+// rigid_body_problem's common case, without a message: every value finite, mass > 0, the inertia symmetric, I and
+// C = tr(I) / 2 - I (the mass's second moments, whose smallest eigenvalue c is half the triangle inequality's slack:
+// I_a + I_b - I_c = 2 c; shifted by -1e-9 / 2 times I's largest diagonal entry, at most its largest principal moment:
+// never looser than rigid_body_problem's eigenvalue test) positive definite by their leading minors. False says
+// only that rigid_body_problem must decide
+inline bool rigid_body_clearly_fine(const RigidBody& body) {
+  if (!(body.mass > 0) || !std::isfinite(body.mass) || !body.com.allFinite() || !body.inertia.allFinite()) return false;
+  const Scalar scale = body.inertia.cwiseAbs().maxCoeff();
+  if ((body.inertia - body.inertia.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return false;
+  const Mat3 C =
+      Mat3::Identity() * (body.inertia.trace() / 2 + 0.5e-9 * body.inertia.diagonal().maxCoeff()) - body.inertia;
+  auto positive_definite = [](const Mat3& A) {  // (Sylvester: the leading minors)
+    return A(0, 0) > 0 && A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) > 0 && A.determinant() > 0;
+  };
+  return positive_definite(body.inertia) && positive_definite(C);
+}
+
 // what is wrong with a body's mass, centre of mass and inertia ("" where nothing is): each finite; mass > 0 (or 0
 // with zero inertia where allow_massless) and an inertia a real body has (symmetric, positive definite, the triangle
 // inequality)
 inline std::string rigid_body_problem(const RigidBody& body, bool allow_massless) {
+  if (rigid_body_clearly_fine(body)) return "";
   auto problem = [](const auto&... parts) {
     std::ostringstream os;
     os.precision(17);
@@ -74,16 +92,7 @@ inline std::string rigid_body_problem(const RigidBody& body, bool allow_massless
   if (!(body.mass > 0)) return problem("mass must be > 0, got ", body.mass);
   const Scalar scale = body.inertia.cwiseAbs().maxCoeff();
   if ((body.inertia - body.inertia.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return "inertia is not symmetric";
-  // the common case without eigenvalues: I positive definite and C = tr(I) / 2 - I (the mass's second moments,
-  // whose smallest eigenvalue c is half the triangle inequality's slack: I_a + I_b - I_c = 2 c) above -1e-9 / 2
-  // times I's largest diagonal entry (at most its largest principal moment: never looser than the test below);
-  // else the principal moments decide and name the problem
-  const Mat3 C =
-      Mat3::Identity() * (body.inertia.trace() / 2 + 0.5e-9 * body.inertia.diagonal().maxCoeff()) - body.inertia;
-  auto positive_definite = [](const Mat3& A) {  // (Sylvester: the leading minors)
-    return A(0, 0) > 0 && A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) > 0 && A.determinant() > 0;
-  };
-  if (positive_definite(body.inertia) && positive_definite(C)) return "";
+  // not clearly fine: the principal moments decide and name the problem
   const Vec3 eig = Eigen::SelfAdjointEigenSolver<Mat3>(body.inertia, Eigen::EigenvaluesOnly).eigenvalues();
   if (!(eig[0] > 0)) return problem("inertia is not positive definite (smallest principal moment ", eig[0], ")");
   // principal moments of a real body: each at most the sum of the other two

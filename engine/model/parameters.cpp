@@ -47,6 +47,7 @@ const Parameter kParameters[] = {
     NOVAPHY_REAL(joint_damping, Dof, 1, NotNegative),
     NOVAPHY_REAL(joint_frictionloss, Dof, 1, NotNegative),
     NOVAPHY_REAL(joint_stiffness, Dof, 1, NotNegative),
+    // (the shape fields here are those SolverModel::read_parameters reads again into the contact materials)
     NOVAPHY_REAL(shape_mu, Shape, 1, NotNegative),
     NOVAPHY_REAL(shape_mu_torsion, Shape, 1, NotNegative),
     NOVAPHY_REAL(shape_mu_rolling, Shape, 1, NotNegative),
@@ -168,7 +169,7 @@ std::string value_problem(const Model& model, const Parameter& p, int i, const S
   for (int m = 0; m < p.width; ++m) {
     const Scalar v = x[m];
     if (p.check == Check::Integer) {
-      if (!(std::isfinite(v) && v == std::round(v) && std::abs(v) < 1e9))
+      if (!(std::isfinite(v) && v == std::trunc(v) && std::abs(v) < 1e9))
         return problem("must be a whole number, got ", v);
     } else if (p.check == Check::NotNegative) {
       if (!(v >= 0) || !std::isfinite(v)) return problem("the value must be finite and >= 0, got ", v);
@@ -189,6 +190,60 @@ std::string value_problem(const Model& model, const Parameter& p, int i, const S
       p.real == &Model::body_inertia ? x : &model.body_inertia[9 * i]);
   // a massless link (a frame between joints) stays massless: the collision filter walks through it
   return rigid_body_problem(body, model.body_mass[i] == 0);
+}
+
+// whether the values [begin, end) all pass a check that looks at one value alone (false for the others: Body, Lower,
+// Upper), in one run over them
+bool values_fit(Check check, const Scalar* begin, const Scalar* end) {
+  bool fit = true;
+  switch (check) {
+    case Check::Finite:
+      for (const Scalar* x = begin; x < end; ++x) fit &= std::isfinite(*x);
+      return fit;
+    case Check::NotNegative:
+      for (const Scalar* x = begin; x < end; ++x) fit &= *x >= 0 && std::isfinite(*x);
+      return fit;
+    case Check::Integer:
+      for (const Scalar* x = begin; x < end; ++x)
+        fit &= std::isfinite(*x) && *x == std::trunc(*x) && std::abs(*x) < 1e9;
+      return fit;
+    default: return false;
+  }
+}
+
+// whether entry i's values x [width] of parameter p pass its check: value_problem's test without its message (the
+// fast path of every value set_parameter checks)
+bool value_fits(const Model& model, const Parameter& p, int i, const Scalar* x) {
+  switch (p.check) {
+    case Check::Finite:
+      for (int m = 0; m < p.width; ++m)
+        if (!std::isfinite(x[m])) return false;
+      return true;
+    case Check::NotNegative:
+      for (int m = 0; m < p.width; ++m)
+        if (!(x[m] >= 0) || !std::isfinite(x[m])) return false;
+      return true;
+    case Check::Integer:
+      for (int m = 0; m < p.width; ++m)
+        if (!(std::isfinite(x[m]) && x[m] == std::trunc(x[m]) && std::abs(x[m]) < 1e9)) return false;
+      return true;
+    case Check::Lower:
+    case Check::Upper: {
+      const Scalar other = (model.*p.partner)[i];
+      return p.check == Check::Lower ? x[0] <= other : other <= x[0];  // (false for a NaN)
+    }
+    case Check::Body: {
+      // a positive mass fits a body whatever its inertia (a massless link's zero is value_problem's to judge)
+      if (p.real == &Model::body_mass && x[0] > 0 && std::isfinite(x[0]) && model.body_mass[i] > 0) return true;
+      RigidBody body;
+      body.mass = p.real == &Model::body_mass ? x[0] : model.body_mass[i];
+      body.com = Eigen::Map<const Vec3>(&model.body_com[3 * i]);
+      body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
+          p.real == &Model::body_inertia ? x : &model.body_inertia[9 * i]);
+      return rigid_body_clearly_fine(body) || value_problem(model, p, i, x).empty();
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -264,27 +319,44 @@ void Model::set_parameter(const std::string& field, const std::vector<int>& worl
 #pragma omp parallel for schedule(static)
   for (int n = 0; n < listed; ++n) {
     const int w = worlds[n];
+    // the simple checks over the world's values in one run; an entry's own check where one fails or needs more
+    if (values_fit(p.check, values + first[n], values + first[n + 1])) continue;
     size_t k = first[n];
-    for (int e = start[w]; e < start[w + 1] && problems[n].empty(); ++e, k += p.width) {
-      problems[n] = value_problem(*this, p, entries[e], values + k);
-      if (!problems[n].empty()) problems[n] = entry_label(*this, p.over, entries[e]) + ": " + problems[n];
+    for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
+      if (value_fits(*this, p, entries[e], values + k)) continue;
+      problems[n] = entry_label(*this, p.over, entries[e]) + ": " + value_problem(*this, p, entries[e], values + k);
+      break;
     }
   }
   for (int n = 0; n < listed && bad < 0; ++n)
     if (!problems[n].empty()) bad = n;
   if (bad >= 0) fail("set_parameter ", field, ": world ", worlds[bad], ", ", problems[bad]);
 
+  Scalar* real = p.real ? (this->*p.real).data() : nullptr;
+  int* whole = p.whole ? (this->*p.whole).data() : nullptr;
 #pragma omp parallel for schedule(static)
   for (int n = 0; n < listed; ++n) {
     const int w = worlds[n];
-    size_t k = first[n];
-    for (int e = start[w]; e < start[w + 1]; ++e, k += p.width) {
+    const int count = start[w + 1] - start[w];
+    if (count == 0) continue;
+    // a world's entries one run of the field (a replicated world's): its values copied at once
+    if (entries[start[w + 1] - 1] - entries[start[w]] == count - 1) {
+      const size_t at = static_cast<size_t>(entries[start[w]]) * p.width;
+      if (real)
+        std::copy(values + first[n], values + first[n + 1], real + at);
+      else
+        std::transform(values + first[n], values + first[n + 1], whole + at,
+                       [](Scalar x) { return static_cast<int>(x); });
+      continue;
+    }
+    const Scalar* x = values + first[n];
+    for (int e = start[w]; e < start[w + 1]; ++e, x += p.width) {
       const size_t at = static_cast<size_t>(entries[e]) * p.width;
       for (int m = 0; m < p.width; ++m) {
-        if (p.whole)
-          (this->*p.whole)[at + m] = static_cast<int>(values[k + m]);
+        if (real)
+          real[at + m] = x[m];
         else
-          (this->*p.real)[at + m] = values[k + m];
+          whole[at + m] = static_cast<int>(x[m]);
       }
     }
   }

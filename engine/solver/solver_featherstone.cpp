@@ -189,10 +189,10 @@ void SolverFeatherstone::read_parameters() {
   for (int w = 0; w < model_.world_count; ++w) worlds[w] = model_.world_parameter_write[w] > parameters_read_;
   for (int a = 0; a < model_.articulation_count; ++a) articulations[a] = worlds[model_.articulation_world(a)];
   parameters_read_ = model_.parameter_writes;
-  built_.read_parameters(model_, worlds);
+  built_.read_parameters(model_, worlds, thread_count());
   if (batches_)
     batches_->read_parameters(built_.welded.welded_bodies.empty() ? model_ : built_.welded.model, model_.body_com,
-                              articulations);
+                              articulations, thread_count());
   // the contact materials' pairs made again at the next dt (ShapeContacts: one material per shape now)
   shape_contacts_.materials = built_.contact_materials.data();
   shape_contacts_.material_count = static_cast<int>(built_.contact_materials.size());

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "engine/collision/shape_filter.h"
+#include "engine/threads/parallel.h"
 #include "kernels/crba.h"
 #include "kernels/fk.h"
 
@@ -43,7 +44,7 @@ SolverModel::SolverModel(const Model& model, bool weld) : welded(weld_fixed_join
   weigh_energy(model);
 }
 
-void SolverModel::read_parameters(const Model& model, const std::vector<std::uint8_t>& worlds) {
+void SolverModel::read_parameters(const Model& model, const std::vector<std::uint8_t>& worlds, int threads) {
   if (!welded.welded_bodies.empty()) {
     welded.model.copy_parameters(model);
     weld_masses(model, welded, worlds);
@@ -67,15 +68,22 @@ void SolverModel::read_parameters(const Model& model, const std::vector<std::uin
     }
   }
   if (!shared)
-    for (int d = 0; d < model.joint_dof_count; ++d)
+    parallel_for(std::clamp(threads, 1, std::max(model.joint_dof_count, 1)), model.joint_dof_count, [&](int d) {
       if (worlds[model.articulation_world(index.dof_articulation[d])])
         for (int k = dof_actuator_start[d]; k < dof_actuator_start[d + 1]; ++k)
           actuator_params[k] = novaphy::actuator_params(model, dof_actuators[k].u);
+    });
   if (!shared_materials)
-    for (int s = 0; s < model.shape_count; ++s) {
+    parallel_for(std::clamp(threads, 1, std::max(model.shape_count, 1)), model.shape_count, [&](int s) {
       const int w = model.shape_world[s];
-      if (w >= 0 && worlds[w] && !shape_visual_only(model, s)) contact_materials[s] = contact_material(model, s);
-    }
+      if (w < 0 || !worlds[w] || shape_visual_only(model, s)) return;
+      // the material's numbers set_parameter writes (engine/model/parameters.cpp); the rest are the model's structure
+      ContactMaterial& m = contact_materials[s];
+      m.mu = model.shape_mu[s];
+      m.torsion = model.shape_mu_torsion[s];
+      m.rolling = model.shape_mu_rolling[s];
+      m.priority = model.shape_priority[s];
+    });
 }
 
 void SolverModel::index_articulations(const Model& model) {

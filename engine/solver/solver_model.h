@@ -23,7 +23,8 @@ struct SolverModel {
   // what depends on the parameters Model::set_parameter writes, read again for the worlds w with worlds[w] != 0:
   // the welded links' masses, the actuators' and shapes' numbers (from the first change on, each actuator and
   // shape has its own entry in actuator_params and contact_materials: randomised worlds share none)
-  void read_parameters(const Model& model, const std::vector<std::uint8_t>& worlds);
+  // (on `threads` threads)
+  void read_parameters(const Model& model, const std::vector<std::uint8_t>& worlds, int threads);
 
   WeldedModel welded;  // what the kernels see: art views its arrays
   std::vector<ArticulationView> art;

@@ -10,6 +10,7 @@
 
 #include "engine/solver/blocks/block_data.h"
 #include "engine/solver/parts/rows.h"
+#include "engine/threads/parallel.h"
 
 namespace novaphy {
 
@@ -59,8 +60,8 @@ class Batches final : public ArticulationBatches {
     enable(std::numeric_limits<int>::max());
   }
 
-  void read_parameters(const Model& model, const std::vector<Scalar>& com,
-                       const std::vector<std::uint8_t>& changed) override {
+  void read_parameters(const Model& model, const std::vector<Scalar>& com, const std::vector<std::uint8_t>& changed,
+                       int threads) override {
     bool more_rows = false;
     for (BatchGroup<T>& G : groups_) {
       bool any = false;
@@ -75,8 +76,8 @@ class Batches final : public ArticulationBatches {
       // a changed lane's parameters and dry friction; dry friction on a dof that had none in any world: the group's
       // friction rows laid out again
       const int nf = static_cast<int>(G.frictional.size());
-      bool more = false;
-      for (int b = 0; b < G.blocks; ++b)
+      std::vector<std::uint8_t> gains(G.blocks, 0);  // per block: a dof that gains dry friction
+      parallel_for(std::clamp(threads, 1, G.blocks), G.blocks, [&](int b) {
         for (int l = 0; l < W; ++l) {
           const int a = G.arts[b * W + l];
           if (!changed[a]) continue;
@@ -84,8 +85,10 @@ class Batches final : public ArticulationBatches {
           const Scalar* loss = model.joint_frictionloss.data() + art_[a].qd_begin();
           for (int m = 0; m < nf; ++m) G.frictionloss[b * nf + m][l] = static_cast<T>(loss[G.frictional[m]]);
           for (int k = 0; k < G.topo.dof_count; ++k)
-            more |= loss[k] > 0 && std::find(G.frictional.begin(), G.frictional.end(), k) == G.frictional.end();
+            gains[b] |= loss[k] > 0 && std::find(G.frictional.begin(), G.frictional.end(), k) == G.frictional.end();
         }
+      });
+      const bool more = std::find(gains.begin(), gains.end(), 1) != gains.end();
       if (more) lay_out_friction(G, model);
       more_rows |= more;
     }

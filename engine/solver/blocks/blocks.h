@@ -36,9 +36,9 @@ class ArticulationBatches : public StepRoute {
   // a batch switched off refactors when it is next on); the units are the blocks of the batches on
   virtual void enable(int max_dofs) = 0;
   // the parameters of the articulations a with changed[a] != 0 read again (Model::set_parameter): from `model`
-  // (the arrays the views point into) and `com` as make() read them
+  // (the arrays the views point into) and `com` as make() read them, the blocks on `threads` threads
   virtual void read_parameters(const Model& model, const std::vector<Scalar>& com,
-                               const std::vector<std::uint8_t>& changed) = 0;
+                               const std::vector<std::uint8_t>& changed, int threads) = 0;
   // true when articulation a is in a batch that is on
   virtual bool active(int a) const = 0;
   // where the blocks keep the limit impulses of their articulations in the step's limit_impulse: cell
