@@ -264,22 +264,25 @@ void bind_builder(py::module_& m) {
       .def(
           "add_sensor",
           [](ModelBuilder& self, const py::object& type, int object, const Transform& xform,
-             std::optional<ShapeType> zone_type, const Vec3& zone_size, Scalar cutoff, const std::string& name) {
+             std::optional<ShapeType> zone_type, const Vec3& zone_size, Scalar cutoff, int shape,
+             const std::string& name) {
             SensorOptions options;
             options.xform = xform;
             options.zone_type = zone_type ? static_cast<int>(*zone_type) : -1;
             options.zone_size = zone_size;
             options.cutoff = cutoff;
+            options.shape = shape;
             options.name = name;
             return self.add_sensor(sensor_type_of(type), object, options);
           },
           py::arg("type"), py::arg("object"), py::kw_only(), py::arg("xform") = Transform::identity(),
           py::arg("zone_type") = std::nullopt, py::arg("zone_size") = Vec3::Zero(), py::arg("cutoff") = 0.0,
-          py::arg("name") = "",
+          py::arg("shape") = -1, py::arg("name") = "",
           "A sensor (a SensorType, or its name as MJCF writes it: 'gyro') of `object`: a joint (jointpos, jointvel, "
           "ballquat, ballangvel), a tendon (tendonpos, tendonvel) or a body (-1: the world) with its frame xform in "
           "the body's frame. A touch sensor sums the normal forces of its body's contacts whose ray meets its zone "
-          "(zone_type Sphere, Box, Ellipsoid, Capsule or Cylinder of zone_size, in the frame; None: the whole body). "
+          "(zone_type Sphere, Box, Ellipsoid, Capsule or Cylinder of zone_size, in the frame; None: the whole body); "
+          "a touch or contactforce sensor with a shape reads only that shape's contacts. "
           "Values are clamped to [-cutoff, cutoff] where cutoff > 0. A solver's step writes them into "
           "State.sensor_data (from the state it starts from, with its accelerations and contact forces: MuJoCo's "
           "sensordata after mj_step).")

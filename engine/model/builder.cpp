@@ -364,6 +364,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
     if (kind == SensorObject::Tendon) sensor.object += tendon0;
     if (kind == SensorObject::Body && sensor.object >= 0) sensor.object += body0;
     if (kind == SensorObject::Body && sensor.object < 0) sensor.options.xform = place * sensor.options.xform;
+    if (sensor.options.shape >= 0) sensor.options.shape += shape0;
     sensor.world = world;
     sensors_.push_back(std::move(sensor));
   }

@@ -95,6 +95,7 @@ struct SensorOptions {
   int zone_type = -1;
   Vec3 zone_size = Vec3::Zero();
   Scalar cutoff = 0;  // values clamped to [-cutoff, cutoff] (Touch: to cutoff); 0: none; never quaternions or axes
+  int shape = -1;     // Touch, ContactForce: only the contacts of this shape of the body (-1: all the body's)
   std::string name;
 };
 

@@ -46,6 +46,15 @@ int ModelBuilder::add_sensor(SensorType type, int object, const SensorOptions& o
   }
   if ((type == SensorType::Touch || type == SensorType::ContactForce || type == SensorType::SubtreeCom) && object < 0)
     fail(item, ": a ", kind, " needs a body, not the world (-1)");
+  if (options.shape != -1) {
+    if (type != SensorType::Touch && type != SensorType::ContactForce)
+      fail(item, ": only a touch or contactforce sensor reads one shape's contacts, this is a ", kind);
+    if (options.shape < 0 || options.shape >= shape_count())
+      fail(item, ": shape index ", options.shape, " out of range [0, ", shape_count(), ")");
+    if (shapes_[options.shape].body != object)
+      fail(item, ": shape ", options.shape, " is not a shape of body ", object, " (its body is ",
+           shapes_[options.shape].body, ")");
+  }
   const int world = object >= 0 && sensor_object_kind(type) == SensorObject::Body ? body_world_[object] : 0;
   sensors_.push_back({type, object, o, world});
   return sensor_count() - 1;
@@ -76,6 +85,7 @@ void ModelBuilder::lay_out_sensors(Model& model) const {
     model.sensor_zone.insert(model.sensor_zone.end(), {static_cast<Scalar>(r.options.zone_type), r.options.zone_size[0],
                                                        r.options.zone_size[1], r.options.zone_size[2]});
     model.sensor_cutoff.push_back(r.options.cutoff);
+    model.sensor_shape.push_back(r.options.shape);
     model.sensor_world.push_back(world_of(r));
     model.sensor_start.push_back(model.sensor_start.back() + sensor_dim(r.type));
     model.sensor_name.push_back(r.options.name);

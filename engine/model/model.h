@@ -32,8 +32,8 @@ enum class Precision : int { Float64 = 0, Float32 = 1 };
 // origin, in the frame; SubtreeCom (3): the centre of mass of the body's subtree in the world; Touch (1): the
 // normal forces of the body's contacts whose ray (from the contact point, away from the body) meets the zone
 // (sensor_zone; a zone of type -1 is the whole body); ContactForce (3): the force the body's contacts exert on it,
-// in the world; ProjectedGravity (3): the world's gravity direction in the frame; TendonPos, TendonVel (1): a fixed
-// tendon's length and velocity
+// in the world (both of the body's contacts, or of one of its shapes: sensor_shape, -1 for all); ProjectedGravity (3):
+// the world's gravity direction in the frame; TendonPos, TendonVel (1): a fixed tendon's length and velocity
 enum class SensorType : int {
   JointPos = 0,
   JointVel,
@@ -194,6 +194,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, sensor_frame, sensor_count, 7)                 \
   X(Scalar, sensor_zone, sensor_count, 4)                  \
   X(Scalar, sensor_cutoff, sensor_count, 1)                \
+  X(int, sensor_shape, sensor_count, 1)                    \
   X(int, sensor_world, sensor_count, 1)                    \
   X(int, sensor_start, sensor_count + 1, 1)
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/model/group_by_key.h"
 #include "engine/sensors/zone.h"
 #include "engine/threads/parallel.h"
 #include "kernels/fk.h"
@@ -63,18 +64,12 @@ void Sensors::evaluate(const Scalar* q, const Scalar* qd, const Scalar* qd_next,
   if (empty()) return;
   // the contacts by world (a counting sort, in the contacts' order within a world)
   const int contact_count = contacts_ ? contacts.contact_count : 0;
-  contact_start_.assign(model_.world_count + 1, 0);
+  contact_start_.resize(model_.world_count + 1);
   contact_order_.resize(contact_count);
-  for (int c = 0; c < contact_count; ++c) {
-    const int w = contact_world(model_, contacts, c);
-    if (w >= 0) ++contact_start_[w + 1];
-  }
-  for (int w = 0; w < model_.world_count; ++w) contact_start_[w + 1] += contact_start_[w];
-  std::vector<int> next(contact_start_.begin(), contact_start_.end() - 1);
-  for (int c = 0; c < contact_count; ++c) {
-    const int w = contact_world(model_, contacts, c);
-    if (w >= 0) contact_order_[next[w]++] = c;
-  }
+  contact_next_.resize(model_.world_count + 1);
+  group_by_key(
+      contact_count, model_.world_count, [&](int c) { return contact_world(model_, contacts, c); },
+      contact_start_.data(), contact_order_.data(), contact_next_.data());
   const int team = std::clamp(threads, 1, model_.world_count);
   scratch_.resize(team);
   parallel_for(team, model_.world_count, [&](int w) {
@@ -228,9 +223,12 @@ void Sensors::evaluate_world(int w, const Scalar* q, const Scalar* qd, const Sca
             const ShapeType zone =
                 static_cast<ShapeType>(static_cast<int>(m.sensor_zone[4 * static_cast<size_t>(sensor)]));
             const Vec3 zone_size = Eigen::Map<const Vec3>(&m.sensor_zone[4 * static_cast<size_t>(sensor) + 1]);
+            const int shape = m.sensor_shape[sensor];
             for (int k = 0; k < contact_count; ++k) {
               const int c = world_contacts[k];
-              const bool on_a = contacts.contact_body_a[c] == object, on_b = contacts.contact_body_b[c] == object;
+              // the contact's sides on the sensor's body, or on its one shape
+              const bool on_a = shape < 0 ? contacts.contact_body_a[c] == object : contacts.contact_shape_a[c] == shape;
+              const bool on_b = shape < 0 ? contacts.contact_body_b[c] == object : contacts.contact_shape_b[c] == shape;
               if (on_a == on_b) continue;
               const Vec3 impulse = vec3_at(contacts.contact_impulse, c), normal = vec3_at(contacts.contact_normal, c);
               total += (on_b ? 1 : -1) / dt * impulse;

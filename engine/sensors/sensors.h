@@ -39,10 +39,10 @@ class Sensors {
 
   const Model& model_;
   std::vector<WorldSensors> worlds_;
-  std::vector<int> body_art_, body_link_;           // per body: its articulation and link
-  std::vector<Scratch> scratch_;                    // per thread
-  bool contacts_ = false;                           // some sensor reads the contacts
-  std::vector<int> contact_start_, contact_order_;  // the contacts by world (a counting sort per evaluate)
+  std::vector<int> body_art_, body_link_;                          // per body: its articulation and link
+  std::vector<Scratch> scratch_;                                   // per thread
+  bool contacts_ = false;                                          // some sensor reads the contacts
+  std::vector<int> contact_start_, contact_order_, contact_next_;  // the contacts by world (group_by_key)
 };
 
 }  // namespace novaphy

@@ -83,6 +83,8 @@ def test_add_sensor_by_type_or_name_and_bad_ones_named():
         builder.add_sensor("gyroscope", body)
     with pytest.raises(ValueError, match=r"sensor 2 \('z'\): a ballquat sensor reads a Ball joint"):
         builder.add_sensor("ballquat", 0, name="z")
+    with pytest.raises(ValueError, match="only a touch or contactforce sensor reads one shape's contacts"):
+        builder.add_sensor("gyro", body, shape=0)
     with pytest.raises(ValueError, match="zone_size must be finite and > 0"):
         builder.add_sensor("touch", body, zone_type=novaphy.ShapeType.Sphere)
     model = builder.finalize()

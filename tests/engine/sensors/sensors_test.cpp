@@ -104,15 +104,30 @@ struct RestingBall {
   Contacts contacts;
 };
 
+// the index of the shape called `name` in what `builder` holds so far
+int shape_named(const ModelBuilder& builder, const std::string& name) {
+  const Model model = builder.finalize();
+  for (int s = 0; s < model.shape_count; ++s)
+    if (model.shape_name[s] == name) return s;
+  ADD_FAILURE() << "no shape " << name;
+  return -1;
+}
+
 TEST(Sensors, ContactForceAndProjectedGravity) {
-  // NovaPhy's own sensors on the resting ball: the floor's push on it, and gravity seen from a frame turned a
-  // quarter turn about x (R^T (0, 0, -1) = (0, -1, 0))
+  // NovaPhy's own sensors on the resting ball: the floor's push on it (on the body, on the geom that touches the
+  // floor, on the one that does not), and gravity seen from a frame turned a quarter turn about x (R^T (0, 0, -1) =
+  // (0, -1, 0))
   SensorOptions turned;
   turned.xform.q = Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()));
-  int force = -1, gravity = -1;
+  int force = -1, gravity = -1, touching = -1, antenna = -1;
   const RestingBall scene([&](ModelBuilder& builder, int ball) {
+    SensorOptions on_geom, on_antenna;
+    on_geom.shape = shape_named(builder, "ballgeom");
+    on_antenna.shape = shape_named(builder, "antenna");
     force = builder.add_sensor(SensorType::ContactForce, ball);
     gravity = builder.add_sensor(SensorType::ProjectedGravity, ball, turned);
+    touching = builder.add_sensor(SensorType::ContactForce, ball, on_geom);
+    antenna = builder.add_sensor(SensorType::Touch, ball, on_antenna);
   });
   const Model& model = scene.model;
   const Scalar weight = -model.gravity.z() * model.body_mass[scene.ball];
@@ -120,6 +135,8 @@ TEST(Sensors, ContactForceAndProjectedGravity) {
   EXPECT_NEAR(f[0], 0, 1e-6 * weight);
   EXPECT_NEAR(f[1], 0, 1e-6 * weight);
   EXPECT_NEAR(f[2], weight, 1e-6 * weight);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(scene.state.sensor_data[model.sensor_start[touching] + k], f[k]);
+  EXPECT_EQ(scene.state.sensor_data[model.sensor_start[antenna]], 0);
   const Scalar* g = &scene.state.sensor_data[model.sensor_start[gravity]];
   const Vec3 expected(0, -1, 0);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(g[k], expected[k], 1e-9) << k;
@@ -196,6 +213,7 @@ TEST(Sensors, BuilderRefusesBadSensorsByName) {
   const int hinge = b.add_joint_revolute(-1, body);
   const int ball_body = b.add_body({1, Vec3::Zero(), Mat3::Identity()});
   b.add_joint_ball(body, ball_body);
+  ASSERT_EQ(ball_body, 1);
   SensorOptions named;
   named.name = "imu";
   EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::JointPos, 5, named), "sensor 0 ('imu'): joint index 5 out of range");
@@ -212,6 +230,13 @@ TEST(Sensors, BuilderRefusesBadSensorsByName) {
   EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::Gyro, body, zone), "only a touch sensor has a zone");
   zone.zone_type = static_cast<int>(ShapeType::Mesh);
   EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::Touch, body, zone), "zone_type 6 is not -1");
+  SensorOptions shaped;
+  shaped.shape = 0;
+  EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::Gyro, body, shaped), "only a touch or contactforce sensor reads one");
+  EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::Touch, body, shaped), "shape index 0 out of range [0, 0)");
+  b.add_shape_sphere(ball_body, 0.1);
+  EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::Touch, body, shaped),
+                       "shape 0 is not a shape of body 0 (its body is 1)");
   SensorOptions bad;
   bad.cutoff = -1;
   EXPECT_NOVAPHY_ERROR(b.add_sensor(SensorType::Gyro, body, bad), "cutoff must be finite and >= 0, got -1");
