@@ -123,9 +123,8 @@ def evaluate(params, norm, worlds, seconds, command=(0.5, 0.0, 0.0), seed=1, fra
         fell |= terminated
         if frames is not None and k % 2 == 0:
             frames.append(np.array(env.state.body_q))
-        if k >= steps // 2:
-            linvel = env._trunk()[0]
-            errors.append(np.abs(linvel[:, 0] - command[0]))
+        if k >= steps // 2:  # the observation's first entry: the trunk's forward velocity in its frame (no noise)
+            errors.append(np.abs(obs[:, 0] - command[0]))
     return float(np.mean(errors)), float(1 - fell.mean()), env
 
 

@@ -30,10 +30,6 @@ Transform y_to_z() {
   return T;
 }
 
-}  // namespace
-
-namespace {
-
 // the sensors NovaPhy computes: MuJoCo 2.2.2's mjtSensor value, its name and NovaPhy's type
 struct MujocoSensorType {
   int mj;

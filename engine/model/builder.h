@@ -352,7 +352,7 @@ class ModelBuilder {
     SensorType type;
     int object;  // joint, tendon or body (-1: the world)
     SensorOptions options;
-    int world;  // the world of a sensor of the world (object -1)
+    int world;  // its object's (a sensor of the world, object -1: the builder's world it was added to)
   };
   std::vector<SensorRecord> sensors_;
   std::vector<ActuatorRecord> actuators_;

@@ -55,25 +55,22 @@ int ModelBuilder::add_sensor(SensorType type, int object, const SensorOptions& o
       fail(item, ": shape ", options.shape, " is not a shape of body ", object, " (its body is ",
            shapes_[options.shape].body, ")");
   }
-  const int world = object >= 0 && sensor_object_kind(type) == SensorObject::Body ? body_world_[object] : 0;
+  // the world of its object (a sensor of the world: world 0 of this builder; add_builder places it)
+  int world = 0;
+  switch (sensor_object_kind(type)) {
+    case SensorObject::Joint: world = body_world_[joints_[object].child]; break;
+    case SensorObject::Tendon: world = body_world_[joints_[tendons_[object].joints[0]].child]; break;
+    case SensorObject::Body: world = object >= 0 ? body_world_[object] : 0; break;
+  }
   sensors_.push_back({type, object, o, world});
   return sensor_count() - 1;
 }
 
 void ModelBuilder::lay_out_sensors(Model& model) const {
   // each world's sensors together, in the order added (a replicated world's as in its builder)
-  const auto world_of = [&](const SensorRecord& s) {
-    switch (sensor_object_kind(s.type)) {
-      case SensorObject::Joint: return body_world_[joints_[s.object].child];
-      case SensorObject::Tendon: return body_world_[joints_[tendons_[s.object].joints[0]].child];
-      case SensorObject::Body: return s.object >= 0 ? body_world_[s.object] : s.world;
-    }
-    return 0;
-  };
   std::vector<int> order(sensors_.size());
   for (size_t s = 0; s < order.size(); ++s) order[s] = static_cast<int>(s);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return world_of(sensors_[a]) < world_of(sensors_[b]); });
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return sensors_[a].world < sensors_[b].world; });
   model.sensor_count = sensor_count();
   model.sensor_start.assign(1, 0);
   for (const int s : order) {
@@ -86,7 +83,7 @@ void ModelBuilder::lay_out_sensors(Model& model) const {
                                                        r.options.zone_size[1], r.options.zone_size[2]});
     model.sensor_cutoff.push_back(r.options.cutoff);
     model.sensor_shape.push_back(r.options.shape);
-    model.sensor_world.push_back(world_of(r));
+    model.sensor_world.push_back(r.world);
     model.sensor_start.push_back(model.sensor_start.back() + sensor_dim(r.type));
     model.sensor_name.push_back(r.options.name);
   }

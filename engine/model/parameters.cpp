@@ -158,6 +158,16 @@ std::string entry_label(const Model& model, Over over, int i) {
   return "";
 }
 
+// body i as it would be with x [width] as its parameter p (body_mass or body_inertia)
+RigidBody entry_body(const Model& model, const Parameter& p, int i, const Scalar* x) {
+  RigidBody body;
+  body.mass = p.real == &Model::body_mass ? x[0] : model.body_mass[i];
+  body.com = Eigen::Map<const Vec3>(&model.body_com[3 * i]);
+  body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
+      p.real == &Model::body_inertia ? x : &model.body_inertia[9 * i]);
+  return body;
+}
+
 // what is wrong with entry i's values x [width] of parameter p ("" where nothing is)
 std::string value_problem(const Model& model, const Parameter& p, int i, const Scalar* x) {
   auto problem = [](const auto&... parts) {
@@ -183,13 +193,8 @@ std::string value_problem(const Model& model, const Parameter& p, int i, const S
     }
   }
   if (p.check != Check::Body) return "";
-  RigidBody body;
-  body.mass = p.real == &Model::body_mass ? x[0] : model.body_mass[i];
-  body.com = Eigen::Map<const Vec3>(&model.body_com[3 * i]);
-  body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
-      p.real == &Model::body_inertia ? x : &model.body_inertia[9 * i]);
   // a massless link (a frame between joints) stays massless: the collision filter walks through it
-  return rigid_body_problem(body, model.body_mass[i] == 0);
+  return rigid_body_problem(entry_body(model, p, i, x), model.body_mass[i] == 0);
 }
 
 // whether the values [begin, end) all pass a check that looks at one value alone (false for the others: Body, Lower,
@@ -216,17 +221,8 @@ bool values_fit(Check check, const Scalar* begin, const Scalar* end) {
 bool value_fits(const Model& model, const Parameter& p, int i, const Scalar* x) {
   switch (p.check) {
     case Check::Finite:
-      for (int m = 0; m < p.width; ++m)
-        if (!std::isfinite(x[m])) return false;
-      return true;
     case Check::NotNegative:
-      for (int m = 0; m < p.width; ++m)
-        if (!(x[m] >= 0) || !std::isfinite(x[m])) return false;
-      return true;
-    case Check::Integer:
-      for (int m = 0; m < p.width; ++m)
-        if (!(std::isfinite(x[m]) && x[m] == std::trunc(x[m]) && std::abs(x[m]) < 1e9)) return false;
-      return true;
+    case Check::Integer: return values_fit(p.check, x, x + p.width);
     case Check::Lower:
     case Check::Upper: {
       const Scalar other = (model.*p.partner)[i];
@@ -235,12 +231,7 @@ bool value_fits(const Model& model, const Parameter& p, int i, const Scalar* x) 
     case Check::Body: {
       // a positive mass fits a body whatever its inertia (a massless link's zero is value_problem's to judge)
       if (p.real == &Model::body_mass && x[0] > 0 && std::isfinite(x[0]) && model.body_mass[i] > 0) return true;
-      RigidBody body;
-      body.mass = p.real == &Model::body_mass ? x[0] : model.body_mass[i];
-      body.com = Eigen::Map<const Vec3>(&model.body_com[3 * i]);
-      body.inertia = Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(
-          p.real == &Model::body_inertia ? x : &model.body_inertia[9 * i]);
-      return rigid_body_clearly_fine(body) || value_problem(model, p, i, x).empty();
+      return rigid_body_clearly_fine(entry_body(model, p, i, x)) || value_problem(model, p, i, x).empty();
     }
   }
   return false;

@@ -134,11 +134,15 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   // contact to its unit or the islands; then the stages in physics order (route.h: kinematics and forces, mass and
   // factor; rows and solve; the islands; integrate; guard; store)
   check_step(in, out, control, contacts, dt);
-  if (!sensors_.empty()) {
+  // the state the sensors are computed at: in's own arrays, or a copy of those the step overwrites (in is out);
+  // body_f the step leaves as it was
+  const bool keep_start = !sensors_.empty() && &in == &out;
+  if (keep_start) {
     start_q_ = in.joint_q;
     start_qd_ = in.joint_qd;
-    start_f_ = in.body_f;
   }
+  const Scalar* start_q = keep_start ? start_q_.data() : in.joint_q.data();
+  const Scalar* start_qd = keep_start ? start_qd_.data() : in.joint_qd.data();
   read_parameters();
   plan();
   StepContext step = begin_step(in, out, control, contacts, dt);
@@ -146,8 +150,8 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   list_contacts(contacts, step);
   run_stages(step);
   end_step(in, out, step);
-  sensors_.evaluate(start_q_.data(), start_qd_.data(), out.joint_qd.data(), start_f_.data(), contacts, dt,
-                    out.sensor_data.data(), thread_count());
+  sensors_.evaluate(start_q, start_qd, out.joint_qd.data(), out.body_f.data(), contacts, dt, out.sensor_data.data(),
+                    thread_count());
   if (!settings.count_serial_time) return;
   serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
   ++serial_seconds_.steps;

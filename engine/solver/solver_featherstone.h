@@ -198,9 +198,10 @@ class SolverFeatherstone {
   bool factor_kept_ = false;           // the last step's factor kept for this one (its update_mass_matrix_interval > 1)
   Scalar factored_dt_ = 0;
   std::vector<Scalar> reset_q_, reset_qd_;  // the reset state's joint_q and joint_qd (set_reset_state)
-  // the model's sensors, and the step's start they are computed at (joint_q, joint_qd, body_f of state_in)
+  // the model's sensors, and the step's start they are computed at where state_in is state_out (its joint_q,
+  // joint_qd)
   Sensors sensors_;
-  std::vector<Scalar> start_q_, start_qd_, start_f_;
+  std::vector<Scalar> start_q_, start_qd_;
   std::atomic<bool> busy_{false};  // a step is running (ExclusiveCall)
   std::int64_t step_bytes_ = 0;    // what a step touches: the solver's memory when made and the state's arrays
   int max_threads_ = 1;            // the threads the routes keep scratch for

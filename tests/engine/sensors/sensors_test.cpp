@@ -177,6 +177,22 @@ TEST(Sensors, EachWorldAsAloneAndTheSameOnAnyThreads) {
   }
 }
 
+TEST(Sensors, TheSameWhetherTheStepWritesAnotherStateOrItsOwn) {
+  ModelBuilder builder;
+  builder.add_mjcf(kSensorsXml);
+  const Model model = builder.finalize();
+  State in_place = model.state("moving"), from = model.state("moving"), to = model.state();
+  SolverFeatherstone a(model), b(model);
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  pipeline.collide(in_place, contacts);
+  a.step(in_place, in_place, model.control(), contacts, model.timestep);
+  pipeline.collide(from, contacts);
+  b.step(from, to, model.control(), contacts, model.timestep);
+  EXPECT_EQ(to.sensor_data, in_place.sensor_data);
+  EXPECT_NE(to.sensor_data, std::vector<Scalar>(to.sensor_data.size(), 0));
+}
+
 TEST(Sensors, ResetWorldsZeroTheirSensors) {
   RestingBall scene;
   State& state = scene.state;
