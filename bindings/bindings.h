@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "engine/model/model.h"
 #include "engine/threads/parallel.h"
 
 namespace novaphy::python {
@@ -29,6 +30,24 @@ py::array view(T* data, int count, int width, py::handle owner, bool writeable) 
   if (!writeable) array.attr("setflags")(py::arg("write") = false);
   return array;
 }
+
+// a call on a State or Control of a float32 model, whose float32 arrays are what Python holds while the engine
+// reads and writes its double fields: they are widened from the arrays before the call, and a State or Control
+// the call writes is rounded back into them after it. Nothing for a float64 model's. (Made without the GIL.)
+template <typename Owner>
+class Widened {
+ public:
+  Widened(Owner& owner, bool written) : owner_(owner), written_(written) { owner_.from_float32(); }
+  Widened(const Widened&) = delete;
+  Widened& operator=(const Widened&) = delete;
+  ~Widened() {
+    if (written_) owner_.to_float32();
+  }
+
+ private:
+  Owner& owner_;
+  bool written_;
+};
 
 // serial_seconds as a dict: step, parallel, steps and share
 inline py::dict serial_seconds_dict(const SerialSeconds& t) {

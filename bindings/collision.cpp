@@ -44,10 +44,15 @@ void bind_collision(py::module_& m) {
            py::arg("on_overflow") = ContactOverflow::Grow, py::arg("margin") = 0.01, py::arg("self_collision") = true,
            py::arg("num_threads") = 0, py::arg("count_serial_time") = false, py::keep_alive<1, 2>())
       .def("contacts", &CollisionPipeline::contacts, "A contacts buffer sized for this pipeline.")
-      .def("collide", &CollisionPipeline::collide, py::arg("state"), py::arg("contacts"),
-           py::call_guard<py::gil_scoped_release>(),
-           "Contacts between the shapes at state.body_q; one collide at a time per pipeline (another thread's "
-           "raises).")
+      .def(
+          "collide",
+          [](CollisionPipeline& self, State& state, Contacts& contacts) {
+            const Widened<State> read(state, false);
+            self.collide(state, contacts);
+          },
+          py::arg("state"), py::arg("contacts"), py::call_guard<py::gil_scoped_release>(),
+          "Contacts between the shapes at state.body_q; one collide at a time per pipeline (another thread's "
+          "raises).")
       .def_property_readonly(
           "serial_seconds", [](const CollisionPipeline& self) { return serial_seconds_dict(self.serial_seconds()); },
           "Seconds of whole collides and of their parallel work when made with count_serial_time, the collides "

@@ -19,77 +19,63 @@ py::array field_view(py::object self, std::vector<T> Owner::*field, int width, b
   return view(data.data(), static_cast<int>(data.size() / width), width, self, writeable);
 }
 
-// to_numpy / from_numpy / copy / assign of a State or Control, driven by its field table (Scalar fields and
-// State::world_reset's flags)
-template <typename Owner>
+// a State's or Control's field as Python holds it: the float32 array of a float32 model's, else the field
+template <typename Owner, typename T, typename Float32>
+py::array held_view(py::object self, std::vector<T> Owner::*field, std::vector<Float32Of<T>> Float32::*single,
+                    int width) {
+  Owner& owner = self.cast<Owner&>();
+  if (owner.precision == Precision::Float64) return field_view(self, field, width, true);
+  std::vector<Float32Of<T>>& data = owner.float32.*single;
+  return view(data.data(), static_cast<int>(data.size() / width), width, self, true);
+}
+
+// to_numpy / from_numpy of a State or Control: its fields as Python holds them, by name
 struct Checkpoint {
-  using Field = std::variant<std::vector<Scalar> Owner::*, std::vector<std::uint8_t> Owner::*>;
-  std::vector<std::pair<const char*, Field>> fields;
-  std::vector<int> widths;
+  std::vector<const char*> fields;
 
-  static std::vector<py::ssize_t> shape_of(std::size_t size, int width) {
-    return width > 1 ? std::vector<py::ssize_t>{static_cast<py::ssize_t>(size / width), width}
-                     : std::vector<py::ssize_t>{static_cast<py::ssize_t>(size)};
-  }
-
-  py::dict to_numpy(const Owner& owner) const {
+  py::dict to_numpy(const py::object& self) const {
     py::dict out;
-    for (size_t k = 0; k < fields.size(); ++k) {
-      std::visit(
-          [&](auto field) {
-            const auto& data = owner.*field;
-            py::array_t<typename std::decay_t<decltype(data)>::value_type> array(shape_of(data.size(), widths[k]));
-            std::copy(data.begin(), data.end(), array.mutable_data());
-            out[fields[k].first] = array;
-          },
-          fields[k].second);
-    }
+    for (const char* name : fields) out[name] = self.attr(name).attr("copy")();
     return out;
   }
 
-  void from_numpy(Owner& owner, const py::dict& arrays) const {
+  void from_numpy(const py::object& self, const py::dict& arrays) const {
     // check everything first: on error nothing is written
-    std::vector<std::function<void()>> writes;
+    std::vector<std::pair<py::array, py::array>> writes;
     for (const auto& [key, value] : arrays) {
       const std::string name = py::str(key);
-      size_t k = 0;
-      while (k < fields.size() && name != fields[k].first) ++k;
-      if (k == fields.size()) throw py::value_error("from_numpy: unknown field '" + name + "'");
+      if (std::find_if(fields.begin(), fields.end(), [&](const char* f) { return name == f; }) == fields.end())
+        throw py::value_error("from_numpy: unknown field '" + name + "'");
       const py::array array = py::array::ensure(value);
       if (!array || !(array.dtype().kind() == 'f' || array.dtype().kind() == 'i' || array.dtype().kind() == 'u'))
         throw py::type_error("from_numpy: field '" + name + "' must be a numeric array, got " +
                              (array ? "an array of dtype " + py::str(array.dtype()).cast<std::string>()
                                     : py::str(py::type::of(value)).cast<std::string>()));
-      std::visit(
-          [&](auto field) {
-            auto& data = owner.*field;
-            using T = typename std::decay_t<decltype(data)>::value_type;
-            const std::vector<py::ssize_t> expected = shape_of(data.size(), widths[k]);
-            const std::vector<py::ssize_t> shape(array.shape(), array.shape() + array.ndim());
-            if (shape != expected)
-              throw py::value_error("from_numpy: field '" + name + "' has shape " +
-                                    py::str(py::tuple(py::cast(shape))).cast<std::string>() + ", expected " +
-                                    py::str(py::tuple(py::cast(expected))).cast<std::string>());
-            auto cast = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(array);
-            writes.emplace_back([&data, cast] { std::copy(cast.data(), cast.data() + data.size(), data.begin()); });
-          },
-          fields[k].second);
+      const py::array field = self.attr(name.c_str());
+      const std::vector<py::ssize_t> shape(array.shape(), array.shape() + array.ndim());
+      const std::vector<py::ssize_t> expected(field.shape(), field.shape() + field.ndim());
+      if (shape != expected)
+        throw py::value_error("from_numpy: field '" + name + "' has shape " +
+                              py::str(py::tuple(py::cast(shape))).cast<std::string>() + ", expected " +
+                              py::str(py::tuple(py::cast(expected))).cast<std::string>());
+      writes.emplace_back(field, array);
     }
-    for (const auto& write : writes) write();
+    for (const auto& [field, array] : writes) field[py::ellipsis()] = array;
   }
 };
 
 template <typename Owner, typename Class>
-void bind_checkpoint(Class& c, const Checkpoint<Owner>& checkpoint) {
+void bind_checkpoint(Class& c, const Checkpoint& checkpoint) {
   c.def(
        "copy", [](const Owner& self) { return Owner(self); }, "An independent copy.")
       .def("assign", &Owner::assign, py::arg("other"), "Copies every array of other (same model).")
       .def(
-          "to_numpy", [checkpoint](const Owner& self) { return checkpoint.to_numpy(self); },
+          "to_numpy", [checkpoint](const py::object& self) { return checkpoint.to_numpy(self); },
           "Every array as a dict of numpy copies (a checkpoint).")
       .def(
-          "from_numpy", [checkpoint](Owner& self, const py::dict& arrays) { checkpoint.from_numpy(self, arrays); },
-          py::arg("arrays"), "Restores arrays from a dict like to_numpy's; checks names, shapes and dtypes first.");
+          "from_numpy",
+          [checkpoint](const py::object& self, const py::dict& arrays) { checkpoint.from_numpy(self, arrays); },
+          py::arg("arrays"), "Restores arrays from a dict like to_numpy's; checks names and shapes first.");
 }
 
 template <typename Class>
@@ -157,7 +143,8 @@ void bind_model(py::module_& m) {
       .value("Free", JointType::Free);
 
   py::enum_<Precision>(m, "Precision",
-                       "The precision the solver's batched kernels step a model in (its arrays stay float64).")
+                       "The precision the solver's batched kernels step a model in; a Float32 model's State and "
+                       "Control arrays are float32 (its Model arrays stay float64).")
       .value("Float64", Precision::Float64)
       .value("Float32", Precision::Float32);
 
@@ -222,27 +209,29 @@ void bind_model(py::module_& m) {
   })
 
   // State and Control first: Model's methods return them
-  auto state =
-      py::class_<State>(m, "State", "Mutable state: joint and body arrays, numpy views over the engine's buffers.");
+  auto state = py::class_<State>(m, "State",
+                                 "Mutable state: joint and body arrays, numpy views over the engine's buffers "
+                                 "(float32 in a float32 model).");
   bind_counts(state);
-#define NOVAPHY_BIND_STATE_FIELD(T, name, count, width) state NOVAPHY_BIND_FIELD(State, T, name, width, true);
+  Checkpoint state_checkpoint;
+#define NOVAPHY_BIND_STATE_FIELD(T, name, count, width)                                                  \
+  state.def_property_readonly(                                                                           \
+      #name, [](py::object self) { return held_view(self, &State::name, &StateFloat32::name, width); }); \
+  state_checkpoint.fields.push_back(#name);
   NOVAPHY_STATE_FIELDS(NOVAPHY_BIND_STATE_FIELD)
-  Checkpoint<State> state_checkpoint;
-#define NOVAPHY_STATE_CHECKPOINT(T, name, count, width) \
-  state_checkpoint.fields.emplace_back(#name, &State::name), state_checkpoint.widths.push_back(width);
-  NOVAPHY_STATE_FIELDS(NOVAPHY_STATE_CHECKPOINT)
-  bind_checkpoint(state, state_checkpoint);
+  bind_checkpoint<State>(state, state_checkpoint);
 
-  auto control =
-      py::class_<Control>(m, "Control", "Control inputs: joint_f generalised forces, actuator_ctrl motor commands.");
+  auto control = py::class_<Control>(m, "Control",
+                                     "Control inputs: joint_f generalised forces, actuator_ctrl motor commands "
+                                     "(float32 in a float32 model).");
   bind_counts(control);
-#define NOVAPHY_BIND_CONTROL_FIELD(T, name, count, width) control NOVAPHY_BIND_FIELD(Control, T, name, width, true);
+  Checkpoint control_checkpoint;
+#define NOVAPHY_BIND_CONTROL_FIELD(T, name, count, width)                                                    \
+  control.def_property_readonly(                                                                             \
+      #name, [](py::object self) { return held_view(self, &Control::name, &ControlFloat32::name, width); }); \
+  control_checkpoint.fields.push_back(#name);
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_BIND_CONTROL_FIELD)
-  Checkpoint<Control> control_checkpoint;
-#define NOVAPHY_CONTROL_CHECKPOINT(T, name, count, width) \
-  control_checkpoint.fields.emplace_back(#name, &Control::name), control_checkpoint.widths.push_back(width);
-  NOVAPHY_CONTROL_FIELDS(NOVAPHY_CONTROL_CHECKPOINT)
-  bind_checkpoint(control, control_checkpoint);
+  bind_checkpoint<Control>(control, control_checkpoint);
 
   auto model = py::class_<Model>(m, "Model", "Read-only model: topology and parameters as flat arrays.");
   bind_counts(model);
@@ -286,6 +275,7 @@ void bind_model(py::module_& m) {
             else if (!keyframe.is_none())
               k = keyframe.cast<int>();
             const py::gil_scoped_release release;
+            const Widened<State> written(state, true);
             self.reset_worlds(state, ids, k, threads);
           },
           py::arg("state"), py::arg("worlds"), py::arg("keyframe") = py::none(), py::kw_only(), py::arg("threads") = 0,

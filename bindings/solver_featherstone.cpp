@@ -91,12 +91,26 @@ void bind_solver_featherstone(py::module_& m) {
            py::arg("update_mass_matrix_interval") = 1, py::arg("friction_smoothing") = 1.0,
            py::arg("use_tile_gemm") = false, py::arg("fuse_cholesky") = true, py::keep_alive<1, 2>())
       .def_readwrite("settings", &SolverFeatherstone::settings)
-      .def("step", &SolverFeatherstone::step, py::arg("state_in"), py::arg("state_out"), py::arg("control"),
-           py::arg("contacts"), py::arg("dt"), py::call_guard<py::gil_scoped_release>(),
-           "Advances state_in by dt into state_out (they may be the same State); one step at a time per solver "
-           "(another thread's raises).")
-      .def("set_reset_state", &SolverFeatherstone::set_reset_state, py::arg("state"),
-           "The state (its joint_q and joint_qd, copied) an articulation restarts from under on_divergence Reset.")
+      .def(
+          "step",
+          [](SolverFeatherstone& self, State& in, State& out, Control& control, Contacts& contacts, Scalar dt) {
+            const Widened<State> written(out, true);
+            if (&in != &out) in.from_float32();
+            const Widened<Control> read(control, false);
+            self.step(in, out, control, contacts, dt);
+          },
+          py::arg("state_in"), py::arg("state_out"), py::arg("control"), py::arg("contacts"), py::arg("dt"),
+          py::call_guard<py::gil_scoped_release>(),
+          "Advances state_in by dt into state_out (they may be the same State); one step at a time per solver "
+          "(another thread's raises).")
+      .def(
+          "set_reset_state",
+          [](SolverFeatherstone& self, State& state) {
+            const Widened<State> read(state, false);
+            self.set_reset_state(state);
+          },
+          py::arg("state"),
+          "The state (its joint_q and joint_qd, copied) an articulation restarts from under on_divergence Reset.")
       .def("set_reset_keyframe", &SolverFeatherstone::set_reset_keyframe, py::arg("keyframe"),
            "The reset state at the model's keyframe of that name: its coordinates and velocities.")
       .def("joint_support", &SolverFeatherstone::joint_support)
@@ -129,10 +143,18 @@ void bind_solver_featherstone(py::module_& m) {
             return view(flags.data(), static_cast<int>(flags.size()), 1, self, false);
           },
           "Per articulation: 1 where the last step's divergence guard fired (a read-only view).");
-  m.def("simulate", &simulate, py::arg("pipeline"), py::arg("solver"), py::arg("state"), py::arg("control"),
-        py::arg("contacts"), py::arg("substeps") = 1, py::arg("dt") = 0.0, py::call_guard<py::gil_scoped_release>(),
-        "substeps steps of dt (0: the model's timestep) of state, in place: each pipeline.collide(state, contacts), "
-        "then solver.step(state, state, control, contacts, dt), the same bits as that loop; without the GIL.");
+  m.def(
+      "simulate",
+      [](CollisionPipeline& pipeline, SolverFeatherstone& solver, State& state, Control& control, Contacts& contacts,
+         int substeps, Scalar dt) {
+        const Widened<State> written(state, true);
+        const Widened<Control> read(control, false);
+        simulate(pipeline, solver, state, control, contacts, substeps, dt);
+      },
+      py::arg("pipeline"), py::arg("solver"), py::arg("state"), py::arg("control"), py::arg("contacts"),
+      py::arg("substeps") = 1, py::arg("dt") = 0.0, py::call_guard<py::gil_scoped_release>(),
+      "substeps steps of dt (0: the model's timestep) of state, in place: each pipeline.collide(state, contacts), "
+      "then solver.step(state, state, control, contacts, dt), the same bits as that loop; without the GIL.");
 }
 
 }  // namespace novaphy::python

@@ -105,19 +105,68 @@ bool same_layout(const ModelCounts& a, const ModelCounts& b) {
          a.actuator_count == b.actuator_count && a.sensor_value_count == b.sensor_value_count;
 }
 
+namespace {
+
+// the precision and layout `assign` needs of `other`
+void check_assign(const ModelCounts& self, const ModelCounts& other, const char* what) {
+  if (!same_layout(self, other))
+    fail("assign: the other ", what, " belongs to a model with ", other.body_count, " bodies, ", other.joint_dof_count,
+         " dofs and ", other.actuator_count, " actuators, this one to ", self.body_count, " bodies, ",
+         self.joint_dof_count, " dofs and ", self.actuator_count);
+  if (other.precision != self.precision)
+    fail("assign: the other ", what, " is ", precision_name(other.precision), ", this one ",
+         precision_name(self.precision));
+}
+
+// to[i] = from[i] (rounded to To) over `threads` threads, in chunks
+template <typename To, typename From>
+void convert(std::vector<To>& to, const std::vector<From>& from, int threads) {
+  constexpr size_t kChunk = size_t{1} << 14;
+  const int chunks = static_cast<int>((from.size() + kChunk - 1) / kChunk);
+  const int team = std::clamp(chunks, 1, threads > 0 ? threads : omp_get_max_threads());
+  parallel_for(team, chunks, [&](int c) {
+    const size_t begin = c * kChunk, end = std::min(from.size(), begin + kChunk);
+    for (size_t i = begin; i < end; ++i) to[i] = static_cast<To>(from[i]);
+  });
+}
+
+}  // namespace
+
 void State::assign(const State& other) {
-  if (!same_layout(*this, other))
-    fail("assign: the other state belongs to a model with ", other.body_count, " bodies and ", other.joint_dof_count,
-         " dofs, this one to ", body_count, " bodies and ", joint_dof_count, " dofs");
+  check_assign(*this, other, "state");
   *this = other;
 }
 
 void Control::assign(const Control& other) {
-  if (!same_layout(*this, other))
-    fail("assign: the other control belongs to a model with ", other.joint_dof_count, " dofs and ",
-         other.actuator_count, " actuators, this one to ", joint_dof_count, " dofs and ", actuator_count);
+  check_assign(*this, other, "control");
   *this = other;
 }
+
+#define NOVAPHY_FROM_FLOAT32(T, name, count, width) convert(name, float32.name, threads);
+#define NOVAPHY_TO_FLOAT32(T, name, count, width) convert(float32.name, name, threads);
+
+void State::from_float32(int threads) {
+  if (precision != Precision::Float32) return;
+  NOVAPHY_STATE_FIELDS(NOVAPHY_FROM_FLOAT32)
+}
+
+void State::to_float32(int threads) {
+  if (precision != Precision::Float32) return;
+  NOVAPHY_STATE_FIELDS(NOVAPHY_TO_FLOAT32)
+}
+
+void Control::from_float32(int threads) {
+  if (precision != Precision::Float32) return;
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_FROM_FLOAT32)
+}
+
+void Control::to_float32(int threads) {
+  if (precision != Precision::Float32) return;
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_TO_FLOAT32)
+}
+
+#undef NOVAPHY_FROM_FLOAT32
+#undef NOVAPHY_TO_FLOAT32
 
 void Model::allocate() {
 #define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
@@ -200,6 +249,11 @@ State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
   std::copy_n(q, model.joint_coord_count, s.joint_q.begin());
   if (qd) std::copy_n(qd, model.joint_dof_count, s.joint_qd.begin());
   bodies_from_joints(model, s);
+  if (model.precision == Precision::Float32) {
+#define NOVAPHY_ALLOCATE_FLOAT32(T, name, count, width) s.float32.name.resize(s.name.size());
+    NOVAPHY_STATE_FIELDS(NOVAPHY_ALLOCATE_FLOAT32)
+    s.to_float32();
+  }
   return s;
 }
 
@@ -259,6 +313,7 @@ Control Model::control(const std::string& name) const {
   const int k = keyframe(name);
   Control c = control();
   std::copy_n(keyframe_ctrl.data() + static_cast<size_t>(k) * actuator_count, actuator_count, c.actuator_ctrl.begin());
+  c.to_float32();
   return c;
 }
 
@@ -270,6 +325,11 @@ Control Model::control() const {
 #undef NOVAPHY_ALLOCATE_MEMBER
   s.joint_target_ke = joint_target_ke;
   s.joint_target_kd = joint_target_kd;
+  if (precision == Precision::Float32) {
+    NOVAPHY_CONTROL_FIELDS(NOVAPHY_ALLOCATE_FLOAT32)
+#undef NOVAPHY_ALLOCATE_FLOAT32
+    s.to_float32();
+  }
   return s;
 }
 
@@ -281,6 +341,21 @@ void check_model_id(const Model& model, const ModelCounts& made_by, const char* 
          " (make it with this model's ", what, "())");
 }
 
+// a Float32 state's or control's float32 arrays as long as its fields
+template <typename Owner>
+void check_float32(const Owner& owner, const char* what) {
+  if (owner.precision == Precision::Float64) return;
+#define NOVAPHY_CHECK_FLOAT32(T, name, count, width)  \
+  if (owner.float32.name.size() != owner.name.size()) \
+    fail(what, ": float32.", #name, " has ", owner.float32.name.size(), " entries, ", #name, " ", owner.name.size());
+  if constexpr (std::is_same_v<Owner, State>) {
+    NOVAPHY_STATE_FIELDS(NOVAPHY_CHECK_FLOAT32)
+  } else {
+    NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_FLOAT32)
+  }
+#undef NOVAPHY_CHECK_FLOAT32
+}
+
 }  // namespace
 
 void Model::check(const State& state) const {
@@ -290,12 +365,14 @@ void Model::check(const State& state) const {
          " (state or control from another model?)");
   NOVAPHY_STATE_FIELDS(NOVAPHY_CHECK_ARRAY)
   check_model_id(*this, state, "state");
+  check_float32(state, "state");
 }
 
 void Model::check(const Control& control) const {
   const auto& state = control;
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_CHECK_ARRAY)
   check_model_id(*this, control, "control");
+  check_float32(control, "control");
 }
 
 }  // namespace novaphy

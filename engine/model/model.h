@@ -7,6 +7,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/articulation.h"
@@ -16,10 +17,10 @@ namespace novaphy {
 // capsules and cylinders run along their frame's Y axis; a Mesh collides as the convex hull of mesh shape_mesh
 enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3, Cylinder = 4, Ellipsoid = 5, Mesh = 6 };
 
-// the precision the batched kernels step a model in (State, Control and Model arrays stay double;
-// with Float32 the stepped state is rounded to float each step)
 enum class EqualityType : int { Connect = 0, JointCoupling = 1, Weld = 2 };
 
+// the precision the batched kernels step a model in; with Float32 the stepped state is rounded to float each
+// step, and its State and Control also hold their arrays as float32 (State::float32, Control::float32)
 enum class Precision : int { Float64 = 0, Float32 = 1 };
 
 // what a sensor measures (MuJoCo's sensor of the same name where MJCF has one; `frame` is the sensor's frame on its
@@ -220,11 +221,13 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_target_ke, joint_dof_count, 1)  \
   X(Scalar, joint_target_kd, joint_dof_count, 1)
 
-// the counts every field's size is written in, and the model they were made by: model_id is a fingerprint of the
+// the counts every field's size is written in, the precision of the model's State and Control arrays, and the
+// model they were made by: model_id is a fingerprint of the
 // model as finalized (every field, gravity and the enums), so a state, control or contacts of another model is
 // refused even where its counts are the same, while models finalized alike (a scene rebuilt) share their states
 struct ModelCounts {
   std::uint64_t model_id = 0;
+  Precision precision = Precision::Float64;
   int world_count = 1;
   int body_count = 0;
   int joint_count = 0;
@@ -248,23 +251,48 @@ struct ModelCounts {
 
 bool same_layout(const ModelCounts& a, const ModelCounts& b);
 
+// a field's type among a float32 model's float32 arrays: Scalar as float, flags as they are
+template <typename T>
+using Float32Of = std::conditional_t<std::is_same_v<T, Scalar>, float, T>;
+
+// a Float32 model's State and Control as float32 arrays (empty for a Float64 model): what the Python binding
+// hands out (numpy views, DLPack without a copy to torch or JAX) and a float32 policy reads and writes in place.
+// The engine reads and writes the double fields; from_float32() widens these arrays into them and to_float32()
+// rounds them into these arrays, exact both ways for a float32 model's stepped state (rounded to float each step)
+#define NOVAPHY_DECLARE_FLOAT32(T, name, count, width) std::vector<Float32Of<T>> name;
+struct StateFloat32 {
+  NOVAPHY_STATE_FIELDS(NOVAPHY_DECLARE_FLOAT32)
+};
+struct ControlFloat32 {
+  NOVAPHY_CONTROL_FIELDS(NOVAPHY_DECLARE_FLOAT32)
+};
+#undef NOVAPHY_DECLARE_FLOAT32
+
 struct State : ModelCounts {
 #define NOVAPHY_DECLARE(T, name, count, width) std::vector<T> name;
   NOVAPHY_STATE_FIELDS(NOVAPHY_DECLARE)
-  // copies every array of other (a checkpoint restored); throws Error unless both have one model's layout
+  StateFloat32 float32;  // (precision Float32)
+  // copies every array of other (a checkpoint restored); throws Error unless both have one model's layout and
+  // precision
   void assign(const State& other);
+  // the fields from the float32 arrays / the float32 arrays from the fields, on `threads` threads (0: OpenMP's
+  // default); nothing for a Float64 state
+  void from_float32(int threads = 0);
+  void to_float32(int threads = 0);
 };
 
 struct Control : ModelCounts {
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_DECLARE)
+  ControlFloat32 float32;  // (precision Float32)
   void assign(const Control& other);
+  void from_float32(int threads = 0);
+  void to_float32(int threads = 0);
 };
 
 struct ParameterIndex;  // engine/model/parameters.cpp
 
 struct Model : ModelCounts {
   Vec3 gravity = Vec3(0, -9.81, 0);  // the builder's: every world's world_gravity at finalize
-  Precision precision = Precision::Float64;
   CollisionFilter collision_filter = CollisionFilter::GroupAndMask;  // exclude_shape: pairs that never collide
   FrictionRule friction_rule = FrictionRule::GeometricMean;
   NOVAPHY_MODEL_FIELDS(NOVAPHY_DECLARE)

@@ -70,7 +70,7 @@ class Contacts:
     def contact_spin_impulse(self) -> numpy.ndarray: ...
 
 class Control:
-    """Control inputs: joint_f generalised forces, actuator_ctrl motor commands."""
+    """Control inputs: joint_f generalised forces, actuator_ctrl motor commands (float32 in a float32 model)."""
     @property
     def actuator_count(self) -> int: ...
     @property
@@ -577,7 +577,7 @@ class MujocoImport:
     def warnings(self) -> List[str]: ...
 
 class Precision:
-    """The precision the solver's batched kernels step a model in (its arrays stay float64).
+    """The precision the solver's batched kernels step a model in; a Float32 model's State and Control arrays are float32 (its Model arrays stay float64).
 
 Members:
 
@@ -847,7 +847,7 @@ class SolverFeatherstoneSettings:
     def weld_fixed_joints(self, value: bool) -> None: ...
 
 class State:
-    """Mutable state: joint and body arrays, numpy views over the engine's buffers."""
+    """Mutable state: joint and body arrays, numpy views over the engine's buffers (float32 in a float32 model)."""
     @property
     def actuator_count(self) -> int: ...
     @property
