@@ -37,16 +37,20 @@ py::array view(T* data, int count, int width, py::handle owner, bool writeable) 
 template <typename Owner>
 class Widened {
  public:
-  Widened(Owner& owner, bool written) : owner_(owner), written_(written) { owner_.from_float32(); }
+  // (on `threads` threads, 0: OpenMP's default)
+  Widened(Owner& owner, bool written, int threads = 0) : owner_(owner), written_(written), threads_(threads) {
+    owner_.from_float32(threads_);
+  }
   Widened(const Widened&) = delete;
   Widened& operator=(const Widened&) = delete;
   ~Widened() {
-    if (written_) owner_.to_float32();
+    if (written_) owner_.to_float32(threads_);
   }
 
  private:
   Owner& owner_;
   bool written_;
+  int threads_;
 };
 
 // serial_seconds as a dict: step, parallel, steps and share

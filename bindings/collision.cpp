@@ -47,7 +47,7 @@ void bind_collision(py::module_& m) {
       .def(
           "collide",
           [](CollisionPipeline& self, State& state, Contacts& contacts) {
-            const Widened<State> read(state, false);
+            const Widened<State> read(state, false, self.options().num_threads);
             self.collide(state, contacts);
           },
           py::arg("state"), py::arg("contacts"), py::call_guard<py::gil_scoped_release>(),

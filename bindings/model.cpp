@@ -275,7 +275,7 @@ void bind_model(py::module_& m) {
             else if (!keyframe.is_none())
               k = keyframe.cast<int>();
             const py::gil_scoped_release release;
-            const Widened<State> written(state, true);
+            const Widened<State> written(state, true, threads);
             self.reset_worlds(state, ids, k, threads);
           },
           py::arg("state"), py::arg("worlds"), py::arg("keyframe") = py::none(), py::kw_only(), py::arg("threads") = 0,

@@ -94,9 +94,10 @@ void bind_solver_featherstone(py::module_& m) {
       .def(
           "step",
           [](SolverFeatherstone& self, State& in, State& out, Control& control, Contacts& contacts, Scalar dt) {
-            const Widened<State> written(out, true);
-            if (&in != &out) in.from_float32();
-            const Widened<Control> read(control, false);
+            const int threads = self.settings.num_threads;
+            const Widened<State> written(out, true, threads);
+            if (&in != &out) in.from_float32(threads);
+            const Widened<Control> read(control, false, threads);
             self.step(in, out, control, contacts, dt);
           },
           py::arg("state_in"), py::arg("state_out"), py::arg("control"), py::arg("contacts"), py::arg("dt"),
@@ -147,8 +148,9 @@ void bind_solver_featherstone(py::module_& m) {
       "simulate",
       [](CollisionPipeline& pipeline, SolverFeatherstone& solver, State& state, Control& control, Contacts& contacts,
          int substeps, Scalar dt) {
-        const Widened<State> written(state, true);
-        const Widened<Control> read(control, false);
+        const int threads = solver.settings.num_threads;
+        const Widened<State> written(state, true, threads);
+        const Widened<Control> read(control, false, threads);
         simulate(pipeline, solver, state, control, contacts, substeps, dt);
       },
       py::arg("pipeline"), py::arg("solver"), py::arg("state"), py::arg("control"), py::arg("contacts"),

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstring>
+#include <functional>
 
 #include "engine/model/body_kinematics.h"
 #include "engine/model/error.h"
@@ -118,17 +119,30 @@ void check_assign(const ModelCounts& self, const ModelCounts& other, const char*
          precision_name(self.precision));
 }
 
-// to[i] = from[i] (rounded to To) over `threads` threads, in chunks
-template <typename To, typename From>
-void convert(std::vector<To>& to, const std::vector<From>& from, int threads) {
-  constexpr size_t kChunk = size_t{1} << 14;
-  const int chunks = static_cast<int>((from.size() + kChunk - 1) / kChunk);
-  const int team = std::clamp(chunks, 1, threads > 0 ? threads : omp_get_max_threads());
-  parallel_for(team, chunks, [&](int c) {
-    const size_t begin = c * kChunk, end = std::min(from.size(), begin + kChunk);
-    for (size_t i = begin; i < end; ++i) to[i] = static_cast<To>(from[i]);
-  });
-}
+// the copies of a call to from_float32 or to_float32: every field's entries converted (rounded to float or widened
+// to double), all fields' in one parallel loop over chunks of them
+class Conversions {
+ public:
+  template <typename To, typename From>
+  void add(std::vector<To>& to, const std::vector<From>& from) {
+    for (size_t begin = 0; begin < from.size(); begin += kChunk) {
+      const size_t n = std::min(kChunk, from.size() - begin);
+      chunks_.push_back([&to, &from, begin, n] {
+        for (size_t i = begin; i < begin + n; ++i) to[i] = static_cast<To>(from[i]);
+      });
+    }
+  }
+
+  void run(int threads) const {
+    const int count = static_cast<int>(chunks_.size());
+    const int team = std::clamp(count, 1, threads > 0 ? threads : omp_get_max_threads());
+    parallel_for(team, count, [&](int c) { chunks_[c](); });
+  }
+
+ private:
+  static constexpr size_t kChunk = size_t{1} << 15;
+  std::vector<std::function<void()>> chunks_;
+};
 
 }  // namespace
 
@@ -142,27 +156,35 @@ void Control::assign(const Control& other) {
   *this = other;
 }
 
-#define NOVAPHY_FROM_FLOAT32(T, name, count, width) convert(name, float32.name, threads);
-#define NOVAPHY_TO_FLOAT32(T, name, count, width) convert(float32.name, name, threads);
+#define NOVAPHY_FROM_FLOAT32(T, name, count, width) conversions.add(name, float32.name);
+#define NOVAPHY_TO_FLOAT32(T, name, count, width) conversions.add(float32.name, name);
 
 void State::from_float32(int threads) {
   if (precision != Precision::Float32) return;
+  Conversions conversions;
   NOVAPHY_STATE_FIELDS(NOVAPHY_FROM_FLOAT32)
+  conversions.run(threads);
 }
 
 void State::to_float32(int threads) {
   if (precision != Precision::Float32) return;
+  Conversions conversions;
   NOVAPHY_STATE_FIELDS(NOVAPHY_TO_FLOAT32)
+  conversions.run(threads);
 }
 
 void Control::from_float32(int threads) {
   if (precision != Precision::Float32) return;
+  Conversions conversions;
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_FROM_FLOAT32)
+  conversions.run(threads);
 }
 
 void Control::to_float32(int threads) {
   if (precision != Precision::Float32) return;
+  Conversions conversions;
   NOVAPHY_CONTROL_FIELDS(NOVAPHY_TO_FLOAT32)
+  conversions.run(threads);
 }
 
 #undef NOVAPHY_FROM_FLOAT32
