@@ -5,7 +5,8 @@
 #   2. the C++ tests again under AddressSanitizer + UndefinedBehaviorSanitizer in ./build-asan;
 #   3. each libFuzzer target for 60 s (tools/fuzz.sh);
 #   4. the training example's smoke test: two PPO iterations of 32 Go1 worlds (tools/train_go1.py, its optional
-#      extra from tools/setup_train.sh; skipped, saying so, where PyPI is out of reach).
+#      extra from tools/setup_train.sh; skipped, saying so, where PyPI is out of reach), and the float32 arrays'
+#      tests again with that extra's JAX (DLPack without a copy).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # the tests run side by side (-j): their OpenMP threads sleep while they wait rather than spin, so
@@ -24,6 +25,7 @@ if bash tools/setup_train.sh; then
   PYTHONPATH=build/python build/venv-train/bin/python tools/train_go1.py --iterations 2 --worlds 32 --horizon 8 \
     --eval-worlds 4 --eval-seconds 0.2 --gif-seconds 0.2 --out build/train_smoke
   test -s build/train_smoke/summary.json && test -s build/train_smoke/curve.png && test -s build/train_smoke/walk.gif
+  PYTHONPATH=build/python build/venv-train/bin/python -m pytest -q tests/python/test_float32.py
 else
   echo "novaphy test: the training extra could not be installed (PyPI out of reach?): its smoke test is skipped"
 fi
