@@ -156,39 +156,30 @@ void Control::assign(const Control& other) {
   *this = other;
 }
 
-#define NOVAPHY_FROM_FLOAT32(T, name, count, width) conversions.add(name, float32.name);
-#define NOVAPHY_TO_FLOAT32(T, name, count, width) conversions.add(float32.name, name);
+namespace {
 
-void State::from_float32(int threads) {
-  if (precision != Precision::Float32) return;
+// a State's or Control's fields into its float32 arrays (`rounding`) or from them, on `threads` threads
+template <typename Owner>
+void convert_float32(Owner& owner, bool rounding, int threads) {
+  if (owner.precision != Precision::Float32) return;
   Conversions conversions;
-  NOVAPHY_STATE_FIELDS(NOVAPHY_FROM_FLOAT32)
+#define NOVAPHY_CONVERT(T, name, count, width) \
+  rounding ? conversions.add(owner.float32.name, owner.name) : conversions.add(owner.name, owner.float32.name);
+  if constexpr (std::is_same_v<Owner, State>) {
+    NOVAPHY_STATE_FIELDS(NOVAPHY_CONVERT)
+  } else {
+    NOVAPHY_CONTROL_FIELDS(NOVAPHY_CONVERT)
+  }
+#undef NOVAPHY_CONVERT
   conversions.run(threads);
 }
 
-void State::to_float32(int threads) {
-  if (precision != Precision::Float32) return;
-  Conversions conversions;
-  NOVAPHY_STATE_FIELDS(NOVAPHY_TO_FLOAT32)
-  conversions.run(threads);
-}
+}  // namespace
 
-void Control::from_float32(int threads) {
-  if (precision != Precision::Float32) return;
-  Conversions conversions;
-  NOVAPHY_CONTROL_FIELDS(NOVAPHY_FROM_FLOAT32)
-  conversions.run(threads);
-}
-
-void Control::to_float32(int threads) {
-  if (precision != Precision::Float32) return;
-  Conversions conversions;
-  NOVAPHY_CONTROL_FIELDS(NOVAPHY_TO_FLOAT32)
-  conversions.run(threads);
-}
-
-#undef NOVAPHY_FROM_FLOAT32
-#undef NOVAPHY_TO_FLOAT32
+void State::from_float32(int threads) { convert_float32(*this, false, threads); }
+void State::to_float32(int threads) { convert_float32(*this, true, threads); }
+void Control::from_float32(int threads) { convert_float32(*this, false, threads); }
+void Control::to_float32(int threads) { convert_float32(*this, true, threads); }
 
 void Model::allocate() {
 #define NOVAPHY_ALLOCATE(T, name, count, width) name.assign(static_cast<size_t>(count) * (width), T{});
