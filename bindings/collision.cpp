@@ -47,6 +47,7 @@ void bind_collision(py::module_& m) {
       .def(
           "collide",
           [](CollisionPipeline& self, State& state, Contacts& contacts) {
+            const ExclusiveCall held = self.hold();  // (before the conversion: a refused call writes nothing)
             const Widened<State> read(state, false, self.options().num_threads);
             self.collide(state, contacts);
           },

@@ -284,6 +284,18 @@ void bind_model(py::module_& m) {
           "world_reset set, so that the next collide and step use none of their history (warm starts, a kept "
           "factor). Every other world is left as it was.")
       .def(
+          "restart_worlds",
+          [](const Model& self, State& state, const py::object& given, int threads) {
+            const std::vector<int> ids = world_ids(self, given, "restart_worlds");
+            const py::gil_scoped_release release;
+            const Widened<State> written(state, true, threads);
+            self.restart_worlds(state, ids, threads);
+          },
+          py::arg("state"), py::arg("worlds"), py::kw_only(), py::arg("threads") = 0,
+          "Worlds of `state` (a bool mask or world ids) start afresh from the joint_q and joint_qd written into them "
+          "(a start of the caller's own): as reset_worlds, with those coordinates and velocities kept and each Free "
+          "or Ball quaternion normalised. Refuses a value that is not finite or a zero quaternion, naming it.")
+      .def(
           "set_parameter",
           [](Model& self, const std::string& field, const py::object& values, const py::object& worlds) {
             std::vector<int> ids;

@@ -95,6 +95,7 @@ void bind_solver_featherstone(py::module_& m) {
           "step",
           [](SolverFeatherstone& self, State& in, State& out, Control& control, Contacts& contacts, Scalar dt) {
             const int threads = self.settings.num_threads;
+            const ExclusiveCall held = self.hold();  // (before the conversions: a refused call writes nothing)
             const Widened<State> written(out, true, threads);
             if (&in != &out) in.from_float32(threads);
             const Widened<Control> read(control, false, threads);
@@ -149,6 +150,7 @@ void bind_solver_featherstone(py::module_& m) {
       [](CollisionPipeline& pipeline, SolverFeatherstone& solver, State& state, Control& control, Contacts& contacts,
          int substeps, Scalar dt) {
         const int threads = solver.settings.num_threads;
+        const ExclusiveCall held_pipeline = pipeline.hold(), held_solver = solver.hold();
         const Widened<State> written(state, true, threads);
         const Widened<Control> read(control, false, threads);
         simulate(pipeline, solver, state, control, contacts, substeps, dt);

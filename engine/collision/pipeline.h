@@ -5,7 +5,6 @@
 // WorldGroups (worlds alike in groups of lanes).
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -14,6 +13,7 @@
 #include "engine/collision/world_groups.h"
 #include "engine/collision/world_shapes.h"
 #include "engine/model/model.h"
+#include "engine/threads/exclusive_call.h"
 #include "engine/threads/parallel.h"
 #include "kernels/collide.h"
 #include "kernels/convex.h"
@@ -102,6 +102,9 @@ class CollisionPipeline {
   // contacts between the shapes at the poses of state.body_q; throws Error where another thread's collide on this
   // pipeline is running (one pipeline per thread)
   void collide(const State& state, Contacts& contacts);
+  // holds this pipeline's one-call flag for the caller's scope (collides on this thread nest inside it), so work
+  // that belongs with a collide (the binding's float32 conversions) is refused with it on another thread
+  ExclusiveCall hold() { return ExclusiveCall(busy_, "CollisionPipeline.collide"); }
 
   const CollisionOptions& options() const { return options_; }
   // wall time of whole collides and of their parallel work (the loops over worlds, shared shapes and planes, the
@@ -216,8 +219,8 @@ class CollisionPipeline {
   ShapeFilter filter_;
   WorldShapes shapes_;
   WorldGroups groups_;
-  std::atomic<bool> busy_{false};  // a collide is running (ExclusiveCall)
-  Scalar reach_;  // the broad phase's bounds' margin: the larger of options_.margin and every shape_margin
+  CallFlag busy_;  // a collide is running (ExclusiveCall)
+  Scalar reach_;   // the broad phase's bounds' margin: the larger of options_.margin and every shape_margin
   SerialSeconds serial_seconds_;
   // scratch
   std::vector<Box> shared_boxes_;              // [WorldShapes::shared_others]

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <functional>
@@ -274,38 +275,97 @@ State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
 
 State Model::state() const { return state_at(*this, joint_q0.data(), nullptr); }
 
+namespace {
+
+// world ids as a mask of the model's worlds; throws naming `what` and an id out of range
+std::vector<std::uint8_t> world_mask(const Model& model, const std::vector<int>& worlds, const char* what) {
+  std::vector<std::uint8_t> mask(model.world_count, 0);
+  for (size_t i = 0; i < worlds.size(); ++i) {
+    if (worlds[i] < 0 || worlds[i] >= model.world_count)
+      fail(what, ": worlds[", i, "] = ", worlds[i], " is not a world of the model (0 .. ", model.world_count - 1, ")");
+    mask[worlds[i]] = 1;
+  }
+  return mask;
+}
+
+// where link j's quaternion starts in joint_q (a Free joint's after its position, a Ball joint's), -1: it has none
+int quaternion_at(const ArticulationView& art, int j) {
+  const int at = art.q_begin() + art.q_start(j);
+  return art.type(j) == JointType::Free ? at + 3 : art.type(j) == JointType::Ball ? at : -1;
+}
+
+// the articulations of the worlds in `mask`
+std::vector<int> articulations_of(const Model& model, const std::vector<std::uint8_t>& mask) {
+  std::vector<int> arts;
+  for (int a = 0; a < model.articulation_count; ++a) {
+    const int w = model.articulation_world(a);
+    if (w >= 0 && mask[w]) arts.push_back(a);
+  }
+  return arts;
+}
+
+// the worlds in `mask` start afresh (reset_worlds, restart_worlds), their articulations on `threads` threads: joint_q
+// from q (nullptr: the state's own, each quaternion normalised) and joint_qd from qd (nullptr: zero; the state's
+// own: kept), body_f zeroed, body_q and body_qd by FK, sensors zeroed, world_reset set
+void start_worlds(const Model& model, State& state, const std::vector<std::uint8_t>& mask, const Scalar* q,
+                  const Scalar* qd, int threads) {
+  const std::vector<int> arts = articulations_of(model, mask);
+  const int team = std::clamp(static_cast<int>(arts.size()), 1, threads > 0 ? threads : omp_get_max_threads());
+  std::vector<ArticulationScratch> scratch(team);
+  parallel_for(team, static_cast<int>(arts.size()), [&](int i) {
+    const ArticulationView art = model.articulation(arts[i]);
+    if (q) {
+      std::copy_n(q + art.q_begin(), art.coord_count(), state.joint_q.begin() + art.q_begin());
+    } else {
+      for (int j = 0; j < art.link_count(); ++j)
+        if (const int at = quaternion_at(art, j); at >= 0)
+          Eigen::Map<Eigen::Matrix<Scalar, 4, 1>>(state.joint_q.data() + at).normalize();
+    }
+    if (qd != state.joint_qd.data())
+      for (int k = art.qd_begin(); k < art.qd_begin() + art.dof_count(); ++k) state.joint_qd[k] = qd ? qd[k] : 0;
+    for (int l = 0; l < art.link_count(); ++l) std::fill_n(state.body_f.begin() + 6 * art.body(l), 6, Scalar(0));
+    ArticulationScratch& s = scratch[omp_get_thread_num()];
+    store_body_state(kinematics(model, state, arts[i], s), s, state);
+  });
+  for (int w = 0; w < model.world_count; ++w) state.world_reset[w] |= mask[w];
+  for (int s = 0; s < model.sensor_count; ++s)
+    if (mask[model.sensor_world[s]])
+      std::fill(state.sensor_data.begin() + model.sensor_start[s],
+                state.sensor_data.begin() + model.sensor_start[s + 1], 0);
+}
+
+}  // namespace
+
 void Model::reset_worlds(State& state, const std::vector<int>& worlds, int keyframe, int threads) const {
   check(state);
   if (keyframe < -1 || keyframe >= keyframe_count)
     fail("reset_worlds: keyframe ", keyframe, " is not one of the model's ", keyframe_count, " keyframes");
-  std::vector<std::uint8_t> reset(world_count, 0);
-  for (size_t i = 0; i < worlds.size(); ++i) {
-    if (worlds[i] < 0 || worlds[i] >= world_count)
-      fail("reset_worlds: worlds[", i, "] = ", worlds[i], " is not a world of the model (0 .. ", world_count - 1, ")");
-    reset[worlds[i]] = 1;
-  }
-  std::vector<int> arts;
-  for (int a = 0; a < articulation_count; ++a) {
-    const int w = articulation_world(a);
-    if (w >= 0 && reset[w]) arts.push_back(a);
-  }
+  const std::vector<std::uint8_t> mask = world_mask(*this, worlds, "reset_worlds");
   const Scalar* q =
       keyframe < 0 ? joint_q0.data() : keyframe_q.data() + static_cast<size_t>(keyframe) * joint_coord_count;
   const Scalar* qd = keyframe < 0 ? nullptr : keyframe_qd.data() + static_cast<size_t>(keyframe) * joint_dof_count;
-  const int team = std::clamp(static_cast<int>(arts.size()), 1, threads > 0 ? threads : omp_get_max_threads());
-  std::vector<ArticulationScratch> scratch(team);
-  parallel_for(team, static_cast<int>(arts.size()), [&](int i) {
-    const ArticulationView art = articulation(arts[i]);
-    std::copy_n(q + art.q_begin(), art.coord_count(), state.joint_q.begin() + art.q_begin());
-    for (int k = art.qd_begin(); k < art.qd_begin() + art.dof_count(); ++k) state.joint_qd[k] = qd ? qd[k] : 0;
-    for (int l = 0; l < art.link_count(); ++l) std::fill_n(state.body_f.begin() + 6 * art.body(l), 6, Scalar(0));
-    ArticulationScratch& s = scratch[omp_get_thread_num()];
-    store_body_state(kinematics(*this, state, arts[i], s), s, state);
-  });
-  for (int w = 0; w < world_count; ++w) state.world_reset[w] |= reset[w];
-  for (int s = 0; s < sensor_count; ++s)
-    if (reset[sensor_world[s]])
-      std::fill(state.sensor_data.begin() + sensor_start[s], state.sensor_data.begin() + sensor_start[s + 1], 0);
+  start_worlds(*this, state, mask, q, qd, threads);
+}
+
+void Model::restart_worlds(State& state, const std::vector<int>& worlds, int threads) const {
+  check(state);
+  const std::vector<std::uint8_t> mask = world_mask(*this, worlds, "restart_worlds");
+  for (const int a : articulations_of(*this, mask)) {
+    const ArticulationView art = articulation(a);
+    const int w = articulation_world(a);
+    for (int k = art.q_begin(); k < art.q_begin() + art.coord_count(); ++k)
+      if (!std::isfinite(state.joint_q[k]))
+        fail("restart_worlds: joint_q[", k, "] (world ", w, ") is not finite: ", state.joint_q[k]);
+    for (int k = art.qd_begin(); k < art.qd_begin() + art.dof_count(); ++k)
+      if (!std::isfinite(state.joint_qd[k]))
+        fail("restart_worlds: joint_qd[", k, "] (world ", w, ") is not finite: ", state.joint_qd[k]);
+    for (int j = 0; j < art.link_count(); ++j)
+      if (const int at = quaternion_at(art, j);
+          at >= 0 && Eigen::Map<const Eigen::Matrix<Scalar, 4, 1>>(state.joint_q.data() + at).squaredNorm() == 0)
+        fail("restart_worlds: the quaternion joint_q[", at, ":", at + 4, "] of joint '",
+             joint_name[art.joint_begin + j], "' (world ", w, ") is zero");
+  }
+  start_worlds(*this, state, mask, nullptr, state.joint_qd.data(), threads);
 }
 
 int Model::keyframe(const std::string& name) const {

@@ -328,6 +328,11 @@ struct Model : ModelCounts {
   // sensor_data (zero) and world_reset (1); every other entry of the state is left as it was. Throws Error naming a
   // world id out of range, a keyframe the model does not have, or a state of another model, before writing anything
   void reset_worlds(State& state, const std::vector<int>& worlds, int keyframe = -1, int threads = 0) const;
+  // worlds `worlds` of `state` start afresh from the joint_q and joint_qd the state holds for them (written by the
+  // caller: a start of its own, e.g. a random pose and velocity): as reset_worlds, with their coordinates and
+  // velocities kept and each Free or Ball joint's quaternion normalised. Throws Error naming a world id out of range,
+  // a coordinate or velocity that is not finite, or a quaternion of norm 0, before writing anything
+  void restart_worlds(State& state, const std::vector<int>& worlds, int threads = 0) const;
   // a zeroed control with the model's PD gains (and keyframe `keyframe`'s actuator commands)
   Control control() const;
   Control control(const std::string& keyframe) const;

@@ -12,7 +12,6 @@
 #pragma once
 
 #include <array>
-#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -65,6 +64,9 @@ class SolverFeatherstone {
   // written; that world is left as it was. A negative PD gain in the control raises likewise. One step at a time:
   // a step called while another thread's step of this solver runs throws Error (one solver per thread)
   void step(const State& state_in, State& state_out, const Control& control, Contacts& contacts, Scalar dt);
+  // holds this solver's one-call flag for the caller's scope (steps on this thread nest inside it), so work that
+  // belongs with a step (the binding's float32 conversions) is refused with it on another thread
+  ExclusiveCall hold() { return ExclusiveCall(busy_, "SolverFeatherstone.step"); }
 
   // the state an articulation restarts from under on_divergence Reset: its joint_q and joint_qd (copied; by
   // default the model's joint_q0 when the solver was made, at rest); throws Error where it is not the model's or
@@ -202,9 +204,9 @@ class SolverFeatherstone {
   // joint_qd)
   Sensors sensors_;
   std::vector<Scalar> start_q_, start_qd_;
-  std::atomic<bool> busy_{false};  // a step is running (ExclusiveCall)
-  std::int64_t step_bytes_ = 0;    // what a step touches: the solver's memory when made and the state's arrays
-  int max_threads_ = 1;            // the threads the routes keep scratch for
+  CallFlag busy_;                // a step is running (ExclusiveCall)
+  std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays
+  int max_threads_ = 1;          // the threads the routes keep scratch for
   // profiling: the stages' totals, steady_clock nanoseconds at the last lap, each thread's stage times in a pass
   SolverStageSeconds stage_seconds_;
   std::int64_t lap_mark_ = 0;

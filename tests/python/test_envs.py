@@ -100,3 +100,57 @@ def test_a_robot_turned_over_is_terminated_and_restarted():
     np.testing.assert_array_equal(terminated, [False, True, False, False])
     assert info["final_obs"][1, 8] > 0.9  # gravity along the trunk's +z when it ended
     assert obs[1, 8] < -0.99  # and the new episode's first observation upright
+
+
+def feet(env, kind, column):
+    """(worlds, 4): one column of each foot's sensor of that kind"""
+    return np.stack([novaphy.sensor_view(env.model, env.state, f"{foot}_{kind}")[:, column] for foot in envs.FEET], 1)
+
+
+def test_the_feet_terms_of_a_robot_dropped_onto_its_feet():
+    """World 1 starts 0.3 m up: its feet touch nothing (no slip, no air-time or height term) until they land; the
+    step they land, Playground's air-time term rewards the time they were off the floor beyond 0.1 s and the height
+    term penalises their swing peak (the first reading, the highest they were) against 0.1 m. World 0 stands."""
+    env = make(n=2, noise=False, randomize=False, command=[0.5, 0.0, 0.0])
+    env.reset(seed=7)
+    novaphy.world_view(env.model, env.state.joint_q)[1, 2] += 0.3
+    env.model.restart_worlds(env.state, [1])
+    for step in range(1, 60):
+        _, _, terminated, _, info = env.step(np.zeros((2, 12)))
+        z, touch = feet(env, "pos", 2), feet(env, "touch", 0)
+        if step == 1:
+            peak = z[1].astype(np.float64)
+        terms = {name: value / (envs.REWARD_SCALES[name] * envs.CTRL_DT) for name, value in
+                 info["reward_terms"].items()}
+        if step > 2:
+            # world 0 on its feet: the spheres' centres below their radius (0.023 m): pressed into the floor as
+            # MuJoCo's soft contacts press them
+            assert (touch[0] > 0).all() and (z[0] > 0).all() and (z[0] < 0.023).all()
+        landed = touch[1] > 0
+        if not landed.any():
+            assert terms["feet_air_time"][1] == 0 and terms["feet_height"][1] == 0 and terms["feet_slip"][1] == 0
+            continue
+        air_time = step * envs.CTRL_DT
+        assert 0.2 < air_time < 0.4 and not terminated.any()
+        assert terms["feet_air_time"][1] == pytest.approx(landed.sum() * (air_time - 0.1), rel=1e-9)
+        assert terms["feet_height"][1] == pytest.approx(np.sum((peak[landed] / envs.MAX_FOOT_HEIGHT - 1) ** 2),
+                                                        rel=1e-9)
+        break
+    else:
+        pytest.fail("world 1's feet never landed")
+
+
+def test_a_randomized_reset_starts_each_world_somewhere_else_moving():
+    env = make(n=8, noise=False, randomize=True)
+    env.reset(seed=8)
+    q = novaphy.world_view(env.model, env.state.joint_q)
+    qd = novaphy.world_view(env.model, env.state.joint_qd)
+    home = np.array(env.model.keyframe_q)[0].reshape(8, -1)[0]
+    assert (np.abs(q[:, 0:2] - home[0:2]) <= 0.5).all() and len({tuple(x) for x in q[:, 0:2]}) == 8
+    np.testing.assert_allclose(np.linalg.norm(q[:, 3:7], axis=1), 1.0, atol=1e-6)
+    yaw = 2 * np.arctan2(q[:, 5], q[:, 6])
+    assert np.ptp(np.unwrap(yaw)) > 1.0  # headings spread over the circle
+    assert (np.abs(qd[:, 0:6]) <= 0.5).all() and np.abs(qd[:, 0:6]).min() > 0
+    np.testing.assert_array_equal(q[:, 7:], np.tile(home[7:].astype(np.float32), (8, 1)))
+    obs, _ = env.reset(seed=8)
+    np.testing.assert_allclose(obs[:, 6:9], np.tile([0, 0, -1], (8, 1)), atol=1e-5)  # upright: turned about z only

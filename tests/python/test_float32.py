@@ -77,6 +77,45 @@ def test_substeps_in_one_call_are_the_bits_of_one_call_each(arm):
         np.testing.assert_array_equal(getattr(runs[0], name), getattr(runs[1], name), err_msg=name)
 
 
+def test_threads_sharing_one_solver_and_one_float32_state_complete_or_raise_writing_nothing():
+    """The binding widens a float32 state and rounds it back under the solver's one-call flag, so a step refused on
+    another thread touches nothing: the shared state is the bits of the completed steps made one after another."""
+    import threading
+    model = arms(novaphy.Precision.Float32, 256)
+    _, contacts, solver = simulator(model)  # (no collide: no contacts, so every step is the same map)
+    solver.settings.num_threads = 1
+    state, control = model.state(keyframe="home"), model.control(keyframe="home")
+    control.actuator_ctrl[:] += np.float32(0.1)
+    runs = [{"done": 0, "refused": 0, "other": []} for _ in range(2)]
+
+    def hammer(run):
+        for _ in range(2000):
+            try:
+                solver.step(state, state, control, contacts, 0.002)
+                run["done"] += 1
+            except novaphy.Error as e:
+                if "called while another call of the same object runs on another thread" in str(e):
+                    run["refused"] += 1
+                else:
+                    run["other"].append(str(e))
+            if runs[0]["refused"] + runs[1]["refused"] >= 200:
+                return
+
+    threads = [threading.Thread(target=hammer, args=(run,)) for run in runs]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert runs[0]["other"] == [] and runs[1]["other"] == []
+    assert runs[0]["refused"] + runs[1]["refused"] > 0  # (the two threads' steps did meet)
+    _, own_contacts, own_solver = simulator(model)
+    replay = model.state(keyframe="home")
+    for _ in range(runs[0]["done"] + runs[1]["done"]):
+        own_solver.step(replay, replay, control, own_contacts, 0.002)
+    for name in STATE_FLOATS:
+        np.testing.assert_array_equal(getattr(state, name), getattr(replay, name), err_msg=name)
+
+
 def test_step_and_reset_write_the_float32_arrays(arm):
     pipeline, contacts, solver = simulator(arm)
     state, control = arm.state(keyframe="home"), arm.control(keyframe="home")

@@ -4,8 +4,9 @@
   Playground's Go1 joystick task defines it: its observation (local linear velocity, gyro, projected gravity, joint
   angles from the home pose, joint velocities, last action, command: 48 numbers), its action (12 joint targets about
   the home pose, scaled by 0.5), its control (Kp 35, Kd 0.5, 0.02 s control steps of five 0.004 s steps), its
-  reward terms and scales and its termination (the trunk upside down); the feet terms (clearance, slip, air time)
-  are not among them;
+  reward terms and scales (the feet terms from sensors the environment adds to each foot: its position, velocity
+  and touch), its commands (new ones at random times within an episode) and its termination (the trunk upside
+  down);
 - ``NovaPhy/Go1Stand-v0``: the same robot and observation with a zero command, rewarded for standing in its home
   pose.
 
@@ -13,9 +14,10 @@ Both are vector environments only: ``gymnasium.make_vec(id, num_envs=N, vectoriz
 Each of the N worlds is a Go1 in one NovaPhy model; a step sets the actuators' targets of every world, runs the
 substeps in one call without the GIL (``novaphy.simulate``), and computes observations and rewards with numpy over
 ``world_view`` arrays. Worlds that end reset in the same step (``autoreset_mode`` SAME_STEP: the returned observation
-is the new episode's first, ``info["final_obs"]`` the ended one's), each to the home keyframe with new per-world
-parameters (foot friction, link masses, trunk centre of mass, armature, friction loss; see
-``randomize_worlds``) and a new command. The robot is ../shared/robots/unitree_go1 or the installed Menagerie's
+is the new episode's first, ``info["final_obs"]`` the ended one's), each to the home keyframe with a new command and,
+as Playground's, a random start (position within 0.5 m, any heading, the trunk moving at up to 0.5 m/s and rad/s
+about each axis) and new per-world parameters (foot friction, link masses, trunk centre of mass, armature, friction
+loss; see ``randomize_worlds``). The robot is ../shared/robots/unitree_go1 or the installed Menagerie's
 (``robot=`` or NOVAPHY_GO1_SCENE give another scene file)."""
 import os
 from pathlib import Path
@@ -44,10 +46,16 @@ REWARD_SCALES = {
     "torques": -0.0002,
     "action_rate": -0.01,
     "energy": -0.001,
+    "feet_clearance": -2.0,
+    "feet_height": -0.2,
+    "feet_slip": -0.1,
+    "feet_air_time": 0.1,
 }
 TRACKING_SIGMA = 0.25
+MAX_FOOT_HEIGHT = 0.1
+COMMAND_PERIOD = 5.0  # s: the mean time between new commands (exponentially distributed)
 COMMAND_AMPLITUDE = np.array([1.5, 0.8, 1.2])  # forward, sideways (m/s), turning (rad/s)
-COMMAND_KEPT = np.array([0.9, 0.25, 0.5])  # the chance each is not zeroed
+COMMAND_KEPT = np.array([0.9, 0.25, 0.5])  # the chance a new command's entry is not zeroed
 NOISE = {"joint_pos": 0.03, "joint_vel": 1.5, "gyro": 0.2, "gravity": 0.05, "linvel": 0.1}
 KP, KD = 35.0, 0.5
 ACTION_SCALE = 0.5
@@ -81,6 +89,27 @@ def go1_scene():
                             "or set NOVAPHY_GO1_SCENE")
 
 
+def _with_foot_sensors(robot_builder):
+    """Each foot's position and velocity in the world (at the foot geom's centre, as Playground's foot sites) and
+    its touch, as sensors of the robot: FR_pos, FR_linvel, FR_touch, ..."""
+    robot = robot_builder.finalize()
+    names = list(robot.shape_name)
+    for foot in FEET:
+        shape = names.index(foot)
+        body = int(robot.shape_body[shape])
+        frame = novaphy.Transform(robot.shape_transform[shape][:3])
+        robot_builder.add_sensor("framepos", body, xform=frame, name=f"{foot}_pos")
+        robot_builder.add_sensor("framelinvel", body, xform=frame, name=f"{foot}_linvel")
+        robot_builder.add_sensor("touch", body, shape=shape, name=f"{foot}_touch")
+
+
+def _quat_multiply(a, b):
+    """a b of quaternions (n, 4) [x, y, z, w]."""
+    av, aw, bv, bw = a[:, :3], a[:, 3:], b[:, :3], b[:, 3:]
+    return np.concatenate([aw * bv + bw * av + np.cross(av, bv), aw * bw - np.sum(av * bv, axis=1, keepdims=True)],
+                          axis=1)
+
+
 def _rotate_into(q, v):
     """v (n, 3) in the frames of unit quaternions q (n, 4) [x, y, z, w]: R^T v."""
     u, w = -q[:, :3], q[:, 3:4]
@@ -106,6 +135,7 @@ class Go1Joystick(VectorEnv):
         self.fixed_command = None if command is None else np.asarray(command, dtype=np.float64).reshape(3)
         robot_builder = novaphy.ModelBuilder()
         robot_builder.add_mjcf(robot or go1_scene())
+        _with_foot_sensors(robot_builder)
         builder = novaphy.ModelBuilder()
         builder.precision = getattr(novaphy.Precision, precision)
         builder.replicate(robot_builder, self.num_envs)
@@ -125,12 +155,11 @@ class Go1Joystick(VectorEnv):
         home = list(model.keyframes).index("home")
         self._home_q = np.array(model.keyframe_q)[home].reshape(n, -1)[0]
         self._default = self._home_q[7:]
-        lower = world_view(model, model.joint_limit_lower)[0, 6:]
-        upper = world_view(model, model.joint_limit_upper)[0, 6:]
+        # Playground's soft limits: the joint ranges scaled by 0.95
+        self._soft_lower = SOFT_LIMIT * world_view(model, model.joint_limit_lower)[0, 6:]
+        self._soft_upper = SOFT_LIMIT * world_view(model, model.joint_limit_upper)[0, 6:]
         self._force_lower = world_view(model, model.actuator_force_lower)[0]
         self._force_upper = world_view(model, model.actuator_force_upper)[0]
-        middle, half = (lower + upper) / 2, (upper - lower) / 2
-        self._soft_lower, self._soft_upper = middle - SOFT_LIMIT * half, middle + SOFT_LIMIT * half
 
         self.state = model.state(keyframe="home")
         self.control = model.control(keyframe="home")
@@ -143,6 +172,8 @@ class Go1Joystick(VectorEnv):
         self._body_q = world_view(model, self.state.body_q)
         self._body_qd = world_view(model, self.state.body_qd)
         self._ctrl = world_view(model, self.control.actuator_ctrl)
+        self._feet = {kind: [novaphy.sensor_view(model, self.state, f"{foot}_{kind}") for foot in FEET]
+                      for kind in ("pos", "linvel", "touch")}
 
         self.single_observation_space = gymnasium.spaces.Box(-np.inf, np.inf, (48,), np.float32)
         self.single_action_space = gymnasium.spaces.Box(-1.0, 1.0, (12,), np.float32)
@@ -150,18 +181,34 @@ class Go1Joystick(VectorEnv):
         self.action_space = batch_space(self.single_action_space, n)
         self._rng = np.random.default_rng()
         self._command = np.zeros((n, 3))
+        self._until_command = np.zeros(n, dtype=np.int64)  # control steps until a world's next command
+        self._air_time = np.zeros((n, 4))  # each foot's time off the floor, its highest point since and its contact
+        self._swing_peak = np.zeros((n, 4))
+        self._last_contact = np.zeros((n, 4), dtype=bool)
         self._last_action = np.zeros((n, 12))
         self._steps = np.zeros(n, dtype=np.int64)
 
     # ---- the task
 
-    def _sample_commands(self, count):
+    def _first_commands(self, count):
+        """An episode's first commands: uniform within the amplitudes (none zeroed), as Playground's reset."""
         if self.stand:
             return np.zeros((count, 3))
         if self.fixed_command is not None:
             return np.tile(self.fixed_command, (count, 1))
-        amplitude = self._rng.uniform(-1.0, 1.0, (count, 3)) * COMMAND_AMPLITUDE
-        return amplitude * (self._rng.uniform(size=(count, 3)) < COMMAND_KEPT)
+        return self._rng.uniform(-1.0, 1.0, (count, 3)) * COMMAND_AMPLITUDE
+
+    def _next_commands(self, commands):
+        """Playground's new command within an episode: each entry, with chance 1/2, replaced by a uniform one that is
+        zeroed unless kept (COMMAND_KEPT)."""
+        if self.stand or self.fixed_command is not None:
+            return commands
+        rng, count = self._rng, len(commands)
+        fresh = rng.uniform(-1.0, 1.0, (count, 3)) * COMMAND_AMPLITUDE * (rng.uniform(size=(count, 3)) < COMMAND_KEPT)
+        return np.where(rng.uniform(size=(count, 3)) < 0.5, fresh, commands)
+
+    def _command_waits(self, count):
+        return np.round(self._rng.exponential(COMMAND_PERIOD, count) / CTRL_DT).astype(np.int64)
 
     def randomize_worlds(self, worlds):
         """New per-world parameters for `worlds` (ids), as Playground's Go1 randomisation: foot friction U(0.4, 1),
@@ -191,17 +238,55 @@ class Go1Joystick(VectorEnv):
                                  worlds=worlds)
 
     def _reset_worlds(self, worlds):
-        """worlds (ids) at the home keyframe with new parameters and a new command (on a flat floor, with commands in
-        the trunk's frame, Playground's random yaw and position change nothing the task sees)"""
-        if len(worlds) == 0:
+        """worlds (ids) at the home keyframe with a new command; where randomize: as Playground's reset, moved by
+        U(-0.5, 0.5) m in x and y, turned by U(-3.14, 3.14) about z and the trunk moving at U(-0.5, 0.5) along and
+        about each axis, with new parameters"""
+        k = len(worlds)
+        if k == 0:
             return
-        self.model.reset_worlds(self.state, worlds, "home")
         if self.randomize:
+            rng = self._rng
+            q, qd = self._home_q[None].repeat(k, axis=0), np.zeros((k, self._qd.shape[1]))
+            q[:, 0:2] += rng.uniform(-0.5, 0.5, (k, 2))
+            half_yaw = rng.uniform(-3.14, 3.14, k) / 2
+            turn = np.stack([np.zeros(k), np.zeros(k), np.sin(half_yaw), np.cos(half_yaw)], axis=1)
+            q[:, 3:7] = _quat_multiply(q[:, 3:7], turn)
+            qd[:, 0:6] = rng.uniform(-0.5, 0.5, (k, 6))
+            self._q[worlds] = q
+            self._qd[worlds] = qd
+            self.model.restart_worlds(self.state, worlds)
             self.randomize_worlds(worlds)
-        self._command[worlds] = self._sample_commands(len(worlds))
+        else:
+            self.model.reset_worlds(self.state, worlds, "home")
+        self._command[worlds] = self._first_commands(k)
+        self._until_command[worlds] = self._command_waits(k)
         self._last_action[worlds] = 0.0
         self._steps[worlds] = 0
         self._ctrl[worlds] = self._default
+        self._air_time[worlds] = 0.0
+        self._swing_peak[worlds] = 0.0
+        self._last_contact[worlds] = False
+
+    def _feet_terms(self):
+        """Playground's feet terms at this control step, and the feet's contacts; advances their air times and
+        swing peaks (the sensors read the last substep's start, as MuJoCo's sensordata and site positions)"""
+        foot_z = np.concatenate([p[:, 2:3] for p in self._feet["pos"]], axis=1)
+        speed_xy = np.stack([np.linalg.norm(v[:, :2], axis=1) for v in self._feet["linvel"]], axis=1)
+        contact = np.concatenate(self._feet["touch"], axis=1) > 0
+        first_contact = (self._air_time > 0) & (contact | self._last_contact)
+        self._air_time += CTRL_DT
+        self._swing_peak = np.maximum(self._swing_peak, foot_z)
+        moving = np.linalg.norm(self._command, axis=1) > 0.01
+        terms = {
+            "feet_slip": np.sum(speed_xy ** 2 * contact, axis=1) * moving,
+            "feet_clearance": np.sum(np.abs(foot_z - MAX_FOOT_HEIGHT) * np.sqrt(speed_xy), axis=1),
+            "feet_height": np.sum((self._swing_peak / MAX_FOOT_HEIGHT - 1.0) ** 2 * first_contact, axis=1) * moving,
+            "feet_air_time": np.sum((self._air_time - 0.1) * first_contact, axis=1) * moving,
+        }
+        self._air_time *= ~contact
+        self._swing_peak *= ~contact
+        self._last_contact = contact
+        return terms
 
     def _trunk(self):
         """The trunk's linear velocity, angular velocity and gravity's direction, in its own frame, every world."""
@@ -240,6 +325,7 @@ class Go1Joystick(VectorEnv):
             "torques": np.sqrt(np.sum(torque ** 2, axis=1)) + np.sum(np.abs(torque), axis=1),
             "action_rate": np.sum((action - self._last_action) ** 2, axis=1),
             "energy": np.sum(np.abs(qd * torque), axis=1),
+            **self._feet_terms(),
         }
         return terms, up
 
@@ -272,7 +358,8 @@ class Go1Joystick(VectorEnv):
         return a.astype(np.float64)
 
     def step(self, actions):
-        """One control step of every world: (observations, rewards, terminated, truncated, info)."""
+        """One control step of every world: (observations, rewards, terminated, truncated, info); info["reward_terms"]
+        holds each reward term as it enters the reward (times its scale and the control step, before the clip)."""
         action = np.clip(self._checked(actions), -1.0, 1.0)
         self._ctrl[:] = self._default + ACTION_SCALE * action
         novaphy.simulate(self.pipeline, self.solver, self.state, self.control, self.contacts,
@@ -284,13 +371,18 @@ class Go1Joystick(VectorEnv):
         terms, up = self._rewards(trunk, action, torque)
         terminated = up[:, 2] < 0.0
         terms["termination"] = terminated.astype(np.float64)
-        reward = sum(REWARD_SCALES[name] * value for name, value in terms.items())
-        reward = np.clip(reward * CTRL_DT, 0.0, 10000.0).astype(np.float32)
+        scaled = {name: REWARD_SCALES[name] * value * CTRL_DT for name, value in terms.items()}
+        reward = np.clip(sum(scaled.values()), 0.0, 10000.0).astype(np.float32)
         self._last_action = action
         self._steps += 1
+        self._until_command -= 1
+        due = np.flatnonzero(self._until_command <= 0)
+        if len(due):
+            self._command[due] = self._next_commands(self._command[due])
+            self._until_command[due] = self._command_waits(len(due))
         truncated = (self._steps >= self.episode_steps) & ~terminated
         observation = self._observe(trunk)
-        info = {}
+        info = {"reward_terms": scaled}
         done = np.flatnonzero(terminated | truncated)
         if len(done):
             info["final_obs"] = observation.copy()

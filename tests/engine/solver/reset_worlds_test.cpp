@@ -1,13 +1,18 @@
-// Model::reset_worlds with the collide and step after it: the worlds reset and only they, and a reset world
-// stepping bit for bit as it would from a fresh start (no warm start, no kept factor of its past)
+// Model::reset_worlds and restart_worlds with the collide and step after it: the worlds reset and only they, and a
+// reset world stepping bit for bit as it would from a fresh start (no warm start, no kept factor of its past)
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "engine/import/mjcf_import.h"
+#include "engine/model/body_kinematics.h"
 #include "solver_test_support.h"
+#include "test_support_errors.h"
 
 namespace novaphy {
 namespace {
@@ -101,6 +106,68 @@ TEST(ResetWorlds, AResetWorldStepsBitForBitAsFromAFreshStart) {
     }
     EXPECT_TRUE(history_shows) << file << ": the worlds' history changes nothing: the test shows nothing";
   }
+}
+
+// restart_worlds: a world started from coordinates and velocities written into the state (a pose turned about z,
+// moving), its bodies by FK of them as a new state's, every other world untouched; its quaternion normalised
+TEST(RestartWorlds, StartsTheWorldsFromTheirOwnCoordinatesAndVelocities) {
+  Scene scene(worlds_of(NOVAPHY_SCENE_DIR "/quadruped.xml", Precision::Float64, 100));
+  scene.state.body_f.assign(scene.state.body_f.size(), 0.5);
+  scene.run(0.1, 0.002);
+  const State before = scene.state;
+  const Model& model = scene.model;
+  const ArticulationView art = model.articulation(2);  // (one articulation a world: world 2's)
+  ASSERT_EQ(model.articulation_world(2), 2);
+  ASSERT_EQ(art.type(0), JointType::Free);
+  std::vector<Scalar> q(model.joint_q0.begin() + art.q_begin(),
+                        model.joint_q0.begin() + art.q_begin() + art.coord_count());
+  const Scalar half_turn = 0.3;  // the root turned 0.6 rad about z: [x y z w], given at norm 2
+  q[3] = 0, q[4] = 0, q[5] = 2 * std::sin(half_turn), q[6] = 2 * std::cos(half_turn);
+  std::vector<Scalar> qd(art.dof_count());
+  for (int k = 0; k < art.dof_count(); ++k) qd[k] = 0.1 * (k + 1);
+  std::copy(q.begin(), q.end(), scene.state.joint_q.begin() + art.q_begin());
+  std::copy(qd.begin(), qd.end(), scene.state.joint_qd.begin() + art.qd_begin());
+  model.restart_worlds(scene.state, {2});
+  // the quaternion normalised (to its last bit, which is the normalisation's own); the oracle: a new state of the
+  // model with world 2's coordinates as restart_worlds left them and its velocities, FK of all
+  q[5] = std::sin(half_turn), q[6] = std::cos(half_turn);
+  for (int k = 0; k < art.coord_count(); ++k)
+    EXPECT_NEAR(scene.state.joint_q[art.q_begin() + k], q[k], 1e-15) << "coordinate " << k;
+  State fresh = model.state();
+  std::copy_n(scene.state.joint_q.begin() + art.q_begin(), art.coord_count(), fresh.joint_q.begin() + art.q_begin());
+  std::copy(qd.begin(), qd.end(), fresh.joint_qd.begin() + art.qd_begin());
+  bodies_from_joints(model, fresh);
+  for (int w = 0; w < kWorlds; ++w) {
+    EXPECT_EQ(scene.state.world_reset[w], w == 2 ? 1 : 0) << "world " << w;
+    EXPECT_EQ(world_state(model, scene.state, w), world_state(model, w == 2 ? fresh : before, w)) << "world " << w;
+  }
+}
+
+TEST(RestartWorlds, BadValuesAreNamedAndNothingIsWritten) {
+  Scene scene(worlds_of(NOVAPHY_SCENE_DIR "/quadruped.xml", Precision::Float64, 10));
+  const Model& model = scene.model;
+  const ArticulationView art = model.articulation(1);
+  const State good = scene.state;
+  auto expect_refused = [&](const std::function<void(State&)>& spoil, const std::string& text) {
+    scene.state = good;
+    spoil(scene.state);
+    const State spoiled = scene.state;
+    EXPECT_NOVAPHY_ERROR(model.restart_worlds(scene.state, {0, 1}), text);
+    EXPECT_EQ(std::memcmp(scene.state.joint_q.data(), spoiled.joint_q.data(), spoiled.joint_q.size() * sizeof(Scalar)),
+              0);  // (bits: a NaN is not equal to itself)
+    EXPECT_EQ(scene.state.body_q, spoiled.body_q);
+    EXPECT_EQ(scene.state.world_reset, spoiled.world_reset);
+  };
+  const int q = art.q_begin() + 2, qd = art.qd_begin() + 7, quat = art.q_begin() + 3;
+  expect_refused([&](State& s) { s.joint_q[q] = NAN; },
+                 "restart_worlds: joint_q[" + std::to_string(q) + "] (world 1) is not finite: nan");
+  expect_refused([&](State& s) { s.joint_qd[qd] = INFINITY; },
+                 "restart_worlds: joint_qd[" + std::to_string(qd) + "] (world 1) is not finite: inf");
+  expect_refused([&](State& s) { std::fill_n(s.joint_q.begin() + quat, 4, 0.0); },
+                 "restart_worlds: the quaternion joint_q[" + std::to_string(quat) + ":" + std::to_string(quat + 4) +
+                     "] of joint '" + model.joint_name[art.joint_begin] + "' (world 1) is zero");
+  EXPECT_NOVAPHY_ERROR(model.restart_worlds(scene.state, {1, 5}),
+                       "restart_worlds: worlds[1] = 5 is not a world of the model (0 .. 4)");
 }
 
 }  // namespace

@@ -269,22 +269,36 @@ TEST(SolverFeatherstoneErrors, AContactBetweenWorldsIsNamed) {
 
 // ---- one call at a time per object ----
 
-TEST(ExclusiveCall, ASecondCallThrowsAndTheFlagIsReleasedAlsoWhenTheCallThrows) {
-  std::atomic<bool> busy{false};
+TEST(ExclusiveCall, AnotherThreadsCallThrowsANestedOneNotAndTheFlagIsReleasedAlsoWhenTheCallThrows) {
+  CallFlag flag;
   {
-    const ExclusiveCall first(busy, "Thing.run");
-    EXPECT_NOVAPHY_ERROR(ExclusiveCall(busy, "Thing.run"),
-                         "Thing.run called while another call of the same object runs on another thread (use one "
-                         "object per thread)");
-    EXPECT_TRUE(busy.load());  // (the refused call did not release the first's flag)
+    const ExclusiveCall first(flag, "Thing.run");
+    std::string refused;
+    std::thread other([&] {
+      try {
+        const ExclusiveCall second(flag, "Thing.run");
+      } catch (const Error& e) {
+        refused = e.what();
+      }
+    });
+    other.join();
+    EXPECT_EQ(refused,
+              "Thing.run called while another call of the same object runs on another thread (use one object per "
+              "thread)");
+    {
+      const ExclusiveCall nested(flag, "Thing.run");  // the same thread: taken again
+    }
+    EXPECT_TRUE(flag.held());  // (neither the refused call nor the nested one released the first's flag)
   }
-  EXPECT_FALSE(busy.load());
+  EXPECT_FALSE(flag.held());
   auto throwing = [&] {
-    const ExclusiveCall call(busy, "Thing.run");
+    const ExclusiveCall call(flag, "Thing.run");
     fail("inside");
   };
   EXPECT_NOVAPHY_ERROR(throwing(), "inside");
-  EXPECT_FALSE(busy.load());
+  EXPECT_FALSE(flag.held());
+  std::thread after([&] { const ExclusiveCall call(flag, "Thing.run"); });  // free for any thread again
+  after.join();
 }
 
 // two threads stepping one solver and colliding with one pipeline, each its own state and contacts: every call
