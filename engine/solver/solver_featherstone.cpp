@@ -134,9 +134,11 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   // contact to its unit or the islands; then the stages in physics order (route.h: kinematics and forces, mass and
   // factor; rows and solve; the islands; integrate; guard; store)
   check_step(in, out, control, contacts, dt);
-  // the state the sensors are computed at: in's own arrays, or a copy of those the step overwrites (in is out);
-  // body_f the step leaves as it was
-  const bool keep_start = !sensors_.empty() && &in == &out;
+  // the sensors read what the start decides before the step; where they read accelerations or forces, the start's
+  // coordinates and velocities after it: in's own, or a copy of those the step overwrites (in is out); body_f the
+  // step leaves as it was
+  sensors_.read_start(in, thread_count());
+  const bool keep_start = sensors_.reads_dynamics() && &in == &out;
   if (keep_start) {
     start_q_ = in.joint_q;
     start_qd_ = in.joint_qd;
