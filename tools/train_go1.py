@@ -144,10 +144,17 @@ def main():
     parser.add_argument("--gif-seconds", type=float, default=4.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="bench/results/train_go1")
+    parser.add_argument("--reward-scale", action="append", default=[], metavar="TERM=SCALE",
+                        help="replace Playground's scale of a reward term (repeatable), e.g. feet_clearance=0")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    reward_scales = {}
+    for given in args.reward_scale:
+        term, _, scale = given.partition("=")
+        reward_scales[term] = float(scale)
 
-    env = gymnasium.make_vec("NovaPhy/Go1Joystick-v0", num_envs=args.worlds, vectorization_mode="vector_entry_point")
+    env = gymnasium.make_vec("NovaPhy/Go1Joystick-v0", num_envs=args.worlds, vectorization_mode="vector_entry_point",
+                             reward_scales=reward_scales)
     obs_size, action_size = env.single_observation_space.shape[0], env.single_action_space.shape[0]
     key = jax.random.PRNGKey(args.seed)
     key, sub = jax.random.split(key)
@@ -226,7 +233,7 @@ def main():
     error, standing, eval_env = evaluate(params, norm, args.eval_worlds, args.eval_seconds)
     summary = {"iterations": iteration, "env_steps": iteration * T * N, "minutes": (time.time() - start) / 60,
                "forward_error_m_s": error, "standing_share": standing, "command_m_s": 0.5,
-               "eval_worlds": args.eval_worlds, "worlds": N, "horizon": T}
+               "eval_worlds": args.eval_worlds, "worlds": N, "horizon": T, "reward_scales": reward_scales}
     print(json.dumps(summary), flush=True)
     with open(os.path.join(args.out, "summary.json"), "w") as f:
         json.dump({"summary": summary, "curve": curve}, f, indent=1)

@@ -199,8 +199,9 @@ const char* shape_type_name(ShapeType type);
   X(int, sensor_world, sensor_count, 1)                    \
   X(int, sensor_start, sensor_count + 1, 1)
 
-// world_reset: 1 where Model::reset_worlds reset the world: the next collide and step from this state use none of
-// the world's past (its contacts' and rows' warm starts, a kept mass-matrix factor); a step writes 0 into its output
+// world_reset: 1 where Model::reset_worlds or restart_worlds reset the world, or a step's divergence guard restarted
+// it (on_divergence Reset): the next collide and step from this state use none of the world's past (its contacts'
+// and rows' warm starts, a kept mass-matrix factor); a step writes 0 into its output's other worlds
 #define NOVAPHY_STATE_FIELDS(X)                \
   X(Scalar, joint_q, joint_coord_count, 1)     \
   X(Scalar, joint_qd, joint_dof_count, 1)      \

@@ -67,7 +67,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(DivergencePolicy, on_divergence, DivergencePolicy::Flag, 0, 0, "",                                                \
     "What step does with an articulation that diverged (its state went non-finite, too fast or too energetic, or a "  \
     "contact too deep): Raise (nothing written), Flag (it keeps its previous state; diverged() marks it) or Reset "   \
-    "(it restarts from the reset state: set_reset_state or set_reset_keyframe, else joint_q0 at rest).")              \
+    "(it restarts from the reset state: set_reset_state or set_reset_keyframe, else joint_q0 at rest; its world is "  \
+    "marked in the output's world_reset, so its next collide and step use none of its past, and its sensors read "    \
+    "0).")                                                                                                            \
   X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A dof speed beyond which an articulation diverged.") \
   X(Scalar, divergence_energy, 1e7, 0, kUnbounded, "J/kg",                                                            \
     "A kinetic energy per kilogram of its mass beyond which an articulation diverged after its step (its energy "     \

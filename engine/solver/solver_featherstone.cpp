@@ -154,6 +154,7 @@ void SolverFeatherstone::step(const State& in, State& out, const Control& contro
   end_step(in, out, step);
   sensors_.evaluate(start_q, start_qd, out.joint_qd.data(), out.body_f.data(), contacts, dt, out.sensor_data.data(),
                     thread_count());
+  restart_guard_resets(out);
   if (!settings.count_serial_time) return;
   serial_seconds_.step += 1e-9 * static_cast<double>(now_ns() - start);
   ++serial_seconds_.steps;
@@ -485,6 +486,19 @@ void SolverFeatherstone::end_step(const State& in, State& out, const StepContext
   if (&out != &in) out.body_f = in.body_f;
   std::fill(out.world_reset.begin(), out.world_reset.end(), 0);
   stage_seconds_.steps += settings.profile_stages;
+}
+
+void SolverFeatherstone::restart_guard_resets(State& out) const {
+  if (!trouble_ || settings.on_divergence != DivergencePolicy::Reset) return;
+  for (int a = 0; a < model_.articulation_count; ++a) {
+    const int w = model_.articulation_world(a);
+    if (!data_.diverged[a] || w < 0) continue;
+    out.world_reset[w] = 1;
+    for (int s = 0; s < model_.sensor_count; ++s)
+      if (model_.sensor_world[s] == w)
+        std::fill(out.sensor_data.begin() + model_.sensor_start[s],
+                  out.sensor_data.begin() + model_.sensor_start[s + 1], 0);
+  }
 }
 
 void SolverFeatherstone::lap(double& total) {

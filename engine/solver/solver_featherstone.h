@@ -162,6 +162,10 @@ class SolverFeatherstone {
   // the diverged articulations raised, kept or reset (settings.on_divergence)
   void guard(const StepContext& step);
   void end_step(const State& in, State& out, const StepContext& step);
+  // the worlds whose articulations the divergence guard reset (on_divergence Reset) leave the step as
+  // Model::reset_worlds leaves a world: world_reset set (their next collide and step use none of their past) and
+  // their sensors zeroed (a reset's velocity jump is no acceleration)
+  void restart_guard_resets(State& out) const;
   // throws naming the first articulation whose factor failed this step on finite input
   void check_factors(const StepContext& step) const;
   // the wall time since the last lap, added to `total` while profiling

@@ -88,6 +88,20 @@ def test_bad_actions_are_named():
         env.step(actions)
     with pytest.raises(ValueError, match="num_envs must be a positive integer"):
         make(n=0)
+    with pytest.raises(ValueError, match="no reward term 'feet_lift' \\(the terms: tracking_lin_vel, "):
+        make(reward_scales={"feet_lift": 0.0})
+
+
+def test_reward_scales_replace_playgrounds():
+    """The terms scaled to 0 enter the reward as 0; the rest as Playground scales them."""
+    runs = []
+    for scales in (None, {"feet_clearance": 0.0, "pose": 2.0}):
+        env = make(n=2, noise=False, randomize=False, command=[0.5, 0.0, 0.0], reward_scales=scales)
+        env.reset(seed=9)
+        runs.append(env.step(np.full((2, 12), 0.3))[4]["reward_terms"])
+    assert (runs[0]["feet_clearance"] != 0).any() and not runs[1]["feet_clearance"].any()
+    np.testing.assert_allclose(runs[1]["pose"], 4 * runs[0]["pose"])
+    np.testing.assert_array_equal(runs[1]["tracking_lin_vel"], runs[0]["tracking_lin_vel"])
 
 
 def test_a_robot_turned_over_is_terminated_and_restarted():

@@ -120,16 +120,22 @@ def _rotate_into(q, v):
 class Go1Joystick(VectorEnv):
     """num_envs Go1 worlds tracking velocity commands (module doc). precision: "Float32" (default) or "Float64";
     threads: the solver's and pipeline's (0: OpenMP's default); noise: Playground's observation noise;
-    randomize: new per-world parameters at each reset; command: a fixed (forward, sideways, turning) command for
-    every world instead of random ones."""
+    randomize: Playground's random start and new per-world parameters at each reset; command: a fixed (forward,
+    sideways, turning) command for every world instead of random ones; reward_scales: {term: scale} replacing
+    Playground's scales (REWARD_SCALES) of those terms."""
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
     stand = False
 
     def __init__(self, num_envs=1, *, precision="Float32", threads=0, noise=True, randomize=True, command=None,
-                 robot=None, episode_steps=EPISODE_STEPS):
+                 robot=None, episode_steps=EPISODE_STEPS, reward_scales=None):
         if not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"{type(self).__name__}: num_envs must be a positive integer, got {num_envs!r}")
+        unknown = sorted(set(reward_scales or {}) - set(REWARD_SCALES))
+        if unknown:
+            raise ValueError(f"{type(self).__name__}: no reward term {', '.join(map(repr, unknown))} (the terms: "
+                             f"{', '.join(REWARD_SCALES)})")
+        self.reward_scales = {**REWARD_SCALES, **{k: float(v) for k, v in (reward_scales or {}).items()}}
         self.num_envs = int(num_envs)
         self.noise, self.randomize, self.episode_steps = noise, randomize, int(episode_steps)
         self.fixed_command = None if command is None else np.asarray(command, dtype=np.float64).reshape(3)
@@ -371,7 +377,7 @@ class Go1Joystick(VectorEnv):
         terms, up = self._rewards(trunk, action, torque)
         terminated = up[:, 2] < 0.0
         terms["termination"] = terminated.astype(np.float64)
-        scaled = {name: REWARD_SCALES[name] * value * CTRL_DT for name, value in terms.items()}
+        scaled = {name: self.reward_scales[name] * value * CTRL_DT for name, value in terms.items()}
         reward = np.clip(sum(scaled.values()), 0.0, 10000.0).astype(np.float32)
         self._last_action = action
         self._steps += 1

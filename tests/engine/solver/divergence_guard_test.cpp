@@ -67,6 +67,30 @@ TEST(DivergenceGuard, ResetRestartsFromTheInitialState) {
   EXPECT_NE(wild.state.joint_q[1], wild.model.joint_q0[1]);  // the others went on swinging
 }
 
+// under Reset the world restarted leaves the step as reset_worlds leaves one: marked, its sensors at 0
+TEST(DivergenceGuard, AWorldTheGuardResetsIsMarkedAsResetAndItsSensorsRead0) {
+  ModelBuilder robot, worlds;
+  const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
+  JointOptions options;
+  options.dof.axis = Vec3::UnitZ();
+  options.child_xform.p = Vec3(-0.25, 0, 0);
+  const int hinge = robot.add_joint_revolute(-1, link, options);
+  robot.add_sensor(SensorType::JointVel, hinge);
+  worlds.replicate(robot, 4);
+  SolverFeatherstoneSettings settings;
+  settings.on_divergence = DivergencePolicy::Reset;
+  Scene wild(worlds, settings);
+  wild.run(0.1);
+  wild.state.joint_qd[2] = 2e6;
+  wild.run(kDt);
+  EXPECT_EQ(wild.solver.diverged(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+  EXPECT_EQ(wild.state.world_reset, (std::vector<std::uint8_t>{0, 0, 1, 0}));
+  EXPECT_EQ(wild.state.sensor_data[2], 0);
+  EXPECT_NE(wild.state.sensor_data[1], 0);  // (the others swing on)
+  wild.run(kDt);
+  EXPECT_EQ(wild.state.world_reset, (std::vector<std::uint8_t>{0, 0, 0, 0}));
+}
+
 TEST(DivergenceGuard, AFlaggedWorldOfABlockKeepsItsStateAndBodies) {
   for (const Precision precision : {Precision::Float32, Precision::Float64}) {
     Scene calm(pendulum_worlds(precision)), wild(pendulum_worlds(precision));

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <functional>
 #include <random>
@@ -105,6 +106,29 @@ TEST(ResetWorlds, AResetWorldStepsBitForBitAsFromAFreshStart) {
       }
     }
     EXPECT_TRUE(history_shows) << file << ": the worlds' history changes nothing: the test shows nothing";
+  }
+}
+
+// a world the divergence guard restarts (on_divergence Reset, at the keyframe "settled") steps on as from a fresh
+// solver and pipeline: none of its contacts' warm starts from before it diverged
+TEST(ResetWorlds, AWorldTheDivergenceGuardResetsStepsOnAsFromAFreshStart) {
+  for (const Precision precision : {Precision::Float64, Precision::Float32}) {
+    SCOPED_TRACE(precision == Precision::Float32 ? "float32" : "float64");
+    const ModelBuilder builder = worlds_of(NOVAPHY_SCENE_DIR "/quadruped.xml", precision, 150);
+    SolverFeatherstoneSettings settings;
+    settings.on_divergence = DivergencePolicy::Reset;
+    Scene wild(builder, settings), fresh(builder, settings);
+    wild.solver.set_reset_keyframe("settled");
+    run_commanded(wild, 60, 7);
+    ASSERT_EQ(wild.model.articulation_world(2), 2);
+    wild.state.joint_qd[wild.model.articulation(2).qd_begin()] = 2e6;
+    wild.run(0.002, 0.002);
+    ASSERT_EQ(wild.solver.diverged()[2], 1);
+    EXPECT_EQ(wild.state.world_reset, (std::vector<std::uint8_t>{0, 0, 1, 0, 0}));
+    fresh.state = wild.state;
+    run_commanded(wild, 30, 11);
+    run_commanded(fresh, 30, 11);
+    EXPECT_EQ(world_state(wild.model, wild.state, 2), world_state(fresh.model, fresh.state, 2));
   }
 }
 
