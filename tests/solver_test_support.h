@@ -106,16 +106,23 @@ inline Scalar max_difference(const std::vector<Scalar>& x, const std::vector<Sca
   return d;
 }
 
-// `count` worlds of one pendulum (four: one block): the blocks write each world's new state as they step it,
-// all but the worlds they flag
-inline ModelBuilder pendulum_worlds(Precision precision, int count = 4) {
-  ModelBuilder robot, worlds;
+// a pendulum: a box on a hinge about z, 2 m up (its hinge is joint 0)
+inline ModelBuilder pendulum() {
+  ModelBuilder robot;
   const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
   JointOptions options;
   options.dof.axis = Vec3::UnitZ();
   options.parent_xform.p = Vec3(0, 2, 0);
   options.child_xform.p = Vec3(-0.25, 0, 0);
   robot.add_joint_revolute(-1, link, options);
+  return robot;
+}
+
+// `count` worlds of one pendulum (four: one block): the blocks write each world's new state as they step it,
+// all but the worlds they flag
+inline ModelBuilder pendulum_worlds(Precision precision, int count = 4) {
+  const ModelBuilder robot = pendulum();
+  ModelBuilder worlds;
   worlds.set_precision(precision);
   worlds.replicate(robot, count);
   return worlds;

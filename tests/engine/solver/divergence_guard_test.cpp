@@ -69,13 +69,8 @@ TEST(DivergenceGuard, ResetRestartsFromTheInitialState) {
 
 // under Reset the world restarted leaves the step as reset_worlds leaves one: marked, its sensors at 0
 TEST(DivergenceGuard, AWorldTheGuardResetsIsMarkedAsResetAndItsSensorsRead0) {
-  ModelBuilder robot, worlds;
-  const int link = robot.add_body(RigidBody::from_box(1, Vec3(0.05, 0.25, 0.05)));
-  JointOptions options;
-  options.dof.axis = Vec3::UnitZ();
-  options.child_xform.p = Vec3(-0.25, 0, 0);
-  const int hinge = robot.add_joint_revolute(-1, link, options);
-  robot.add_sensor(SensorType::JointVel, hinge);
+  ModelBuilder robot = pendulum(), worlds;
+  robot.add_sensor(SensorType::JointVel, 0);  // (its hinge)
   worlds.replicate(robot, 4);
   SolverFeatherstoneSettings settings;
   settings.on_divergence = DivergencePolicy::Reset;
