@@ -6,6 +6,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <limits>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
 #include "engine/model/model.h"
 #include "engine/threads/parallel.h"
 
@@ -18,8 +23,38 @@ void bind_builder(py::module_& m);
 void bind_eval(py::module_& m);
 void bind_collision(py::module_& m);
 void bind_solver_featherstone(py::module_& m);
+void bind_solver_maximal(py::module_& m);  // after bind_solver_featherstone (DivergencePolicy, JointSupportMatrix)
 void bind_shard(py::module_& m);
 void bind_mujoco(py::module_& m);  // after bind_builder: adds ModelBuilder.add_mujoco_model
+
+// a setting's accepted range as the docs write it ("" for a bool or an enum)
+template <typename T, typename Low, typename High>
+std::string setting_range(Low lowest, High highest) {
+  if constexpr (std::is_same_v<T, bool> || std::is_enum_v<T>) {
+    return "";
+  } else {
+    std::ostringstream os;
+    os.precision(17);
+    const bool unbounded =
+        static_cast<T>(highest) == std::numeric_limits<T>::max() ||
+        (std::numeric_limits<T>::has_infinity && static_cast<T>(highest) == std::numeric_limits<T>::infinity());
+    if (unbounded)
+      os << ">= " << lowest;
+    else
+      os << "[" << lowest << ", " << highest << "]";
+    return os.str();
+  }
+}
+
+// one line of a settings table (engine/solver/settings.h) bound, and described for Settings.fields(), in a scope that
+// names the struct Settings and holds py::class_<Settings> settings_class (NOVAPHY_BIND_SETTING) or a py::list
+// fields (NOVAPHY_DESCRIBE_SETTING)
+#define NOVAPHY_BIND_SETTING(type, name, value, lowest, highest, unit, doc) \
+  settings_class.def_readwrite(#name, &Settings::name, doc);
+#define NOVAPHY_DESCRIBE_SETTING(type, name, value, lowest, highest, unit, doc)                                  \
+  fields.append(py::dict(py::arg("name") = #name, py::arg("type") = #type, py::arg("default") = Settings{}.name, \
+                         py::arg("range") = setting_range<type>(lowest, highest), py::arg("unit") = unit,        \
+                         py::arg("doc") = doc));
 
 // a numpy view of `count` rows of `width` values owned by `owner` (no copy); width 1 gives a 1-D array
 template <typename T>

@@ -390,6 +390,66 @@ void bind_builder(py::module_& m) {
             "Ball joint: quaternion q, angular velocity in the child frame.");
   def_joint(builder, "add_joint_fixed", JointType::Fixed, "Fixed joint: rigid attachment.");
   def_joint(builder, "add_joint_free", JointType::Free, "Free joint (root only): q = pose, qd = [w; v] in the world.");
+  // the maximal-coordinate joints (SolverSemiImplicit, SolverXPBD)
+  auto joint_frames = [](std::optional<Transform> parent_xform, std::optional<Transform> child_xform,
+                         const std::string& name) {
+    JointOptions options;
+    options.parent_xform = parent_xform.value_or(Transform::identity());
+    options.child_xform = child_xform.value_or(Transform::identity());
+    options.name = name;
+    return options;
+  };
+  builder
+      .def(
+          "add_joint_distance",
+          [joint_frames](ModelBuilder& self, int parent, int child, std::optional<Transform> parent_xform,
+                         std::optional<Transform> child_xform, Scalar min_distance, Scalar max_distance,
+                         Scalar compliance, const std::string& name) {
+            return self.add_joint_distance(parent, child, joint_frames(parent_xform, child_xform, name), min_distance,
+                                           max_distance, compliance);
+          },
+          py::arg("parent"), py::arg("child"), py::kw_only(), py::arg("parent_xform") = py::none(),
+          py::arg("child_xform") = py::none(), py::arg("min_distance") = 0.0, py::arg("max_distance") = INFINITY,
+          py::arg("compliance") = 0.0, py::arg("name") = "",
+          "Distance joint (maximal coordinates): the joint frames' origins stay between min_distance and "
+          "max_distance apart; compliance (m/N) makes it a spring of stiffness 1 / compliance. Enforced by "
+          "SolverSemiImplicit and SolverXPBD; SolverFeatherstone refuses it.")
+      .def(
+          "add_joint_d6",
+          [joint_frames](ModelBuilder& self, int parent, int child, std::optional<Transform> parent_xform,
+                         std::optional<Transform> child_xform, const py::list& linear_axes,
+                         const py::list& angular_axes, Scalar linear_compliance, Scalar angular_compliance,
+                         const std::string& name) {
+            std::vector<JointDofConfig> linear, angular;
+            for (const py::handle axis : linear_axes) linear.push_back(dof_config(py::reinterpret_borrow<py::object>(axis)));
+            for (const py::handle axis : angular_axes)
+              angular.push_back(dof_config(py::reinterpret_borrow<py::object>(axis)));
+            return self.add_joint_d6(parent, child, joint_frames(parent_xform, child_xform, name), linear, angular,
+                                     linear_compliance, angular_compliance);
+          },
+          py::arg("parent"), py::arg("child"), py::kw_only(), py::arg("parent_xform") = py::none(),
+          py::arg("child_xform") = py::none(), py::arg("linear_axes") = py::list(),
+          py::arg("angular_axes") = py::list(), py::arg("linear_compliance") = 0.0,
+          py::arg("angular_compliance") = 0.0, py::arg("name") = "",
+          "D6 joint (maximal coordinates): each axis of the joint frame locked, free, limited or driven. "
+          "linear_axes and angular_axes (JointDofConfig or 3 numbers each, at most 3 of each kind) are the axes "
+          "that are not locked, with their limits and drive gains; the joint frame turns so its x, y, z are the "
+          "distinct given axes in order (linear first), completed to a right-handed frame; its dofs are angular x, y, "
+          "z then linear x, y, z of that frame. Enforced by SolverSemiImplicit and SolverXPBD.")
+      .def(
+          "add_joint_cable",
+          [joint_frames](ModelBuilder& self, int parent, int child, std::optional<Transform> parent_xform,
+                         std::optional<Transform> child_xform, Scalar stretch_compliance, Scalar bend_compliance,
+                         const std::string& name) {
+            return self.add_joint_cable(parent, child, joint_frames(parent_xform, child_xform, name),
+                                        stretch_compliance, bend_compliance);
+          },
+          py::arg("parent"), py::arg("child"), py::kw_only(), py::arg("parent_xform") = py::none(),
+          py::arg("child_xform") = py::none(), py::arg("stretch_compliance") = 0.0, py::arg("bend_compliance") = 0.0,
+          py::arg("name") = "",
+          "Cable joint (maximal coordinates): a segment of a rope or cable held to its parent segment at the joint "
+          "frames, stretching with stretch_compliance (m/N) and bending and twisting with bend_compliance "
+          "(rad/(N m)). Enforced by SolverSemiImplicit and SolverXPBD.");
 }
 
 }  // namespace novaphy::python

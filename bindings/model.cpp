@@ -140,7 +140,10 @@ void bind_model(py::module_& m) {
       .value("Slide", JointType::Prismatic)
       .value("Ball", JointType::Ball)
       .value("Fixed", JointType::Fixed)
-      .value("Free", JointType::Free);
+      .value("Free", JointType::Free)
+      .value("Distance", JointType::Distance)
+      .value("D6", JointType::D6)
+      .value("Cable", JointType::Cable);
 
   py::enum_<Precision>(m, "Precision",
                        "The precision the solver's batched kernels step a model in; a Float32 model's State and "

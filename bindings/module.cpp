@@ -12,5 +12,6 @@ PYBIND11_MODULE(_novaphy, m) {
   novaphy::python::bind_eval(m);
   novaphy::python::bind_collision(m);
   novaphy::python::bind_solver_featherstone(m);
+  novaphy::python::bind_solver_maximal(m);
   novaphy::python::bind_shard(m);
 }

@@ -11,29 +11,6 @@
 
 namespace novaphy::python {
 
-namespace {
-
-// a setting's accepted range as the docs write it ("" for a bool or an enum)
-template <typename T, typename Low, typename High>
-std::string setting_range(Low lowest, High highest) {
-  if constexpr (std::is_same_v<T, bool> || std::is_enum_v<T>) {
-    return "";
-  } else {
-    std::ostringstream os;
-    os.precision(17);
-    const bool unbounded =
-        static_cast<T>(highest) == std::numeric_limits<T>::max() ||
-        (std::numeric_limits<T>::has_infinity && static_cast<T>(highest) == std::numeric_limits<T>::infinity());
-    if (unbounded)
-      os << ">= " << lowest;
-    else
-      os << "[" << lowest << ", " << highest << "]";
-    return os.str();
-  }
-}
-
-}  // namespace
-
 void bind_solver_featherstone(py::module_& m) {
   using Settings = SolverFeatherstoneSettings;
   py::enum_<DivergencePolicy>(m, "DivergencePolicy", "What step does with an articulation that diverged.")
@@ -42,23 +19,15 @@ void bind_solver_featherstone(py::module_& m) {
       .value("Reset", DivergencePolicy::Reset,
              "the articulation restarts from the reset state (set_reset_state, set_reset_keyframe; else joint_q0 at "
              "rest)");
-  py::class_<Settings> settings(m, "SolverFeatherstoneSettings",
-                                "Every knob of SolverFeatherstone (docs/settings.md); checked at each step.");
-  settings.def(py::init<>());
-#define NOVAPHY_BIND_SETTING(type, name, value, lowest, highest, unit, doc) \
-  settings.def_readwrite(#name, &Settings::name, doc);
+  py::class_<Settings> settings_class(m, "SolverFeatherstoneSettings",
+                                      "Every knob of SolverFeatherstone (docs/settings.md); checked at each step.");
+  settings_class.def(py::init<>());
   NOVAPHY_SOLVER_SETTINGS(NOVAPHY_BIND_SETTING)
-#undef NOVAPHY_BIND_SETTING
-  settings.def_static(
+  settings_class.def_static(
       "fields",
       [] {
         py::list fields;
-#define NOVAPHY_DESCRIBE_SETTING(type, name, value, lowest, highest, unit, doc)                                  \
-  fields.append(py::dict(py::arg("name") = #name, py::arg("type") = #type, py::arg("default") = Settings{}.name, \
-                         py::arg("range") = setting_range<type>(lowest, highest), py::arg("unit") = unit,        \
-                         py::arg("doc") = doc));
         NOVAPHY_SOLVER_SETTINGS(NOVAPHY_DESCRIBE_SETTING)
-#undef NOVAPHY_DESCRIBE_SETTING
         return fields;
       },
       "The settings table: per setting its name, C++ type, default, accepted range, unit and doc.");

@@ -9,6 +9,9 @@ const char* joint_type_name(JointType type) {
     case JointType::Ball: return "Ball";
     case JointType::Fixed: return "Fixed";
     case JointType::Free: return "Free";
+    case JointType::Distance: return "Distance";
+    case JointType::D6: return "D6";
+    case JointType::Cable: return "Cable";
   }
   return "Unknown";
 }

@@ -30,9 +30,9 @@ void forward_velocity(const ArticulationView& art, const Scalar* qd, Articulatio
     const Vec6 v_J = s.S.middleCols(art.qd_start(i), d) * Eigen::Map<const VecX>(qd + art.qd_start(i), d);
     s.v[i] = p < 0 ? v_J : Vec6(s.Xup[i] * s.v[p] + v_J);
     s.c[i] = crm(s.v[i]) * v_J;
-    if (art.type(i) == JointType::Free) {
+    if (joint_is_six_dof(art.type(i))) {
       const Transform X_c = art.X_c(i);
-      const Vec6 c_J = joint_bias_acceleration(JointType::Free, motion_xform(X_c) * v_J);
+      const Vec6 c_J = joint_bias_acceleration(art.type(i), motion_xform(X_c) * v_J);
       s.c[i] += motion_xform(X_c.inverse()) * c_J;
     }
   }

@@ -27,6 +27,9 @@ void integrate_joints(const ArticulationView& art, const Scalar* q, const Scalar
       case JointType::Prismatic: y[0] = x[0] + dt * v[0]; break;
       case JointType::Ball: store(joint_quat(x) * exp_map(dt * Vec3(v[0], v[1], v[2])), y); break;
       case JointType::Free:
+      case JointType::Distance:
+      case JointType::D6:
+      case JointType::Cable:
         for (int k = 0; k < 3; ++k) y[k] = x[k] + dt * v[3 + k];
         store(exp_map(dt * Vec3(v[0], v[1], v[2])) * joint_quat(x + 3), y + 3);
         break;

@@ -125,7 +125,34 @@ int ModelBuilder::add_joint_free(int parent, int child, const JointOptions& opti
 }
 
 int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOptions& options) {
-  const std::string item = label("joint", joint_count(), options.name) + " (" + joint_type_name(type) + ")";
+  if (joint_is_six_dof(type) && type != JointType::Free)
+    fail(label("joint", joint_count(), options.name), " (", joint_type_name(type), "): add it with add_joint_",
+         type == JointType::Distance ? "distance" : type == JointType::D6 ? "d6" : "cable");
+  return add_joint_record({type, parent, child, options});
+}
+
+namespace {
+
+// a dof's limits and gains checked
+void check_dof(const std::string& item, const JointDofConfig& dof) {
+  if (std::isnan(dof.limit_lower) || std::isnan(dof.limit_upper) || dof.limit_lower > dof.limit_upper)
+    fail(item, ": limits must satisfy limit_lower <= limit_upper, got [", dof.limit_lower, ", ", dof.limit_upper, "]");
+  check_nonnegative(item, "armature", dof.armature);
+  check_nonnegative(item, "damping", dof.damping);
+  check_nonnegative(item, "frictionloss", dof.frictionloss);
+  check_nonnegative(item, "stiffness", dof.stiffness);
+  check_nonnegative(item, "target_ke", dof.target_ke);
+  check_nonnegative(item, "target_kd", dof.target_kd);
+  check_finite(item, "q_ref", dof.q_ref);
+  check_finite(item, "q0", dof.q0);
+}
+
+}  // namespace
+
+int ModelBuilder::add_joint_record(JointRecord joint) {
+  const JointType type = joint.type;
+  const int parent = joint.parent, child = joint.child;
+  const std::string item = label("joint", joint_count(), joint.options.name) + " (" + joint_type_name(type) + ")";
   if (parent < -1 || parent >= body_count())
     fail(item, ": parent body index ", parent, " out of range [-1, ", body_count(), ")");
   if (child < 0 || child >= body_count())
@@ -137,25 +164,18 @@ int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOp
   if (type == JointType::Free && parent != -1)
     fail(item, ": a Free joint must be a root (parent -1), got parent ", parent);
 
-  JointRecord joint{type, parent, child, options};
-  joint.options.parent_xform = checked_transform(item, "parent_xform", options.parent_xform);
-  joint.options.child_xform = checked_transform(item, "child_xform", options.child_xform);
+  joint.options.parent_xform = checked_transform(item, "parent_xform", joint.options.parent_xform);
+  joint.options.child_xform = checked_transform(item, "child_xform", joint.options.child_xform);
   JointDofConfig& dof = joint.options.dof;
   if (type == JointType::Revolute || type == JointType::Prismatic) {
     check_finite(item, "axis", dof.axis);
     if (dof.axis.norm() < 1e-9) fail(item, ": axis has zero length");
     dof.axis.normalize();
   }
-  if (std::isnan(dof.limit_lower) || std::isnan(dof.limit_upper) || dof.limit_lower > dof.limit_upper)
-    fail(item, ": limits must satisfy limit_lower <= limit_upper, got [", dof.limit_lower, ", ", dof.limit_upper, "]");
-  check_nonnegative(item, "armature", dof.armature);
-  check_nonnegative(item, "damping", dof.damping);
-  check_nonnegative(item, "frictionloss", dof.frictionloss);
-  check_nonnegative(item, "stiffness", dof.stiffness);
-  check_nonnegative(item, "target_ke", dof.target_ke);
-  check_nonnegative(item, "target_kd", dof.target_kd);
-  check_finite(item, "q_ref", dof.q_ref);
-  check_finite(item, "q0", dof.q0);
+  check_dof(item, dof);
+  for (size_t k = 0; k < joint.dofs.size(); ++k) check_dof(item + " dof " + std::to_string(k), joint.dofs[k]);
+  const char* compliance_name[2] = {"linear compliance", "angular compliance"};
+  for (int k = 0; k < 2; ++k) check_nonnegative(item, compliance_name[k], joint.compliance[k]);
 
   joints_.push_back(joint);
   body_joint_[child] = joint_count() - 1;
@@ -426,6 +446,7 @@ void ModelBuilder::lay_out_joints(const std::vector<JointRecord>& joints, Model&
     joint.options.parent_xform.to_array(&model.joint_X_p[7 * j]);
     joint.options.child_xform.to_array(&model.joint_X_c[7 * j]);
     Eigen::Map<Vec3>(&model.joint_axis[3 * j]) = joint.options.dof.axis;
+    for (int k = 0; k < 2; ++k) model.joint_compliance[2 * j + k] = joint.compliance[k];
     model.joint_name.push_back(joint.options.name);
     lay_out_joint_dofs(joint, q, qd, model);
     q += joint_coord_count(joint.type);
@@ -437,8 +458,8 @@ void ModelBuilder::lay_out_joints(const std::vector<JointRecord>& joints, Model&
 }
 
 void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, Model& model) const {
-  const JointDofConfig& dof = joint.options.dof;
   for (int k = 0; k < joint_dof_count(joint.type); ++k) {
+    const JointDofConfig& dof = joint.dofs.empty() ? joint.options.dof : joint.dofs[k];
     model.joint_armature[qd + k] = dof.armature;
     model.joint_damping[qd + k] = dof.damping;
     model.joint_frictionloss[qd + k] = dof.frictionloss;
@@ -448,6 +469,7 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
     model.joint_target_ke[qd + k] = dof.target_ke;
     model.joint_target_kd[qd + k] = dof.target_kd;
   }
+  const JointDofConfig& dof = joint.options.dof;
   Scalar* q0 = model.joint_q0.data() + q;  // past the end for a joint without coordinates
   switch (joint.type) {
     case JointType::Revolute:
@@ -456,7 +478,10 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
       q0[0] = dof.q0;
       break;
     case JointType::Ball: q0[3] = model.joint_q_ref[q + 3] = 1; break;
-    case JointType::Free: {
+    case JointType::Free:
+    case JointType::Distance:
+    case JointType::D6:
+    case JointType::Cable: {
       // start at the body's pose: J = X_p^-1 * body_xform * X_c
       const Transform J = joint.options.parent_xform.inverse() * body_xform_[joint.child] * joint.options.child_xform;
       J.to_array(q0);

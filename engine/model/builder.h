@@ -142,7 +142,30 @@ class ModelBuilder {
   int add_joint_fixed(int parent, int child, const JointOptions& options = {});
   // a Free joint must be a root (parent -1): its q is the child's pose in the world
   int add_joint_free(int parent, int child, const JointOptions& options = {});
+  // Revolute, Prismatic, Ball, Fixed or Free (the maximal-coordinate joints have their own adders)
   int add_joint(JointType type, int parent, int child, const JointOptions& options);
+
+  // The maximal-coordinate joints (builder_maximal_joints.cpp; kernels/joint.h: each is kinematically a Free joint
+  // relative to its parent, starting where the bodies were placed). SolverSemiImplicit and SolverXPBD enforce them,
+  // SolverFeatherstone refuses them. A compliance (m/N, rad/(N m); 0: rigid) makes a constraint a spring of
+  // stiffness 1 / compliance (model.joint_compliance: linear, angular).
+  // Distance: the parent and child joint frames' origins (the anchors) stay between min_distance and max_distance
+  // apart (model.joint_limit_lower / upper of its first dof)
+  int add_joint_distance(int parent, int child, const JointOptions& options, Scalar min_distance,
+                         Scalar max_distance, Scalar compliance = 0);
+  // D6: per axis of the joint frame locked, free, limited or driven. linear_axes and angular_axes (each at most 3,
+  // options.dof is not read) give the axes that are not locked, in the parent joint frame, with their limits, drive
+  // gains and damping; the joint frame is rotated so its x, y and z are the distinct given axes in order (linear
+  // first, then angular; a direction given for both is one axis), completed to a right-handed frame. The D6's dofs
+  // are that frame's: angular x, y, z, then linear x, y, z (a Free joint's [w; v]); a locked axis has the range
+  // [0, 0]. Its angular coordinates are the rotation vector of the child joint frame in the parent's
+  int add_joint_d6(int parent, int child, const JointOptions& options, const std::vector<JointDofConfig>& linear_axes,
+                   const std::vector<JointDofConfig>& angular_axes, Scalar linear_compliance = 0,
+                   Scalar angular_compliance = 0);
+  // Cable: a segment of a rope or cable held to its parent segment at the joint frames, stretching with
+  // stretch_compliance and bending and twisting with bend_compliance (an all-locked D6 of those compliances)
+  int add_joint_cable(int parent, int child, const JointOptions& options, Scalar stretch_compliance = 0,
+                      Scalar bend_compliance = 0);
 
   // joints: contiguous, ascending, each parent inside the articulation or the world
   int add_articulation(const std::vector<int>& joints);
@@ -251,10 +274,14 @@ class ModelBuilder {
  private:
   friend class MjcfImporter;
   struct JointRecord {
+    JointRecord(JointType type_, int parent_, int child_, const JointOptions& options_)
+        : type(type_), parent(parent_), child(child_), options(options_) {}
     JointType type;
     int parent, child;
     JointOptions options;
     int articulation = -1;
+    std::vector<JointDofConfig> dofs;  // per dof where they differ (a D6's, a Distance's); empty: options.dof
+    Scalar compliance[2] = {0, 0};     // linear, angular (model.joint_compliance)
   };
   struct ShapeRecord {
     ShapeType type;
@@ -272,6 +299,8 @@ class ModelBuilder {
 
   // massless links are allowed for imported bodies that carry several MuJoCo joints
   int add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name, bool allow_massless);
+  // the joint checked (bodies, frames, limits and gains of options.dof and of each of joint.dofs) and added
+  int add_joint_record(JointRecord joint);
   int add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh = -1);
   // the implicit Free joint of a body no joint names as its child
   JointRecord free_joint(int body) const;

@@ -288,10 +288,10 @@ std::vector<std::uint8_t> world_mask(const Model& model, const std::vector<int>&
   return mask;
 }
 
-// where link j's quaternion starts in joint_q (a Free joint's after its position, a Ball joint's), -1: it has none
+// where link j's quaternion starts in joint_q (a six-dof joint's after its position, a Ball joint's), -1: it has none
 int quaternion_at(const ArticulationView& art, int j) {
   const int at = art.q_begin() + art.q_start(j);
-  return art.type(j) == JointType::Free ? at + 3 : art.type(j) == JointType::Ball ? at : -1;
+  return joint_is_six_dof(art.type(j)) ? at + 3 : art.type(j) == JointType::Ball ? at : -1;
 }
 
 // the articulations of the worlds in `mask`

@@ -110,6 +110,8 @@ const char* shape_type_name(ShapeType type);
 // corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the mesh,
 // counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types. world_gravity: each
 // world's gravity (the builder's gravity in every world at finalize).
+// joint_compliance: a maximal-coordinate joint's linear and angular compliance (builder.h: add_joint_distance, d6,
+// cable; 0 rigid), read by the solvers in maximal coordinates.
 // The parameters learning randomises may change per world after finalize, through Model::set_parameter only
 // (engine/model/parameters.cpp lists them); every other field is the model's structure and stays as finalized.
 #define NOVAPHY_MODEL_FIELDS(X)                            \
@@ -128,6 +130,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_X_p, joint_count, 7)                     \
   X(Scalar, joint_X_c, joint_count, 7)                     \
   X(Scalar, joint_axis, joint_count, 3)                    \
+  X(Scalar, joint_compliance, joint_count, 2)              \
   X(Scalar, joint_q0, joint_coord_count, 1)                \
   X(Scalar, joint_q_ref, joint_coord_count, 1)             \
   X(Scalar, joint_armature, joint_dof_count, 1)            \

@@ -24,15 +24,31 @@ void check_setting(const char* name, T value, Low lowest, High highest, const ch
   }
 }
 
-}  // namespace
-
-void SolverFeatherstoneSettings::check() const {
+void check_policy(DivergencePolicy on_divergence) {
   if (static_cast<int>(on_divergence) < 0 || static_cast<int>(on_divergence) > 2)
     fail("settings.on_divergence must be Raise, Flag or Reset, got ", static_cast<int>(on_divergence));
+}
+
+}  // namespace
+
 #define NOVAPHY_CHECK_SETTING(type, name, value, lowest, highest, unit, doc) \
   check_setting<type>(#name, name, lowest, highest, unit);
+
+void SolverFeatherstoneSettings::check() const {
+  check_policy(on_divergence);
   NOVAPHY_SOLVER_SETTINGS(NOVAPHY_CHECK_SETTING)
-#undef NOVAPHY_CHECK_SETTING
 }
+
+void SolverSemiImplicitSettings::check() const {
+  check_policy(on_divergence);
+  NOVAPHY_SEMI_IMPLICIT_SETTINGS(NOVAPHY_CHECK_SETTING)
+}
+
+void SolverXPBDSettings::check() const {
+  check_policy(on_divergence);
+  NOVAPHY_XPBD_SETTINGS(NOVAPHY_CHECK_SETTING)
+}
+
+#undef NOVAPHY_CHECK_SETTING
 
 }  // namespace novaphy

@@ -13,6 +13,7 @@
 
 #include "engine/model/actuator.h"
 #include "engine/model/error.h"
+#include "engine/solver/joint_support.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/threads/parallel.h"
 #include "kernels/crba.h"
@@ -28,29 +29,8 @@ constexpr int kContactsPerThread = 512;
 
 }  // namespace
 
-bool JointSupportMatrix::supports(const std::string& joint) const {
-  for (const Entry& e : entries)
-    if (e.joint == joint) return e.supported;
-  fail("unknown joint type '", joint, "'");
-}
-
-std::string JointSupportMatrix::to_string() const {
-  std::ostringstream os;
-  os << "SolverFeatherstone joint support:";
-  for (const Entry& e : entries) os << "\n  " << e.joint << ": " << (e.supported ? "yes" : "no");
-  return os.str();
-}
-
 JointSupportMatrix SolverFeatherstone::joint_support() const {
-  return {{{"Revolute", true},
-           {"Prismatic", true},
-           {"Slide", true},
-           {"Ball", true},
-           {"Fixed", true},
-           {"Free", true},
-           {"Distance", false},
-           {"D6", false},
-           {"Cable", false}}};
+  return novaphy::joint_support("SolverFeatherstone", false);
 }
 
 // ---- made once: the routes and their data over what is built once for the model (SolverModel)
@@ -58,7 +38,7 @@ JointSupportMatrix SolverFeatherstone::joint_support() const {
 SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherstoneSettings& settings_)
     : settings(settings_),
       model_(model),
-      built_(model, settings_.weld_fixed_joints),
+      built_(supported_model(model, "SolverFeatherstone", false), settings_.weld_fixed_joints),
       parameters_read_(model.parameter_writes),
       sensors_(model) {
   settings.check();

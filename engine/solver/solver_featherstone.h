@@ -22,6 +22,7 @@
 #include "engine/solver/blocks/blocks.h"
 #include "engine/solver/dense/dense.h"
 #include "engine/solver/islands/rows.h"
+#include "engine/solver/joint_support.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver/settings.h"
 #include "engine/solver/solver_data.h"
@@ -39,16 +40,6 @@ struct SolverStageSeconds {
   double solve = 0;         // M^-1 J^T, warm start and PGS sweeps
   double integrate = 0;     // joint integration, the divergence guard, FK into body_q/body_qd
   int steps = 0;
-};
-
-struct JointSupportMatrix {
-  struct Entry {
-    std::string joint;
-    bool supported;
-  };
-  std::vector<Entry> entries;
-  bool supports(const std::string& joint) const;  // throws Error for an unknown name
-  std::string to_string() const;
 };
 
 // keeps a reference to the model, which must outlive it and is read-only after finalize: the solver reads most of

@@ -45,6 +45,9 @@ void batch_kinematics(const BatchTopology<T>& topo, const V<T>* q, BatchWork<T>&
         for (int m = 0; m < 4; ++m) Qrel[m] = V<T>{} + k.P0[m];
         for (int m = 0; m < 3; ++m) trel[m] = V<T>{} + k.T0[m];
         break;
+      case JointType::Distance:  // (maximal-coordinate joints: SolverFeatherstone refuses them)
+      case JointType::D6:
+      case JointType::Cable: break;
     }
     V<T>* Qi = &w.Q[4 * i];
     V<T>* pi = &w.p[3 * i];
@@ -111,7 +114,10 @@ inline void link_subspace(const BatchTopology<T>& topo, const BatchWork<T>& w, c
       }
       break;
     }
-    case JointType::Fixed: break;
+    case JointType::Fixed:
+    case JointType::Distance:
+    case JointType::D6:
+    case JointType::Cable: break;
   }
 }
 

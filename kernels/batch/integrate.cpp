@@ -36,7 +36,10 @@ void batch_integrate(const BatchTopology<T>& topo, const V<T>* q, const V<T>* qd
         quat_normalize<T>(y + 3);
         break;
       }
-      case JointType::Fixed: break;
+      case JointType::Fixed:
+      case JointType::Distance:  // (maximal-coordinate joints: SolverFeatherstone refuses them)
+      case JointType::D6:
+      case JointType::Cable: break;
     }
   }
 }

@@ -27,7 +27,10 @@ std::vector<Scalar> advance(const Model& model, const State& state, Scalar h) {
         Eigen::Map<Eigen::Vector4d>{x} = r.coeffs();
         break;
       }
-      case JointType::Free: {  // [w; v] in the parent frame
+      case JointType::Free:
+      case JointType::Distance:
+      case JointType::D6:
+      case JointType::Cable: {  // [w; v] in the parent frame
         for (int k = 0; k < 3; ++k) x[k] += h * v[3 + k];
         const Quat r = exp_quat(h * Vec3(v[0], v[1], v[2])) * joint_quat(x + 3);
         Eigen::Map<Eigen::Vector4d>{x + 3} = r.coeffs();

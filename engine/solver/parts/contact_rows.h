@@ -95,8 +95,8 @@ struct ContactRows {
   // whether or not the sweeps converged. A contact's rows push and are bounded by friction, so carried whole they do
   // not build up as an equality's can; a smaller share lets a stack creep, its friction restarting short of what
   // holds it
-  template <typename V>
-  static V warm_share(const SolverFeatherstoneSettings& p) {
+  template <typename V, typename Settings>
+  static V warm_share(const Settings& p) {
     return splat<V>(static_cast<Element<V>>(p.use_warmstarting ? 1 : 0));
   }
 
@@ -116,9 +116,9 @@ struct ContactRows {
   // a rigid normal row's target: push the penetration beyond the slop out at erp / dt, let a gap close in one
   // step; a contact that closes within this step faster than the restitution threshold bounces at
   // -restitution times its approach speed (v_approach: J qd of the normal row at the step's start)
-  template <typename V>
+  template <typename V, typename Settings>
   static V rigid_normal_target(const V& depth, const V& v_approach, const V& restitution,
-                               const SolverFeatherstoneSettings& p, const V& dt) {
+                               const Settings& p, const V& dt) {
     using E = Element<V>;
     const E slop = static_cast<E>(p.linear_slop);
     const V zero{};
@@ -132,8 +132,8 @@ struct ContactRows {
 
   // rows e < dims: their targets, cfm (a soft contact's; 0 for a rigid one) and friction coefficients mu (0 for the
   // normal), from their velocities v at the step's start
-  template <typename V>
-  static void targets(const ContactInput<V>& in, const V* v, int dims, const SolverFeatherstoneSettings& p, const V& dt,
+  template <typename V, typename Settings>
+  static void targets(const ContactInput<V>& in, const V* v, int dims, const Settings& p, const V& dt,
                       V* target, V* cfm, V* mu) {
     const ContactSoftness<V>& s = in.softness;
     target[0] = select<V>(s.soft, soft_normal_target(in.depth, v[0], s.damping, s.spring, s.active_margin, dt),

@@ -16,8 +16,8 @@ namespace novaphy {
 struct EqualityRow : KeptImpulseRow {
   static constexpr RowKind kKind = RowKind::Bounded;
 
-  template <typename V>
-  static V target(const V& error, const SolverFeatherstoneSettings& p, const V& dt) {
+  template <typename V, typename Settings>
+  static V target(const V& error, const Settings& p, const V& dt) {
     return -static_cast<Element<V>>(p.erp) * error / dt;
   }
   static Scalar bound() { return std::numeric_limits<Scalar>::infinity(); }

@@ -29,8 +29,8 @@ struct LimitRow : KeptImpulseRow {
   }
 
   // close a gap in one step; push a penetration beyond the slop out at erp / dt
-  template <typename V>
-  static V target(const V& gap, const SolverFeatherstoneSettings& p, const V& dt) {
+  template <typename V, typename Settings>
+  static V target(const V& gap, const Settings& p, const V& dt) {
     const V depth = -gap - static_cast<Element<V>>(p.linear_slop);
     const V zero{};
     return select<V>(gap >= 0, -gap / dt, static_cast<Element<V>>(p.erp) * select<V>(depth > 0, depth, zero) / dt);

@@ -1,6 +1,8 @@
 // The constraint rows of the step, one part per row kind, each written once over the number type (kernels/number.h)
-// and used by both row builders (the blocks' lanes, engine/solver/blocks/rows.cpp; the islands of articulations,
-// engine/solver/islands/rows.cpp), which keep only how a Jacobian is laid out and how M^-1 J^T is solved. A part says
+// and used by every row builder (SolverFeatherstone's: the blocks' lanes, engine/solver/blocks/rows.cpp, and the
+// islands of articulations, engine/solver/islands/rows.cpp; SolverSemiImplicit's bodies,
+// engine/solver/semi_implicit/), which keep only how a Jacobian is laid out and how M^-1 J^T is solved. A part reads
+// the settings it names (erp, linear_slop, ...) of whichever solver's settings table it is given. A part says
 // whether its row is on, its kind (the projection of its impulse in a sweep, kernels/pgs.h), its target and bounds,
 // its softness, the impulse it starts from and the one it keeps for the next step:
 //   limit_row.h          a joint's range, a tendon's length (LimitRow)

@@ -10,8 +10,8 @@ namespace novaphy {
 // the share of its last step's impulses a world's rows start from: all of them where its last sweeps converged
 // (stopped at one that moved no row beyond pgs_tolerance), warmstarting_factor of them where they ran out (an
 // error left by sweeps that ran out, carried whole from step to step, can build up), none without warm starting
-template <typename V>
-inline V warm_share(const Mask<V>& converged, const SolverFeatherstoneSettings& p) {
+template <typename V, typename Settings>
+inline V warm_share(const Mask<V>& converged, const Settings& p) {
   using E = Element<V>;
   if (!p.use_warmstarting) return V{};
   return select<V>(converged, splat<V>(E(1)), splat<V>(static_cast<E>(p.warmstarting_factor)));

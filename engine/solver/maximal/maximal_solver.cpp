@@ -1,0 +1,264 @@
+#include "engine/solver/maximal/maximal_solver.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/model/actuator.h"
+#include "engine/model/error.h"
+#include "engine/model/finite_checks.h"
+#include "kernels/joint.h"
+
+namespace novaphy {
+
+namespace {
+
+// x rounded to float where the model steps in float32
+void round_to_float(Scalar* x, int count) {
+  for (int k = 0; k < count; ++k) x[k] = static_cast<float>(x[k]);
+}
+
+}  // namespace
+
+MaximalSolver::MaximalSolver(const Model& model, const char* name)
+    : model_(model), name_(name), step_name_(std::string(name) + ".step"), built_(MaximalConstraints::of(model, name)) {
+  threads_ = std::max(1, omp_get_max_threads());
+  next_.resize(model.body_count);
+  body_slot_.assign(model.body_count, -1);
+  for (int w = 0; w < model.world_count; ++w)
+    for (int i = built_.body_start[w]; i < built_.body_start[w + 1]; ++i)
+      body_slot_[built_.world_bodies[i]] = i - built_.body_start[w];
+  dof_actuator_start_.assign(model.joint_dof_count + 1, 0);
+  for (int u = 0; u < model.actuator_count; ++u) ++dof_actuator_start_[model.joint_qd_start[model.actuator_joint[u]] + 1];
+  for (int d = 0; d < model.joint_dof_count; ++d) dof_actuator_start_[d + 1] += dof_actuator_start_[d];
+  dof_actuators_.assign(model.actuator_count, 0);
+  std::vector<int> next(dof_actuator_start_.begin(), dof_actuator_start_.end() - 1);
+  for (int u = 0; u < model.actuator_count; ++u) dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
+  diverged_.assign(model.world_count, 0);
+  read_materials();
+}
+
+void MaximalSolver::read_materials() {
+  const int n = model_.shape_count;
+  materials_.resize(n);
+  shape_material_.resize(n);
+  shape_weight_.resize(n);
+  for (int s = 0; s < n; ++s) {
+    materials_[s] = contact_material(model_, s);
+    shape_material_[s] = s;
+    shape_weight_[s] = contact_weight(model_, s);
+  }
+  shapes_ = {materials_.data(), shape_material_.data(), shape_weight_.data(), nullptr, n, model_.friction_rule, 0};
+  parameters_read_ = model_.parameter_writes;
+}
+
+void MaximalSolver::check_step(const State& in, const State& out, const Control& control, const Contacts& contacts,
+                               Scalar dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) fail("dt must be finite and > 0, got ", dt);
+  check_settings();
+  model_.check(in);
+  model_.check(out);
+  model_.check(control);
+  if (!same_layout(contacts, model_) || contacts.model_id != model_.model_id)
+    fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
+         " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
+  Checked arrays[] = {{&in.body_q, "state_in.body_q"},
+                      {&in.body_qd, "state_in.body_qd"},
+                      {&in.body_f, "state_in.body_f"},
+                      {&in.joint_q, "state_in.joint_q"},
+                      {&control.joint_f, "control.joint_f"},
+                      {&control.actuator_ctrl, "control.actuator_ctrl"},
+                      {&control.joint_target_pos, "control.joint_target_pos"},
+                      {&control.joint_target_vel, "control.joint_target_vel"},
+                      {&control.joint_target_ke, "control.joint_target_ke"},
+                      {&control.joint_target_kd, "control.joint_target_kd"}};
+  check_finite(arrays, static_cast<int>(std::size(arrays)), thread_count());
+  for (int d = 0; d < model_.joint_dof_count; ++d)
+    if (control.joint_target_ke[d] < 0 || control.joint_target_kd[d] < 0)
+      fail("control.joint_target_ke and joint_target_kd must be >= 0, got ", control.joint_target_ke[d], " and ",
+           control.joint_target_kd[d], " at dof ", d);
+}
+
+void MaximalSolver::list_contacts(const Contacts& contacts) {
+  const int n = contacts.contact_count;
+  auto world_of = [&](int c) {
+    const int a = contacts.contact_body_a[c], b = contacts.contact_body_b[c];
+    return model_.body_world[a >= 0 ? a : b];
+  };
+  contact_start_.assign(model_.world_count + 1, 0);
+  for (int c = 0; c < n; ++c)
+    if (contacts.contact_body_a[c] >= 0 || contacts.contact_body_b[c] >= 0) ++contact_start_[world_of(c) + 1];
+  for (int w = 0; w < model_.world_count; ++w) contact_start_[w + 1] += contact_start_[w];
+  world_contacts_.resize(contact_start_.back());
+  std::vector<int> next(contact_start_.begin(), contact_start_.end() - 1);
+  for (int c = 0; c < n; ++c)
+    if (contacts.contact_body_a[c] >= 0 || contacts.contact_body_b[c] >= 0) world_contacts_[next[world_of(c)]++] = c;
+}
+
+BodyMotion MaximalSolver::start_motion(const State& in, int b) const {
+  if (b < 0 || built_.body_static[b]) {
+    BodyMotion m = BodyMotion::of(model_, in, b);
+    m.v.setZero(), m.w.setZero();
+    m.inv_mass = 0;
+    m.inv_inertia.setZero();
+    return m;
+  }
+  return BodyMotion::of(model_, in, b);
+}
+
+void MaximalSolver::forces(int w, const State& in, const Control& control, Scalar dt,
+                           std::vector<BodyMotion>& bodies) const {
+  const Vec3 g(model_.world_gravity[3 * w], model_.world_gravity[3 * w + 1], model_.world_gravity[3 * w + 2]);
+  const int first = built_.body_start[w];
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    BodyMotion& m = bodies[i];
+    if (m.inv_mass == 0) continue;
+    const int b = built_.world_bodies[first + i];
+    const Scalar* f = &in.body_f[6 * static_cast<size_t>(b)];
+    const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> I_body(&model_.body_inertia[9 * b]);
+    const Mat3 R = m.q.toRotationMatrix();
+    const Vec3 gyroscopic = -m.w.cross(R * (I_body * (R.transpose() * m.w)));
+    m.v += dt * (g + m.inv_mass * Vec3(f[0], f[1], f[2]));
+    m.w += dt * (m.inv_inertia * (Vec3(f[3], f[4], f[5]) + gyroscopic));
+  }
+  for (int i = built_.joint_start[w]; i < built_.joint_start[w + 1]; ++i) {
+    const int j = built_.world_joints[i];
+    const auto type = static_cast<JointType>(model_.joint_type[j]);
+    if (type != JointType::Free && type != JointType::Ball) continue;
+    const Scalar* tau = &control.joint_f[model_.joint_qd_start[j]];
+    const int parent = model_.joint_parent[j], child = model_.joint_child[j];
+    BodyMotion& C = bodies[body_slot_[child]];
+    BodyMotion* P = parent >= 0 ? &bodies[body_slot_[parent]] : nullptr;
+    const Transform pj = (P ? P->frame(model_, parent) : Transform::identity()) *
+                         Transform::from_array(&model_.joint_X_p[7 * j]);
+    const Transform cj = C.frame(model_, child) * Transform::from_array(&model_.joint_X_c[7 * j]);
+    Vec3 torque, force = Vec3::Zero();
+    if (type == JointType::Free) {  // [torque; force] in the parent joint frame, the force at the child's origin
+      torque = pj.q * Vec3(tau[0], tau[1], tau[2]);
+      force = pj.q * Vec3(tau[3], tau[4], tau[5]);
+    } else {  // a torque in the child joint frame
+      torque = cj.q * Vec3(tau[0], tau[1], tau[2]);
+    }
+    C.v += (dt * C.inv_mass) * force;
+    C.w += dt * (C.inv_inertia * (torque + (cj.p - C.x).cross(force)));
+    if (P) P->w -= dt * (P->inv_inertia * torque);
+  }
+}
+
+Scalar MaximalSolver::axis_coordinate(const MaximalConstraint& c, int k, const State& in, Scalar coordinate) const {
+  if (c.joint < 0) return coordinate;
+  const auto type = static_cast<JointType>(model_.joint_type[c.joint]);
+  if ((type == JointType::Revolute && k == 0) || (type == JointType::Prismatic && k == 3))
+    return in.joint_q[model_.joint_q_start[c.joint]];
+  return coordinate;
+}
+
+AxisSpring MaximalSolver::axis_spring(const MaximalConstraint& c, int k, const State& in,
+                                      const Control& control) const {
+  AxisSpring s;
+  const int d = c.dof[k];
+  if (d < 0) return s;
+  const Scalar ke = control.joint_target_ke[d], kd = control.joint_target_kd[d];
+  s.force = control.joint_f[d] + ke * control.joint_target_pos[d] + kd * control.joint_target_vel[d];
+  s.stiffness = ke;
+  s.damping = kd + model_.joint_damping[d];
+  const auto type = static_cast<JointType>(model_.joint_type[c.joint]);
+  if (type == JointType::Revolute || type == JointType::Prismatic) {
+    const int q = model_.joint_q_start[c.joint];
+    s.force += model_.joint_stiffness[d] * model_.joint_q_ref[q];
+    s.stiffness += model_.joint_stiffness[d];
+    for (int i = dof_actuator_start_[d]; i < dof_actuator_start_[d + 1]; ++i) {
+      const int u = dof_actuators_[i];
+      const ActuatorForce a = actuator_force(model_, u, control.actuator_ctrl[u], in.joint_q[q], in.joint_qd[d]);
+      s.force += a.force;
+      s.stiffness += a.stiffness;
+      s.damping += a.damping;
+    }
+  } else {
+    s.stiffness += model_.joint_stiffness[d];
+  }
+  return s;
+}
+
+bool MaximalSolver::world_diverged(int w, const Contacts& contacts, const GuardSettings& guard) const {
+  for (int i = built_.body_start[w]; i < built_.body_start[w + 1]; ++i) {
+    const int b = built_.world_bodies[i];
+    if (built_.body_static[b]) continue;
+    const BodyMotion& m = next_[b];
+    if (!m.x.allFinite() || !m.q.coeffs().allFinite() || !m.v.allFinite() || !m.w.allFinite()) return true;
+    if (m.v.norm() > guard.speed || m.w.norm() > guard.speed) return true;
+  }
+  int count = 0;
+  const int* list = contacts_of(w, &count);
+  for (int i = 0; i < count; ++i)
+    if (contacts.contact_depth[list[i]] > guard.depth) return true;
+  return false;
+}
+
+void MaximalSolver::write_world(int w, const State& in, State& out) const {
+  const bool diverged = diverged_[w] != 0;
+  for (int i = built_.joint_start[w]; i < built_.joint_start[w + 1]; ++i) {
+    const int j = built_.world_joints[i];
+    if (&in != &out) {
+      std::copy_n(&in.joint_q[model_.joint_q_start[j]], model_.joint_q_start[j + 1] - model_.joint_q_start[j],
+                  &out.joint_q[model_.joint_q_start[j]]);
+      std::copy_n(&in.joint_qd[model_.joint_qd_start[j]], model_.joint_qd_start[j + 1] - model_.joint_qd_start[j],
+                  &out.joint_qd[model_.joint_qd_start[j]]);
+    }
+  }
+  const bool float32 = model_.precision == Precision::Float32;
+  for (int i = built_.body_start[w]; i < built_.body_start[w + 1]; ++i) {
+    const int b = built_.world_bodies[i];
+    const size_t at = static_cast<size_t>(b);
+    if (&in != &out) {
+      std::copy_n(&in.body_f[6 * at], 6, &out.body_f[6 * at]);
+      if (diverged || built_.body_static[b]) {
+        std::copy_n(&in.body_q[7 * at], 7, &out.body_q[7 * at]);
+        std::copy_n(&in.body_qd[6 * at], 6, &out.body_qd[6 * at]);
+      }
+    }
+    if (diverged || built_.body_static[b]) continue;
+    next_[b].store(model_, b, out);
+    if (float32) round_to_float(&out.body_q[7 * at], 7), round_to_float(&out.body_qd[6 * at], 6);
+  }
+  out.world_reset[w] = 0;
+  if (diverged) return;
+  built_.joint_coordinates(model_, out, w);
+  if (!float32) return;
+  for (int i = built_.joint_start[w]; i < built_.joint_start[w + 1]; ++i) {
+    const int j = built_.world_joints[i];
+    round_to_float(&out.joint_q[model_.joint_q_start[j]], model_.joint_q_start[j + 1] - model_.joint_q_start[j]);
+    round_to_float(&out.joint_qd[model_.joint_qd_start[j]], model_.joint_qd_start[j + 1] - model_.joint_qd_start[j]);
+  }
+}
+
+void MaximalSolver::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
+  const ExclusiveCall call(busy_, step_name_.c_str());
+  check_step(in, out, control, contacts, dt);
+  if (model_.parameter_writes != parameters_read_) read_materials();
+  shapes_.dt = dt;
+  list_contacts(contacts);
+  const GuardSettings guard = guard_settings();
+  const int threads = std::clamp(thread_count() == 0 ? omp_get_max_threads() : thread_count(), 1, threads_);
+  const StepInput step{in, control, contacts, dt};
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int w = 0; w < model_.world_count; ++w) {
+    step_world(w, step, omp_get_thread_num());
+    diverged_[w] = world_diverged(w, contacts, guard);
+  }
+  const auto first = std::find(diverged_.begin(), diverged_.end(), 1);
+  if (guard.on_divergence == DivergencePolicy::Raise && first != diverged_.end())
+    fail(name_, ": world ", first - diverged_.begin(),
+         " diverged (a body's state went non-finite or beyond settings.divergence_speed, or a contact deeper than "
+         "settings.divergence_depth); nothing was written");
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int w = 0; w < model_.world_count; ++w) write_world(w, in, out);
+  if (guard.on_divergence != DivergencePolicy::Reset || first == diverged_.end()) return;
+  std::vector<int> reset;
+  for (int w = 0; w < model_.world_count; ++w)
+    if (diverged_[w]) reset.push_back(w);
+  model_.reset_worlds(out, reset, -1, threads);
+}
+
+}  // namespace novaphy

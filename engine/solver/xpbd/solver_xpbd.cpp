@@ -1,0 +1,329 @@
+#include "engine/solver/xpbd/solver_xpbd.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/solver/parts/contact_rows.h"
+
+namespace novaphy {
+
+namespace {
+
+constexpr Scalar kPi = 3.14159265358979323846;
+constexpr Scalar kTiny = 1e-12;
+
+// the slots of constraint c's bodies among its world's (-1: the world)
+int slot_of(const std::vector<int>& body_slot, int body) { return body >= 0 ? body_slot[body] : -1; }
+
+// an angular coordinate's change wrapped to (-pi, pi]
+Scalar wrapped(Scalar x) { return std::remainder(x, 2 * kPi); }
+
+}  // namespace
+
+SolverXPBD::SolverXPBD(const Model& model, const SolverXPBDSettings& settings_)
+    : MaximalSolver(model, "SolverXPBD"), settings(settings_) {
+  settings.check();
+  scratch_.resize(threads_);
+}
+
+Scalar SolverXPBD::inverse_mass(int i, const Vec3& p, const Vec3& n, const Scratch& s) const {
+  if (i < 0) return 0;
+  const BodyMotion& m = s.bodies[i];
+  if (m.inv_mass == 0) return 0;
+  const Vec3 rn = (p - m.x).cross(n);
+  return m.inv_mass + rn.dot(m.inv_inertia * rn);
+}
+
+void SolverXPBD::apply_impulse(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& p, Scratch& s) const {
+  if (b >= 0 && s.bodies[b].inv_mass > 0) {
+    BodyMotion& B = s.bodies[b];
+    B.v += B.inv_mass * p;
+    B.w += B.inv_inertia * (pb - B.x).cross(p);
+  }
+  if (a >= 0 && s.bodies[a].inv_mass > 0) {
+    BodyMotion& A = s.bodies[a];
+    A.v -= A.inv_mass * p;
+    A.w -= A.inv_inertia * (pa - A.x).cross(p);
+  }
+}
+
+Scalar SolverXPBD::correct_position(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& correction,
+                                    Scalar alpha_h, Scalar* lambda, Scalar relaxation, Scratch& s) const {
+  const Scalar c = correction.norm();
+  if (c < kTiny) return 0;
+  const Vec3 n = correction / c;
+  const Scalar w = inverse_mass(a, pa, n, s) + inverse_mass(b, pb, n, s);
+  if (w + alpha_h < kTiny) return 0;
+  const Scalar change = (c - alpha_h * *lambda) / (w + alpha_h);
+  *lambda += change;
+  const Vec3 p = (relaxation * change) * n;
+  if (b >= 0 && s.bodies[b].inv_mass > 0) {
+    BodyMotion& B = s.bodies[b];
+    B.x += B.inv_mass * p;
+    B.q = turned(B.q, B.inv_inertia * (pb - B.x).cross(p));
+    B.orient(model_, s.body[b]);
+  }
+  if (a >= 0 && s.bodies[a].inv_mass > 0) {
+    BodyMotion& A = s.bodies[a];
+    A.x -= A.inv_mass * p;
+    A.q = turned(A.q, -(A.inv_inertia * (pa - A.x).cross(p)));
+    A.orient(model_, s.body[a]);
+  }
+  return change;
+}
+
+void SolverXPBD::correct_rotation(int a, int b, const Vec3& correction, Scalar alpha_h, Scalar* lambda,
+                                  Scalar relaxation, Scratch& s) const {
+  const Scalar c = correction.norm();
+  if (c < kTiny) return;
+  const Vec3 n = correction / c;
+  Scalar w = 0;
+  if (a >= 0) w += n.dot(s.bodies[a].inv_inertia * n);
+  if (b >= 0) w += n.dot(s.bodies[b].inv_inertia * n);
+  if (w + alpha_h < kTiny) return;
+  const Scalar change = (c - alpha_h * *lambda) / (w + alpha_h);
+  *lambda += change;
+  const Vec3 p = (relaxation * change) * n;
+  if (b >= 0 && s.bodies[b].inv_mass > 0) {
+    BodyMotion& B = s.bodies[b];
+    B.q = turned(B.q, B.inv_inertia * p);
+    B.orient(model_, s.body[b]);
+  }
+  if (a >= 0 && s.bodies[a].inv_mass > 0) {
+    BodyMotion& A = s.bodies[a];
+    A.q = turned(A.q, -(A.inv_inertia * p));
+    A.orient(model_, s.body[a]);
+  }
+}
+
+void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) const {
+  forces(w, step.in, step.control, h, s.bodies);
+  for (size_t i = 0; i < s.bodies.size(); ++i) {
+    BodyMotion& m = s.bodies[i];
+    if (m.inv_mass == 0) continue;
+    m.x += h * m.v;
+    m.q = turned(m.q, h * m.w);
+    m.orient(model_, s.body[i]);
+  }
+}
+
+void SolverXPBD::solve_constraint(const MaximalConstraint& c, Scalar h, Scalar* lambda, Scratch& s) const {
+  const int a = slot_of(body_slot_, c.a), b = slot_of(body_slot_, c.b);
+  auto frames = [&](Transform& frame_a, Transform& frame_b) {
+    frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
+    frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
+  };
+  const Scalar h2 = h * h;
+  const Scalar alpha_linear = (c.compliance[0] + settings.joint_linear_compliance) / h2;
+  const Scalar alpha_angular = (c.compliance[1] + settings.joint_angular_compliance) / h2;
+  Transform frame_a, frame_b;
+  frames(frame_a, frame_b);
+  if (c.distance) {
+    const Vec3 gap = frame_b.p - frame_a.p;
+    const Scalar length = gap.norm();
+    if (length < kTiny) return;
+    const Scalar held = std::clamp(length, c.lower[3], c.upper[3]);
+    correct_position(a, b, frame_a.p, frame_b.p, (held - length) / length * gap, alpha_linear, &lambda[1],
+                     settings.joint_linear_relaxation, s);
+    return;
+  }
+  Scalar coordinate[6];
+  constraint_coordinates(c, frame_a, frame_b, coordinate);
+  // an axis's error: how far its coordinate is past what the axis allows
+  auto error = [&](int k) {
+    switch (c.mode[k]) {
+      case AxisMode::Free: return Scalar(0);
+      case AxisMode::Locked: return coordinate[k] - c.lower[k];
+      case AxisMode::Limited: return coordinate[k] - std::clamp(coordinate[k], c.lower[k], c.upper[k]);
+    }
+    return Scalar(0);
+  };
+  const Vec3 turn_error(error(0), error(1), error(2));
+  if (!turn_error.isZero()) {
+    correct_rotation(a, b, -(frame_a.q * turn_error), alpha_angular, &lambda[0], settings.joint_angular_relaxation, s);
+    frames(frame_a, frame_b);
+    constraint_coordinates(c, frame_a, frame_b, coordinate);
+  }
+  const Vec3 offset_error(error(3), error(4), error(5));
+  if (!offset_error.isZero())
+    correct_position(a, b, frame_a.p, frame_b.p, -(frame_a.q * offset_error), alpha_linear, &lambda[1],
+                     settings.joint_linear_relaxation, s);
+}
+
+void SolverXPBD::solve_contact(XContact& c, Scratch& s) const {
+  const BodyMotion* A = c.a >= 0 ? &s.bodies[c.a] : nullptr;
+  const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
+  auto at = [](const BodyMotion* m, const Vec3& r) { return m ? Vec3(m->x + m->q * r) : r; };
+  const Vec3 pa = at(A, c.r_a), pb = at(B, c.r_b);
+  const Scalar depth = (pa - pb).dot(c.n);
+  if (depth <= 0) return;
+  Scalar unused = 0;
+  c.lambda_n += correct_position(c.a, c.b, pa, pb, depth * c.n, 0, &unused, settings.rigid_contact_relaxation, s);
+}
+
+void SolverXPBD::hold_contact(XContact& c, Scratch& s) const {
+  if (c.lambda_n <= 0) return;
+  const BodyMotion* A = c.a >= 0 ? &s.bodies[c.a] : nullptr;
+  const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
+  const BodyMotion* A0 = c.a >= 0 ? &s.before[c.a] : nullptr;
+  const BodyMotion* B0 = c.b >= 0 ? &s.before[c.b] : nullptr;
+  auto at = [](const BodyMotion* m, const Vec3& r) { return m ? Vec3(m->x + m->q * r) : r; };
+  Scalar unused = 0;
+  // static friction: the points' relative tangential motion over the substep undone while the friction holds
+  const Vec3 pa_now = at(A, c.r_a), pb_now = at(B, c.r_b);
+  const Vec3 moved = (pa_now - at(A0, c.r_a)) - (pb_now - at(B0, c.r_b));
+  const Vec3 slide = moved - moved.dot(c.n) * c.n;
+  const Scalar length = slide.norm();
+  if (length < kTiny) return;
+  const Vec3 t = slide / length;
+  const Scalar w = inverse_mass(c.a, pa_now, t, s) + inverse_mass(c.b, pb_now, t, s);
+  if (w < kTiny || c.lambda_t + length / w >= c.mu * c.lambda_n) return;
+  c.lambda_t += correct_position(c.a, c.b, pa_now, pb_now, slide, 0, &unused, settings.rigid_contact_relaxation, s);
+}
+
+void SolverXPBD::velocity_pass(int w, const StepInput& step, Scalar h, Scratch& s) const {
+  const Vec3 g(model_.world_gravity[3 * w], model_.world_gravity[3 * w + 1], model_.world_gravity[3 * w + 2]);
+  for (XContact& c : s.contacts) {
+    if (c.lambda_n <= 0) continue;
+    const BodyMotion* A = c.a >= 0 ? &s.bodies[c.a] : nullptr;
+    const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
+    const Vec3 pa = A ? Vec3(A->x + A->q * c.r_a) : c.r_a, pb = B ? Vec3(B->x + B->q * c.r_b) : c.r_b;
+    const Vec3 v = (B ? B->point_velocity(pb) : Vec3::Zero()) - (A ? A->point_velocity(pa) : Vec3::Zero());
+    const Scalar vn = c.n.dot(v);
+    const Vec3 vt = v - vn * c.n;
+    // dynamic friction: at most mu times the normal force's impulse over the substep
+    Vec3 change = Vec3::Zero();
+    const Scalar speed = vt.norm();
+    if (speed > kTiny) change -= (std::min(c.mu * c.lambda_n / h, speed) / speed) * vt;
+    // the normal velocity: what the restitution leaves of the approach, none where it is slow
+    const Scalar e = settings.enable_restitution && std::abs(c.approach) > 2 * g.norm() * h ? c.restitution : 0;
+    change += (std::max(-e * c.approach, Scalar(0)) - vn) * c.n;
+    const Scalar size = change.norm();
+    if (size < kTiny) continue;
+    const Vec3 n = change / size;
+    const Scalar inv = inverse_mass(c.a, pa, n, s) + inverse_mass(c.b, pb, n, s);
+    if (inv > kTiny) apply_impulse(c.a, c.b, pa, pb, change / inv, s);
+  }
+  // each axis's spring, implicitly over h, at the substep's end
+  for (int ci = built_.world_start[w]; ci < built_.world_start[w + 1]; ++ci) {
+    const MaximalConstraint& c = built_.constraints[ci];
+    const int a = slot_of(body_slot_, c.a), b = slot_of(body_slot_, c.b);
+    const Transform frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
+    const Transform frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
+    Scalar coordinate[6];
+    constraint_coordinates(c, frame_a, frame_b, coordinate);
+    for (int k = 0; k < 6; ++k) {
+      if (c.dof[k] < 0 || c.mode[k] == AxisMode::Locked) continue;
+      const AxisSpring spring = axis_spring(c, k, step.in, step.control);
+      if (!spring.any()) continue;
+      // the coordinate as the joint's (a Revolute angle winds on)
+      Scalar x = coordinate[k];
+      if (c.joint >= 0) {
+        const Scalar joint_x = axis_coordinate(c, k, step.in, coordinate[k]);
+        if (joint_x != coordinate[k]) x = joint_x + (k < 3 ? wrapped(coordinate[k] - joint_x) : coordinate[k] - joint_x);
+      }
+      const Vec3 axis = frame_a.q * Vec3::Unit(k % 3);
+      Scalar x_dot, inv;
+      const Vec3 p = frame_b.p;
+      if (k < 3) {
+        x_dot = axis.dot((b >= 0 ? s.bodies[b].w : Vec3::Zero()) - (a >= 0 ? s.bodies[a].w : Vec3::Zero()));
+        inv = (a >= 0 ? axis.dot(s.bodies[a].inv_inertia * axis) : 0) +
+              (b >= 0 ? axis.dot(s.bodies[b].inv_inertia * axis) : 0);
+      } else {
+        x_dot = axis.dot((b >= 0 ? s.bodies[b].point_velocity(p) : Vec3::Zero()) -
+                         (a >= 0 ? s.bodies[a].point_velocity(p) : Vec3::Zero()));
+        inv = inverse_mass(a, p, axis, s) + inverse_mass(b, p, axis, s);
+      }
+      const Scalar denominator = spring.damping + h * spring.stiffness;
+      Scalar impulse;
+      if (denominator > 0) {
+        const Scalar cfm = 1 / (h * denominator);
+        impulse = ((spring.force - spring.stiffness * x) / denominator - x_dot) / (inv + cfm);
+      } else {
+        impulse = h * spring.force;
+      }
+      if (k < 3) {
+        if (b >= 0) s.bodies[b].w += s.bodies[b].inv_inertia * (impulse * axis);
+        if (a >= 0) s.bodies[a].w -= s.bodies[a].inv_inertia * (impulse * axis);
+      } else {
+        apply_impulse(a, b, p, p, impulse * axis, s);
+      }
+    }
+  }
+}
+
+void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
+  Scratch& s = scratch_[thread];
+  const int first = built_.body_start[w], count = built_.body_start[w + 1] - first;
+  s.bodies.resize(count);
+  s.body.resize(count);
+  for (int i = 0; i < count; ++i) {
+    s.body[i] = built_.world_bodies[first + i];
+    s.bodies[i] = start_motion(step.in, s.body[i]);
+  }
+  // the contacts: their points on each body at the step's start, where the contact found them
+  int contacts = 0;
+  const int* list = contacts_of(w, &contacts);
+  s.contacts.resize(contacts);
+  for (int i = 0; i < contacts; ++i) {
+    const int c = list[i];
+    const Contacts& in = step.contacts;
+    XContact& x = s.contacts[i];
+    x.a = slot_of(body_slot_, in.contact_body_a[c]);
+    x.b = slot_of(body_slot_, in.contact_body_b[c]);
+    x.n = Vec3(in.contact_normal[3 * c], in.contact_normal[3 * c + 1], in.contact_normal[3 * c + 2]);
+    const Vec3 point(in.contact_point[3 * c], in.contact_point[3 * c + 1], in.contact_point[3 * c + 2]);
+    const Scalar depth = in.contact_depth[c];
+    const Vec3 pa = point + 0.5 * depth * x.n, pb = point - 0.5 * depth * x.n;
+    x.r_a = x.a >= 0 ? Vec3(s.bodies[x.a].q.conjugate() * (pa - s.bodies[x.a].x)) : pa;
+    x.r_b = x.b >= 0 ? Vec3(s.bodies[x.b].q.conjugate() * (pb - s.bodies[x.b].x)) : pb;
+    const ContactInput<Scalar> read = ContactRows::read(in, c, shapes_, model_.impratio);
+    x.mu = read.mu;
+    x.restitution = read.restitution;
+  }
+  const int constraints = built_.world_start[w + 1] - built_.world_start[w];
+  s.lambda.resize(2 * static_cast<size_t>(constraints));
+  const Scalar h = step.dt / settings.substeps;
+  for (int sub = 0; sub < settings.substeps; ++sub) {
+    s.before = s.bodies;
+    for (XContact& c : s.contacts) {
+      c.lambda_n = c.lambda_t = 0;
+      const BodyMotion* A = c.a >= 0 ? &s.bodies[c.a] : nullptr;
+      const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
+      const Vec3 pa = A ? Vec3(A->x + A->q * c.r_a) : c.r_a, pb = B ? Vec3(B->x + B->q * c.r_b) : c.r_b;
+      c.approach = c.n.dot((B ? B->point_velocity(pb) : Vec3::Zero()) - (A ? A->point_velocity(pa) : Vec3::Zero()));
+    }
+    std::fill(s.lambda.begin(), s.lambda.end(), 0);
+    predict(w, step, h, s);
+    for (int it = 0; it < settings.iterations; ++it) {
+      for (int ci = 0; ci < constraints; ++ci)
+        solve_constraint(built_.constraints[built_.world_start[w] + ci], h, &s.lambda[2 * ci], s);
+      for (XContact& c : s.contacts) solve_contact(c, s);
+      for (XContact& c : s.contacts) hold_contact(c, s);
+    }
+    // the velocities the positions moved at
+    for (int i = 0; i < count; ++i) {
+      BodyMotion& m = s.bodies[i];
+      if (m.inv_mass == 0) continue;
+      const BodyMotion& m0 = s.before[i];
+      m.v = (m.x - m0.x) / h;
+      Quat turn = m.q * m0.q.conjugate();
+      if (turn.w() < 0) turn.coeffs() *= -1;
+      m.w = (2 / h) * turn.vec();
+    }
+    velocity_pass(w, step, h, s);
+    const Scalar damping = std::max(Scalar(0), 1 - settings.angular_damping * h);
+    for (BodyMotion& m : s.bodies) m.w *= damping;
+  }
+  for (int i = 0; i < count; ++i)
+    if (s.bodies[i].inv_mass > 0) next_[s.body[i]] = s.bodies[i];
+  // the contacts' impulses: the normal and friction corrections over the step's time, on b
+  for (int i = 0; i < contacts; ++i) {
+    const int c = list[i];
+    const XContact& x = s.contacts[i];
+    for (int m = 0; m < 3; ++m)
+      step.contacts.contact_impulse[3 * c + m] = x.lambda_n / h * x.n[m], step.contacts.contact_spin_impulse[3 * c + m] = 0;
+  }
+}
+
+}  // namespace novaphy
