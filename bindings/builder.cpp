@@ -421,7 +421,8 @@ void bind_builder(py::module_& m) {
                          const py::list& angular_axes, Scalar linear_compliance, Scalar angular_compliance,
                          const std::string& name) {
             std::vector<JointDofConfig> linear, angular;
-            for (const py::handle axis : linear_axes) linear.push_back(dof_config(py::reinterpret_borrow<py::object>(axis)));
+            for (const py::handle axis : linear_axes)
+              linear.push_back(dof_config(py::reinterpret_borrow<py::object>(axis)));
             for (const py::handle axis : angular_axes)
               angular.push_back(dof_config(py::reinterpret_borrow<py::object>(axis)));
             return self.add_joint_d6(parent, child, joint_frames(parent_xform, child_xform, name), linear, angular,
@@ -429,8 +430,8 @@ void bind_builder(py::module_& m) {
           },
           py::arg("parent"), py::arg("child"), py::kw_only(), py::arg("parent_xform") = py::none(),
           py::arg("child_xform") = py::none(), py::arg("linear_axes") = py::list(),
-          py::arg("angular_axes") = py::list(), py::arg("linear_compliance") = 0.0,
-          py::arg("angular_compliance") = 0.0, py::arg("name") = "",
+          py::arg("angular_axes") = py::list(), py::arg("linear_compliance") = 0.0, py::arg("angular_compliance") = 0.0,
+          py::arg("name") = "",
           "D6 joint (maximal coordinates): each axis of the joint frame locked, free, limited or driven. "
           "linear_axes and angular_axes (JointDofConfig or 3 numbers each, at most 3 of each kind) are the axes "
           "that are not locked, with their limits and drive gains; the joint frame turns so its x, y, z are the "

@@ -9,7 +9,16 @@ namespace novaphy {
 // Distance, D6 and Cable are maximal-coordinate joints (the solvers in maximal coordinates enforce them; Featherstone
 // refuses them): kinematically each is a Free joint relative to its parent, q = the child joint frame's pose in the
 // parent joint frame [px, py, pz, qx, qy, qz, qw], qd = [w; v] of it in the parent joint frame
-enum class JointType : int { Revolute = 0, Prismatic = 1, Ball = 2, Fixed = 3, Free = 4, Distance = 5, D6 = 6, Cable = 7 };
+enum class JointType : int {
+  Revolute = 0,
+  Prismatic = 1,
+  Ball = 2,
+  Fixed = 3,
+  Free = 4,
+  Distance = 5,
+  D6 = 6,
+  Cable = 7
+};
 
 // whether the joint's coordinates are a pose and its velocity a twist (Free and the maximal-coordinate joints)
 constexpr bool joint_is_six_dof(JointType type) {

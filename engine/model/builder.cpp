@@ -127,7 +127,9 @@ int ModelBuilder::add_joint_free(int parent, int child, const JointOptions& opti
 int ModelBuilder::add_joint(JointType type, int parent, int child, const JointOptions& options) {
   if (joint_is_six_dof(type) && type != JointType::Free)
     fail(label("joint", joint_count(), options.name), " (", joint_type_name(type), "): add it with add_joint_",
-         type == JointType::Distance ? "distance" : type == JointType::D6 ? "d6" : "cable");
+         type == JointType::Distance ? "distance"
+         : type == JointType::D6     ? "d6"
+                                     : "cable");
   return add_joint_record({type, parent, child, options});
 }
 
@@ -174,8 +176,6 @@ int ModelBuilder::add_joint_record(JointRecord joint) {
   }
   check_dof(item, dof);
   for (size_t k = 0; k < joint.dofs.size(); ++k) check_dof(item + " dof " + std::to_string(k), joint.dofs[k]);
-  const char* compliance_name[2] = {"linear compliance", "angular compliance"};
-  for (int k = 0; k < 2; ++k) check_nonnegative(item, compliance_name[k], joint.compliance[k]);
 
   joints_.push_back(joint);
   body_joint_[child] = joint_count() - 1;
@@ -482,8 +482,10 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
     case JointType::Distance:
     case JointType::D6:
     case JointType::Cable: {
-      // start at the body's pose: J = X_p^-1 * body_xform * X_c
-      const Transform J = joint.options.parent_xform.inverse() * body_xform_[joint.child] * joint.options.child_xform;
+      // start at the body's pose relative to its parent's as placed: J = X_p^-1 * parent_xform^-1 * body_xform * X_c
+      const Transform parent = joint.parent < 0 ? Transform::identity() : body_xform_[joint.parent];
+      const Transform J = joint.options.parent_xform.inverse() * parent.inverse() * body_xform_[joint.child] *
+                          joint.options.child_xform;
       J.to_array(q0);
       J.to_array(model.joint_q_ref.data() + q);
       break;

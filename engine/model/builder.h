@@ -146,13 +146,13 @@ class ModelBuilder {
   int add_joint(JointType type, int parent, int child, const JointOptions& options);
 
   // The maximal-coordinate joints (builder_maximal_joints.cpp; kernels/joint.h: each is kinematically a Free joint
-  // relative to its parent, starting where the bodies were placed). SolverSemiImplicit and SolverXPBD enforce them,
-  // SolverFeatherstone refuses them. A compliance (m/N, rad/(N m); 0: rigid) makes a constraint a spring of
-  // stiffness 1 / compliance (model.joint_compliance: linear, angular).
-  // Distance: the parent and child joint frames' origins (the anchors) stay between min_distance and max_distance
-  // apart (model.joint_limit_lower / upper of its first dof)
-  int add_joint_distance(int parent, int child, const JointOptions& options, Scalar min_distance,
-                         Scalar max_distance, Scalar compliance = 0);
+  // relative to its parent, starting at the child's placement relative to its parent's placement: add_body's xform).
+  // SolverSemiImplicit and SolverXPBD enforce them, SolverFeatherstone refuses them. A compliance (m/N, rad/(N m); 0:
+  // rigid) makes a constraint a spring of stiffness 1 / compliance (model.joint_compliance: linear, angular). Distance:
+  // the parent and child joint frames' origins (the anchors) stay between min_distance and max_distance apart
+  // (model.joint_limit_lower / upper of its first dof)
+  int add_joint_distance(int parent, int child, const JointOptions& options, Scalar min_distance, Scalar max_distance,
+                         Scalar compliance = 0);
   // D6: per axis of the joint frame locked, free, limited or driven. linear_axes and angular_axes (each at most 3,
   // options.dof is not read) give the axes that are not locked, in the parent joint frame, with their limits, drive
   // gains and damping; the joint frame is rotated so its x, y and z are the distinct given axes in order (linear
@@ -299,7 +299,8 @@ class ModelBuilder {
 
   // massless links are allowed for imported bodies that carry several MuJoCo joints
   int add_body_checked(const RigidBody& body, const Transform& xform, const std::string& name, bool allow_massless);
-  // the joint checked (bodies, frames, limits and gains of options.dof and of each of joint.dofs) and added
+  // the joint checked (bodies, frames, limits and gains of options.dof and of each of joint.dofs; its adder checks
+  // its compliance) and added
   int add_joint_record(JointRecord joint);
   int add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh = -1);
   // the implicit Free joint of a body no joint names as its child

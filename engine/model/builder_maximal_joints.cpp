@@ -12,7 +12,6 @@ namespace novaphy {
 
 namespace {
 
-
 // a dof that moves freely, and one held at 0 (a locked axis)
 JointDofConfig free_dof() { return {}; }
 JointDofConfig locked_dof() {
@@ -79,6 +78,7 @@ int ModelBuilder::add_joint_distance(int parent, int child, const JointOptions& 
     fail(item, ": min_distance must be finite and >= 0, got ", min_distance);
   if (std::isnan(max_distance) || max_distance < min_distance)
     fail(item, ": max_distance must be >= min_distance (", min_distance, "), got ", max_distance);
+  check_nonnegative(item, "compliance", compliance);
   JointRecord joint{JointType::Distance, parent, child, options};
   joint.dofs.assign(6, free_dof());
   joint.dofs[0].limit_lower = min_distance;
@@ -94,6 +94,8 @@ int ModelBuilder::add_joint_d6(int parent, int child, const JointOptions& option
   const std::string item = label("joint", joint_count(), options.name) + " (D6)";
   if (linear_axes.size() > 3 || angular_axes.size() > 3)
     fail(item, ": at most 3 linear and 3 angular axes, got ", linear_axes.size(), " and ", angular_axes.size());
+  check_nonnegative(item, "linear_compliance", linear_compliance);
+  check_nonnegative(item, "angular_compliance", angular_compliance);
   Mat3 frame;
   std::vector<int> slot;
   d6_frame(item, linear_axes, angular_axes, frame, slot);
@@ -115,6 +117,9 @@ int ModelBuilder::add_joint_d6(int parent, int child, const JointOptions& option
 
 int ModelBuilder::add_joint_cable(int parent, int child, const JointOptions& options, Scalar stretch_compliance,
                                   Scalar bend_compliance) {
+  const std::string item = label("joint", joint_count(), options.name) + " (Cable)";
+  check_nonnegative(item, "stretch_compliance", stretch_compliance);
+  check_nonnegative(item, "bend_compliance", bend_compliance);
   JointRecord joint{JointType::Cable, parent, child, options};
   joint.dofs.assign(6, free_dof());
   joint.compliance[0] = stretch_compliance;

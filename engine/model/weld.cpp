@@ -91,7 +91,7 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
   m.joint_count = static_cast<int>(kept.size());
   m.joint_type.clear(), m.joint_parent.clear(), m.joint_child.clear(), m.joint_ancestor.clear();
   m.joint_articulation.clear(), m.joint_q_start.clear(), m.joint_qd_start.clear();
-  m.joint_X_p.clear(), m.joint_X_c.clear(), m.joint_axis.clear(), m.joint_name.clear();
+  m.joint_X_p.clear(), m.joint_X_c.clear(), m.joint_axis.clear(), m.joint_compliance.clear(), m.joint_name.clear();
   for (const int j : kept) {
     const int parent = model.joint_parent[j] < 0 ? -1 : w.link_body[model.joint_parent[j]];
     m.joint_type.push_back(model.joint_type[j]);
@@ -104,6 +104,8 @@ WeldedModel weld_fixed_joints(const Model& model, bool weld) {
     X_p[j].to_array(&*m.joint_X_p.insert(m.joint_X_p.end(), 7, 0));
     m.joint_X_c.insert(m.joint_X_c.end(), &model.joint_X_c[7 * j], &model.joint_X_c[7 * j] + 7);
     m.joint_axis.insert(m.joint_axis.end(), &model.joint_axis[3 * j], &model.joint_axis[3 * j] + 3);
+    m.joint_compliance.insert(m.joint_compliance.end(), &model.joint_compliance[2 * j],
+                              &model.joint_compliance[2 * j] + 2);
     if (!model.joint_name.empty()) m.joint_name.push_back(model.joint_name[j]);
   }
   m.joint_q_start.push_back(model.joint_q_start[model.joint_count]);

@@ -60,3 +60,56 @@ def test_motor_arm_reaches_its_target_and_sweeps_the_boxes():
 def test_robots_stay_upright():
     s = demo_100_robots.run(200, side=4)
     assert s["upright"] == s["robots"] == 16
+
+
+def seesaw_tilts(s, solver):
+    assert -demo_seesaw.LIMIT - 0.01 < s["plank_angle"] < -0.3
+    if solver == "semi_implicit":  # under XPBD the box slides off the tilted plank onto the ground
+        assert s["box_height"] > 0.3
+
+
+def arm_reaches_target(s, solver):
+    assert s["arm_angle"] == pytest.approx(s["target"], rel=0.01)
+    assert s["boxes_moved"] >= 2
+
+
+def rope_stays_attached(s, solver):
+    assert s["lowest_tip_height"] < demo_rope.PIVOT[1] - 1.2
+    assert s["worst_joint_gap"] < 0.01  # held by constraints: within a tenth of a link through the whip
+
+
+def cradle_passes_momentum(s, solver):
+    if solver == "xpbd":  # SemiImplicit's restitution gains energy at the impacts
+        assert s["last_ball_peak_angle"] > 0.9 * s["release_angle"]
+        assert s["first_ball_peak_after_impact"] < 0.1 * s["release_angle"]
+
+
+def ball_knocks_boxes(s, solver):
+    assert s["boxes_moved"] >= s["boxes"] // 2
+
+
+def robots_stand(s, solver):
+    assert s["upright"] == s["robots"]
+
+
+# the maximal-coordinate solvers refuse a massless moving body, as the importer makes the first link of a two-hinge hip
+MASSLESS_LINKS = pytest.mark.xfail(raises=ValueError, strict=True, reason="the imported hips' first links are massless")
+
+
+@pytest.mark.parametrize("solver", ["semi_implicit", "xpbd"])
+@pytest.mark.parametrize(
+    "demo, steps, options, outcome",
+    [
+        pytest.param(demo_seesaw, 120, {}, seesaw_tilts, id="seesaw"),
+        pytest.param(demo_motor_arm, 240, {}, arm_reaches_target, id="motor_arm"),
+        pytest.param(demo_rope, 240, {}, rope_stays_attached, id="rope"),
+        pytest.param(demo_newtons_cradle_pendulum, 1100, {}, cradle_passes_momentum, id="newtons_cradle"),
+        pytest.param(demo_wrecking_ball, 360, {}, ball_knocks_boxes, id="wrecking_ball"),
+        pytest.param(demo_100_robots, 100, {"side": 2}, robots_stand, id="100_robots", marks=MASSLESS_LINKS),
+    ],
+)
+def test_demo_under_maximal_coordinates(demo, steps, options, outcome, solver):
+    """Each demo, shortened, steps finitely under the maximal-coordinate solvers and reaches what they reach."""
+    s = demo.run(steps, solver=solver, **options)
+    assert all(np.all(np.isfinite(value)) for value in s.values())
+    outcome(s, solver)

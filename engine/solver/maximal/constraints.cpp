@@ -81,8 +81,8 @@ Vec3 rotation_vector(const Quat& q) {
 
 Quat turned(const Quat& q, const Vec3& r) {
   const Scalar angle = r.norm();
-  const Quat e = angle < 1e-12 ? Quat(1, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z())
-                               : Quat(Eigen::AngleAxis<Scalar>(angle, r / angle));
+  const Quat e =
+      angle < 1e-12 ? Quat(1, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z()) : Quat(Eigen::AngleAxis<Scalar>(angle, r / angle));
   return (e * q).normalized();
 }
 
@@ -99,10 +99,21 @@ MaximalConstraints MaximalConstraints::of(const Model& model, const std::string&
     if (static_cast<JointType>(model.joint_type[j]) == JointType::Fixed && (parent < 0 || out.body_static[parent]))
       out.body_static[model.joint_child[j]] = 1;
   }
-  for (int b = 0; b < model.body_count; ++b)
-    if (!out.body_static[b] && !(model.body_mass[b] > 0))
-      fail(solver, " needs every moving body to have a mass: body ", b,
+  // a moving body of no mass takes a share of the nearest body of mass below it along its chain
+  std::vector<int> child_of(model.body_count, -1);
+  for (int j = 0; j < model.joint_count; ++j)
+    if (model.joint_parent[j] >= 0 && child_of[model.joint_parent[j]] < 0)
+      child_of[model.joint_parent[j]] = model.joint_child[j];
+  out.stand_in_of.assign(model.body_count, -1);
+  for (int b = 0; b < model.body_count; ++b) {
+    if (out.body_static[b] || model.body_mass[b] > 0) continue;
+    int below = child_of[b];
+    while (below >= 0 && !(model.body_mass[below] > 0)) below = child_of[below];
+    if (below < 0)
+      fail(solver, " needs every moving body to have a mass or one of mass below it: body ", b,
            model.body_name[b].empty() ? "" : " '" + model.body_name[b] + "'", " has ", model.body_mass[b]);
+    out.stand_in_of[b] = below;
+  }
 
   std::vector<std::vector<MaximalConstraint>> by_world(model.world_count);
   for (int j = 0; j < model.joint_count; ++j) {
@@ -143,7 +154,8 @@ MaximalConstraints MaximalConstraints::of(const Model& model, const std::string&
     std::vector<int> next(start.begin(), start.end() - 1);
     for (int i = 0; i < count; ++i) items[next[world_of(i)]++] = i;
   };
-  group(model.body_count, [&](int b) { return model.body_world[b]; }, out.world_bodies, out.body_start);
+  group(
+      model.body_count, [&](int b) { return model.body_world[b]; }, out.world_bodies, out.body_start);
   group(
       model.joint_count, [&](int j) { return model.body_world[model.joint_child[j]]; }, out.world_joints,
       out.joint_start);
@@ -156,19 +168,11 @@ BodyMotion BodyMotion::of(const Model& model, const State& state, int b) {
   const Scalar* X = &state.body_q[7 * static_cast<size_t>(b)];
   const Scalar* V = &state.body_qd[6 * static_cast<size_t>(b)];
   m.q = Quat(X[6], X[3], X[4], X[5]).normalized();
-  m.x = Vec3(X[0], X[1], X[2]) + m.q * Vec3(model.body_com[3 * b], model.body_com[3 * b + 1], model.body_com[3 * b + 2]);
+  m.x =
+      Vec3(X[0], X[1], X[2]) + m.q * Vec3(model.body_com[3 * b], model.body_com[3 * b + 1], model.body_com[3 * b + 2]);
   m.v = Vec3(V[0], V[1], V[2]);
   m.w = Vec3(V[3], V[4], V[5]);
-  m.inv_mass = model.body_mass[b] > 0 ? 1 / model.body_mass[b] : 0;
-  m.orient(model, b);
   return m;
-}
-
-void BodyMotion::orient(const Model& model, int b) {
-  if (inv_mass == 0) return;
-  const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> I(&model.body_inertia[9 * b]);
-  const Mat3 R = q.toRotationMatrix();
-  inv_inertia = R * I.inverse() * R.transpose();
 }
 
 Transform BodyMotion::frame(const Model& model, int b) const {
@@ -187,9 +191,30 @@ void BodyMotion::store(const Model& model, int b, State& state) const {
 void constraint_coordinates(const MaximalConstraint& c, const Transform& frame_a, const Transform& frame_b,
                             Scalar coordinate[6]) {
   const Transform rel = frame_a.inverse() * frame_b;
-  const Vec3 angle = rotation_vector(rel.q);
-  for (int k = 0; k < 3; ++k) coordinate[k] = angle[k], coordinate[3 + k] = rel.p[k];
+  for (int k = 0; k < 3; ++k) coordinate[3 + k] = rel.p[k];
   if (c.distance) coordinate[3] = (frame_b.p - frame_a.p).norm();
+  int turning = -1, count = 0;
+  for (int k = 0; k < 3; ++k)
+    if (c.mode[k] != AxisMode::Locked) turning = k, ++count;
+  Vec3 angle;
+  if (count == 1) {
+    // one axis turns (a hinge): the rotation as a swing after a twist about it, the twist's angle its coordinate (any
+    // angle) and the swing's rotation vector the others' (exact at any twist, where the rotation vector's components
+    // mix as the twist nears pi)
+    const Quat& q = rel.q;
+    const Scalar along = q.vec()[turning];
+    const Scalar norm = std::hypot(along, q.w());
+    Quat twist = Quat::Identity();
+    if (norm > 1e-12) {
+      twist.w() = q.w() / norm;
+      twist.vec() = Vec3::Unit(turning) * (along / norm);
+    }
+    angle = rotation_vector(q * twist.conjugate());
+    angle[turning] = std::remainder(2 * std::atan2(along, q.w()), 2 * kPi);
+  } else {
+    angle = rotation_vector(rel.q);
+  }
+  for (int k = 0; k < 3; ++k) coordinate[k] = angle[k];
 }
 
 void MaximalConstraints::joint_coordinates(const Model& model, State& state, int w) const {
@@ -198,8 +223,8 @@ void MaximalConstraints::joint_coordinates(const Model& model, State& state, int
     const auto type = static_cast<JointType>(model.joint_type[j]);
     const int parent = model.joint_parent[j], child = model.joint_child[j];
     const BodyMotion P = BodyMotion::of(model, state, parent), C = BodyMotion::of(model, state, child);
-    const Transform pj = (parent < 0 ? Transform::identity() : P.frame(model, parent)) *
-                         Transform::from_array(&model.joint_X_p[7 * j]);
+    const Transform pj =
+        (parent < 0 ? Transform::identity() : P.frame(model, parent)) * Transform::from_array(&model.joint_X_p[7 * j]);
     const Transform cj = C.frame(model, child) * Transform::from_array(&model.joint_X_c[7 * j]);
     const Transform J = pj.inverse() * cj;
     const Vec3 w_rel = pj.q.conjugate() * (C.w - P.w);

@@ -33,17 +33,21 @@ struct MaximalConstraint {
 };
 
 // the constraints of a model by world (constraints [world_start[w], world_start[w + 1]) are world w's), each world's
-// moving bodies and joints in order (world_bodies from body_start[w], world_joints from joint_start[w]), and the
-// bodies that do not move (held to the world by Fixed joints, directly or through others)
+// bodies and joints in order (world_bodies from body_start[w], world_joints from joint_start[w]), the bodies that do
+// not move (held to the world by Fixed joints, directly or through others), and for each moving body of no mass (an
+// MJCF body of several joints is a chain whose inner links have none) the body whose mass and inertia it takes a
+// share of (kStandInShare): the nearest one of mass below it along its chain
 struct MaximalConstraints {
+  static constexpr Scalar kStandInShare = 0.01;
   std::vector<MaximalConstraint> constraints;
   std::vector<int> world_start;
   std::vector<int> world_bodies, body_start;
   std::vector<int> world_joints, joint_start;
   std::vector<std::uint8_t> body_static;
+  std::vector<int> stand_in_of;  // per body: -1, or the body of mass it stands in for
 
   // fails naming the first element `solver` does not model: a JointCoupling equality, a fixed tendon, a sensor, a
-  // moving body of no mass
+  // moving body of no mass with none of mass below it
   static MaximalConstraints of(const Model& model, const std::string& solver);
   // joint_q and joint_qd of world w's joints from its bodies' body_q and body_qd (the inverse of forward
   // kinematics; a Revolute angle and a quaternion's sign continue from the coordinates the state holds)
@@ -56,18 +60,19 @@ Vec3 rotation_vector(const Quat& q);
 Quat turned(const Quat& q, const Vec3& r);
 
 // a body as a step of the maximal solvers sees it: its centre of mass x, orientation q, COM velocity v and angular
-// velocity w (world), inverse mass and world inverse inertia (0 for the world and bodies of no mass)
+// velocity w (world), inverse mass and inverse inertia (in its frame and in the world; 0 for the world and static
+// bodies)
 struct BodyMotion {
   Vec3 x = Vec3::Zero();
   Quat q = Quat::Identity();
   Vec3 v = Vec3::Zero(), w = Vec3::Zero();
   Scalar inv_mass = 0;
-  Mat3 inv_inertia = Mat3::Zero();
+  Mat3 inv_inertia_body = Mat3::Zero(), inv_inertia = Mat3::Zero();
 
-  // body b of the state (b = -1: the world, at rest)
+  // body b's pose and velocity in the state (b = -1: the world, at rest), no mass
   static BodyMotion of(const Model& model, const State& state, int b);
-  // the inverse inertia again at the orientation q
-  void orient(const Model& model, int b);
+  // the world inverse inertia again at the orientation q
+  void orient() { inv_inertia = q * inv_inertia_body * q.conjugate(); }
   // the velocity of the world point p riding on the body
   Vec3 point_velocity(const Vec3& p) const { return v + w.cross(p - x); }
   // the body's frame (its origin's pose) from x and q

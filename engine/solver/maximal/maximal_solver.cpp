@@ -30,13 +30,32 @@ MaximalSolver::MaximalSolver(const Model& model, const char* name)
     for (int i = built_.body_start[w]; i < built_.body_start[w + 1]; ++i)
       body_slot_[built_.world_bodies[i]] = i - built_.body_start[w];
   dof_actuator_start_.assign(model.joint_dof_count + 1, 0);
-  for (int u = 0; u < model.actuator_count; ++u) ++dof_actuator_start_[model.joint_qd_start[model.actuator_joint[u]] + 1];
+  for (int u = 0; u < model.actuator_count; ++u)
+    ++dof_actuator_start_[model.joint_qd_start[model.actuator_joint[u]] + 1];
   for (int d = 0; d < model.joint_dof_count; ++d) dof_actuator_start_[d + 1] += dof_actuator_start_[d];
   dof_actuators_.assign(model.actuator_count, 0);
   std::vector<int> next(dof_actuator_start_.begin(), dof_actuator_start_.end() - 1);
-  for (int u = 0; u < model.actuator_count; ++u) dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
+  for (int u = 0; u < model.actuator_count; ++u)
+    dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
   diverged_.assign(model.world_count, 0);
   read_materials();
+  read_masses();
+}
+
+void MaximalSolver::read_masses() {
+  const int n = model_.body_count;
+  inv_mass_.assign(n, 0);
+  inertia_body_.assign(n, Mat3::Zero());
+  inv_inertia_body_.assign(n, Mat3::Zero());
+  for (int b = 0; b < n; ++b) {
+    if (built_.body_static[b]) continue;
+    const int of = built_.stand_in_of[b] >= 0 ? built_.stand_in_of[b] : b;
+    const Scalar share = of == b ? 1 : MaximalConstraints::kStandInShare;
+    const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> I(&model_.body_inertia[9 * of]);
+    inv_mass_[b] = 1 / (share * model_.body_mass[of]);
+    inertia_body_[b] = share * I;
+    inv_inertia_body_[b] = inertia_body_[b].inverse();
+  }
 }
 
 void MaximalSolver::read_materials() {
@@ -97,14 +116,15 @@ void MaximalSolver::list_contacts(const Contacts& contacts) {
 }
 
 BodyMotion MaximalSolver::start_motion(const State& in, int b) const {
+  BodyMotion m = BodyMotion::of(model_, in, b);
   if (b < 0 || built_.body_static[b]) {
-    BodyMotion m = BodyMotion::of(model_, in, b);
     m.v.setZero(), m.w.setZero();
-    m.inv_mass = 0;
-    m.inv_inertia.setZero();
     return m;
   }
-  return BodyMotion::of(model_, in, b);
+  m.inv_mass = inv_mass_[b];
+  m.inv_inertia_body = inv_inertia_body_[b];
+  m.orient();
+  return m;
 }
 
 void MaximalSolver::forces(int w, const State& in, const Control& control, Scalar dt,
@@ -116,9 +136,7 @@ void MaximalSolver::forces(int w, const State& in, const Control& control, Scala
     if (m.inv_mass == 0) continue;
     const int b = built_.world_bodies[first + i];
     const Scalar* f = &in.body_f[6 * static_cast<size_t>(b)];
-    const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> I_body(&model_.body_inertia[9 * b]);
-    const Mat3 R = m.q.toRotationMatrix();
-    const Vec3 gyroscopic = -m.w.cross(R * (I_body * (R.transpose() * m.w)));
+    const Vec3 gyroscopic = -m.w.cross(m.q * (inertia_body_[b] * (m.q.conjugate() * m.w)));
     m.v += dt * (g + m.inv_mass * Vec3(f[0], f[1], f[2]));
     m.w += dt * (m.inv_inertia * (Vec3(f[3], f[4], f[5]) + gyroscopic));
   }
@@ -130,8 +148,8 @@ void MaximalSolver::forces(int w, const State& in, const Control& control, Scala
     const int parent = model_.joint_parent[j], child = model_.joint_child[j];
     BodyMotion& C = bodies[body_slot_[child]];
     BodyMotion* P = parent >= 0 ? &bodies[body_slot_[parent]] : nullptr;
-    const Transform pj = (P ? P->frame(model_, parent) : Transform::identity()) *
-                         Transform::from_array(&model_.joint_X_p[7 * j]);
+    const Transform pj =
+        (P ? P->frame(model_, parent) : Transform::identity()) * Transform::from_array(&model_.joint_X_p[7 * j]);
     const Transform cj = C.frame(model_, child) * Transform::from_array(&model_.joint_X_c[7 * j]);
     Vec3 torque, force = Vec3::Zero();
     if (type == JointType::Free) {  // [torque; force] in the parent joint frame, the force at the child's origin
@@ -236,11 +254,13 @@ void MaximalSolver::write_world(int w, const State& in, State& out) const {
 void MaximalSolver::step(const State& in, State& out, const Control& control, Contacts& contacts, Scalar dt) {
   const ExclusiveCall call(busy_, step_name_.c_str());
   check_step(in, out, control, contacts, dt);
-  if (model_.parameter_writes != parameters_read_) read_materials();
+  if (model_.parameter_writes != parameters_read_) read_materials(), read_masses();
   shapes_.dt = dt;
   list_contacts(contacts);
   const GuardSettings guard = guard_settings();
-  const int threads = std::clamp(thread_count() == 0 ? omp_get_max_threads() : thread_count(), 1, threads_);
+  // (no more threads than worlds: a parallel region of idle threads costs more than a small world's step)
+  const int threads = std::clamp(thread_count() == 0 ? omp_get_max_threads() : thread_count(), 1,
+                                 std::min(threads_, model_.world_count));
   const StepInput step{in, control, contacts, dt};
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int w = 0; w < model_.world_count; ++w) {

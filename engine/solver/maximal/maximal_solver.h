@@ -87,18 +87,23 @@ class MaximalSolver {
   std::string step_name_;  // "<name>.step"
 
   MaximalConstraints built_;
-  std::vector<int> body_slot_;  // each body's place among its world's (world_bodies from body_start)
+  std::vector<int> body_slot_;    // each body's place among its world's (world_bodies from body_start)
   std::vector<BodyMotion> next_;  // per body: its motion after the step
   ShapeContacts shapes_;          // the shapes' contact numbers (read again where set_parameter wrote them)
   int threads_ = 1;               // the threads the scratch is kept for
 
  private:
   void check_step(const State& in, const State& out, const Control& control, const Contacts& contacts, Scalar dt);
+  // the shapes' contact numbers and the bodies' masses and inertias (a stand-in's, MaximalConstraints), as the
+  // model's per-world parameters are now
   void read_materials();
+  void read_masses();
   void list_contacts(const Contacts& contacts);
   bool world_diverged(int w, const Contacts& contacts, const GuardSettings& guard) const;
   void write_world(int w, const State& in, State& out) const;
 
+  std::vector<Scalar> inv_mass_;                       // per body (0: static)
+  std::vector<Mat3> inertia_body_, inv_inertia_body_;  // per body, about its COM in its frame
   std::vector<ContactMaterial> materials_;
   std::vector<int> shape_material_;
   std::vector<Scalar> shape_weight_;

@@ -117,8 +117,8 @@ struct ContactRows {
   // step; a contact that closes within this step faster than the restitution threshold bounces at
   // -restitution times its approach speed (v_approach: J qd of the normal row at the step's start)
   template <typename V, typename Settings>
-  static V rigid_normal_target(const V& depth, const V& v_approach, const V& restitution,
-                               const Settings& p, const V& dt) {
+  static V rigid_normal_target(const V& depth, const V& v_approach, const V& restitution, const Settings& p,
+                               const V& dt) {
     using E = Element<V>;
     const E slop = static_cast<E>(p.linear_slop);
     const V zero{};
@@ -133,8 +133,8 @@ struct ContactRows {
   // rows e < dims: their targets, cfm (a soft contact's; 0 for a rigid one) and friction coefficients mu (0 for the
   // normal), from their velocities v at the step's start
   template <typename V, typename Settings>
-  static void targets(const ContactInput<V>& in, const V* v, int dims, const Settings& p, const V& dt,
-                      V* target, V* cfm, V* mu) {
+  static void targets(const ContactInput<V>& in, const V* v, int dims, const Settings& p, const V& dt, V* target,
+                      V* cfm, V* mu) {
     const ContactSoftness<V>& s = in.softness;
     target[0] = select<V>(s.soft, soft_normal_target(in.depth, v[0], s.damping, s.spring, s.active_margin, dt),
                           rigid_normal_target(in.depth, v[0], in.restitution, p, dt));

@@ -56,8 +56,8 @@ class SolverSemiImplicit : public MaximalSolver {
   // the sweeps; returns whether they converged
   bool sweep(Scratch& s) const;
 
-  std::vector<Scratch> scratch_;          // per thread
-  std::vector<Scalar> kept_;              // per constraint: 3 per axis (locked or lower limit, upper limit, spring)
+  std::vector<Scratch> scratch_;         // per thread
+  std::vector<Scalar> kept_;             // per constraint: 3 per axis (locked or lower limit, upper limit, spring)
   std::vector<std::uint8_t> converged_;  // per world: whether its last sweeps converged
 };
 

@@ -61,13 +61,13 @@ Scalar SolverXPBD::correct_position(int a, int b, const Vec3& pa, const Vec3& pb
     BodyMotion& B = s.bodies[b];
     B.x += B.inv_mass * p;
     B.q = turned(B.q, B.inv_inertia * (pb - B.x).cross(p));
-    B.orient(model_, s.body[b]);
+    B.orient();
   }
   if (a >= 0 && s.bodies[a].inv_mass > 0) {
     BodyMotion& A = s.bodies[a];
     A.x -= A.inv_mass * p;
     A.q = turned(A.q, -(A.inv_inertia * (pa - A.x).cross(p)));
-    A.orient(model_, s.body[a]);
+    A.orient();
   }
   return change;
 }
@@ -87,12 +87,12 @@ void SolverXPBD::correct_rotation(int a, int b, const Vec3& correction, Scalar a
   if (b >= 0 && s.bodies[b].inv_mass > 0) {
     BodyMotion& B = s.bodies[b];
     B.q = turned(B.q, B.inv_inertia * p);
-    B.orient(model_, s.body[b]);
+    B.orient();
   }
   if (a >= 0 && s.bodies[a].inv_mass > 0) {
     BodyMotion& A = s.bodies[a];
     A.q = turned(A.q, -(A.inv_inertia * p));
-    A.orient(model_, s.body[a]);
+    A.orient();
   }
 }
 
@@ -103,7 +103,7 @@ void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) con
     if (m.inv_mass == 0) continue;
     m.x += h * m.v;
     m.q = turned(m.q, h * m.w);
-    m.orient(model_, s.body[i]);
+    m.orient();
   }
 }
 
@@ -220,7 +220,8 @@ void SolverXPBD::velocity_pass(int w, const StepInput& step, Scalar h, Scratch& 
       Scalar x = coordinate[k];
       if (c.joint >= 0) {
         const Scalar joint_x = axis_coordinate(c, k, step.in, coordinate[k]);
-        if (joint_x != coordinate[k]) x = joint_x + (k < 3 ? wrapped(coordinate[k] - joint_x) : coordinate[k] - joint_x);
+        if (joint_x != coordinate[k])
+          x = joint_x + (k < 3 ? wrapped(coordinate[k] - joint_x) : coordinate[k] - joint_x);
       }
       const Vec3 axis = frame_a.q * Vec3::Unit(k % 3);
       Scalar x_dot, inv;
@@ -322,7 +323,8 @@ void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
     const int c = list[i];
     const XContact& x = s.contacts[i];
     for (int m = 0; m < 3; ++m)
-      step.contacts.contact_impulse[3 * c + m] = x.lambda_n / h * x.n[m], step.contacts.contact_spin_impulse[3 * c + m] = 0;
+      step.contacts.contact_impulse[3 * c + m] = x.lambda_n / h * x.n[m],
+                                            step.contacts.contact_spin_impulse[3 * c + m] = 0;
   }
 }
 

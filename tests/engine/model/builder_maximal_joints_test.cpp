@@ -86,8 +86,8 @@ TEST(MaximalJoints, BadInputIsNamed) {
   ModelBuilder& b = s.builder;
   EXPECT_NOVAPHY_ERROR(b.add_joint_distance(s.a, s.b, {}, -0.1, 1), "(Distance): min_distance must be finite and >= 0");
   EXPECT_NOVAPHY_ERROR(b.add_joint_distance(s.a, s.b, {}, 1, 0.5), "max_distance must be >= min_distance (1), got 0.5");
-  EXPECT_NOVAPHY_ERROR(b.add_joint_distance(s.a, s.b, {}, 0, 1, -1), "linear compliance must be finite and >= 0");
-  EXPECT_NOVAPHY_ERROR(b.add_joint_cable(s.a, s.b, {}, 0, -2), "(Cable): angular compliance must be finite and >= 0");
+  EXPECT_NOVAPHY_ERROR(b.add_joint_distance(s.a, s.b, {}, 0, 1, -1), "(Distance): compliance must be finite and >= 0");
+  EXPECT_NOVAPHY_ERROR(b.add_joint_cable(s.a, s.b, {}, 0, -2), "(Cable): bend_compliance must be finite and >= 0");
   EXPECT_NOVAPHY_ERROR(b.add_joint_d6(s.a, s.b, {}, {axis(Vec3::Zero())}, {}), "linear_axes[0] has zero length");
   EXPECT_NOVAPHY_ERROR(b.add_joint_d6(s.a, s.b, {}, {axis(Vec3::UnitX()), axis(Vec3::UnitX())}, {}),
                        "linear_axes[1] conflicts with an axis of its kind along the same direction");
@@ -100,7 +100,7 @@ TEST(MaximalJoints, BadInputIsNamed) {
       "the three axes are left-handed");
   EXPECT_NOVAPHY_ERROR(b.add_joint_d6(s.a, s.b, {}, {}, {axis(Vec3::UnitX(), 1, 0)}),
                        "limits must satisfy limit_lower <= limit_upper");
-  EXPECT_NOVAPHY_ERROR(b.add_joint_d6(s.a, s.b, {}, {}, {}, -1), "(D6): linear compliance must be finite and >= 0");
+  EXPECT_NOVAPHY_ERROR(b.add_joint_d6(s.a, s.b, {}, {}, {}, -1), "(D6): linear_compliance must be finite and >= 0");
   EXPECT_NOVAPHY_ERROR(b.add_joint(JointType::D6, s.a, s.b, {}), "(D6): add it with add_joint_d6");
   EXPECT_EQ(b.joint_count(), 1);  // nothing added by a refused call
   // a direction given for both kinds is one axis: a D6 sliding along and turning about x

@@ -13,7 +13,7 @@ TARGET = np.pi / 2
 KP, KD = 400.0, 60.0
 
 
-def build():
+def build(*, solver="featherstone"):
     builder = novaphy.ModelBuilder()
     builder.add_ground_plane(0.0, mu=0.5)
     arm = builder.add_body(novaphy.RigidBody.from_box(4.0, ARM))
@@ -32,11 +32,11 @@ def build():
         box = builder.add_body(novaphy.RigidBody.from_box(0.3, [0.08] * 3), xform=novaphy.Transform(position))
         builder.add_shape_box(box, [0.08] * 3, mu=0.5)
         boxes.append(box)
-    return Simulation(builder.finalize()), boxes
+    return Simulation(builder.finalize(), solver=solver), boxes
 
 
-def run(steps, render=None, frames=60):
-    sim, boxes = build()
+def run(steps, *, render=None, frames=60, solver="featherstone"):
+    sim, boxes = build(solver=solver)
     if render:
         sim.record(steps, frames)
     start = sim.state.body_q[boxes, :3].copy()
@@ -51,7 +51,7 @@ def run(steps, render=None, frames=60):
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=600)
-    s = run(args.steps, render=args.render)
+    s = run(args.steps, render=args.render, solver=args.solver)
     print(
         f"arm at {np.degrees(s['arm_angle']):.2f} deg for a target of {np.degrees(s['target']):.0f} deg; "
         f"{s['boxes_moved']} of 3 boxes swept aside"

@@ -17,7 +17,7 @@ RELEASE = np.radians(30.0)
 DT = 1.0 / 1000.0
 
 
-def build():
+def build(*, solver="featherstone"):
     builder = novaphy.ModelBuilder()
     for i in range(BALLS):
         x = i * (2 * RADIUS + GAP)
@@ -30,16 +30,17 @@ def build():
             child_xform=novaphy.Transform([0.0, LENGTH, 0.0]),
             axis=[0.0, 0.0, 1.0],
         )
-    sim = Simulation(builder.finalize(), dt=DT, angular_damping=0.0)
-    sim.solver.settings.restitution_threshold = 0.01
+    # XPBD bounces only with enable_restitution; it has no restitution threshold
+    sim = Simulation(builder.finalize(), dt=DT, solver=solver, angular_damping=0.0, enable_restitution=True)
+    sim.set_setting("restitution_threshold", 0.01)
     sim.state.joint_q[0] = -RELEASE  # swing the first ball out to -x
     sim.refresh()
     return sim
 
 
-def run(steps, render=None, frames=60):
+def run(steps, *, render=None, frames=60, solver="featherstone"):
     """Simulates until the last ball turns back (or steps run out) and reports the swing."""
-    sim = build()
+    sim = build(solver=solver)
     if render:
         sim.record(steps, frames)
     peak_last = 0.0
@@ -60,7 +61,7 @@ def run(steps, render=None, frames=60):
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=2000)
-    s = run(args.steps, render=args.render)
+    s = run(args.steps, render=args.render, solver=args.solver)
     print(
         f"released the first ball at {np.degrees(s['release_angle']):.1f} deg; the last ball swung out to "
         f"{np.degrees(s['last_ball_peak_angle']):.1f} deg while the first stayed within "

@@ -10,7 +10,7 @@ PLANK = np.array([1.0, 0.04, 0.25])  # half extents
 LIMIT = 0.4  # rad
 
 
-def build():
+def build(*, solver="featherstone"):
     builder = novaphy.ModelBuilder()
     builder.add_ground_plane(0.0)
     plank = builder.add_body(novaphy.RigidBody.from_box(2.0, PLANK))
@@ -20,11 +20,11 @@ def build():
     )
     box = builder.add_body(novaphy.RigidBody.from_box(3.0, [0.15] * 3), xform=novaphy.Transform([0.7, 2.0, 0.0]))
     builder.add_shape_box(box, [0.15] * 3, mu=0.8)
-    return Simulation(builder.finalize()), box
+    return Simulation(builder.finalize(), solver=solver), box
 
 
-def run(steps, render=None, frames=60):
-    sim, box = build()
+def run(steps, *, render=None, frames=60, solver="featherstone"):
+    sim, box = build(solver=solver)
     if render:
         sim.record(steps, frames)
     for _ in steps_of(steps, "seesaw"):
@@ -35,7 +35,7 @@ def run(steps, render=None, frames=60):
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=360)
-    s = run(args.steps, render=args.render)
+    s = run(args.steps, render=args.render, solver=args.solver)
     print(
         f"the plank tilted to {np.degrees(s['plank_angle']):.1f} deg (limit {np.degrees(LIMIT):.0f}); "
         f"the box rests at y = {s['box_height']:.2f} m"

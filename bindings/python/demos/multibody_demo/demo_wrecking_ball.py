@@ -13,7 +13,7 @@ BOX = 0.15  # half extent
 TOWER = (2, 6)  # columns, rows
 
 
-def build():
+def build(*, solver="featherstone"):
     builder = novaphy.ModelBuilder()
     builder.add_ground_plane(0.0, mu=0.6)
     along_x = novaphy.Transform([LINK_LENGTH / 2, 0.0, 0.0], rotation_z(np.pi / 2))
@@ -39,12 +39,12 @@ def build():
             box = builder.add_body(novaphy.RigidBody.from_box(1.0, [BOX] * 3), xform=novaphy.Transform(position))
             builder.add_shape_box(box, [BOX] * 3, mu=0.6)
             boxes.append(box)
-    sim = Simulation(builder.finalize(), dt=1.0 / 240.0)
+    sim = Simulation(builder.finalize(), dt=1.0 / 240.0, solver=solver)
     return sim, boxes
 
 
-def run(steps, render=None, frames=60):
-    sim, boxes = build()
+def run(steps, *, render=None, frames=60, solver="featherstone"):
+    sim, boxes = build(solver=solver)
     if render:
         sim.record(steps, frames)
     start = sim.state.body_q[boxes, :3].copy()
@@ -62,7 +62,7 @@ def run(steps, render=None, frames=60):
 
 def main():
     args = arguments(__doc__.splitlines()[0], steps=720)
-    s = run(args.steps, render=args.render)
+    s = run(args.steps, render=args.render, solver=args.solver)
     print(
         f"{s['boxes_moved']} of {s['boxes']} boxes knocked more than 0.3 m; the tower went from "
         f"{s['tower_height_before']:.2f} m to {s['tower_height_after']:.2f} m high"
