@@ -16,7 +16,8 @@ template <typename Owner, typename T>
 py::array field_view(py::object self, std::vector<T> Owner::*field, int width, bool writeable) {
   Owner& owner = self.cast<Owner&>();
   std::vector<T>& data = owner.*field;
-  return view(data.data(), static_cast<int>(data.size() / width), width, self, writeable);
+  // (a width of 0, the keyframes' commands of a model without actuators, makes an empty view)
+  return view(data.data(), width > 0 ? static_cast<int>(data.size() / width) : 0, width, self, writeable);
 }
 
 // a State's or Control's field as Python holds it: the float32 array of a float32 model's, else the field
@@ -26,7 +27,7 @@ py::array held_view(py::object self, std::vector<T> Owner::*field, std::vector<F
   Owner& owner = self.cast<Owner&>();
   if (owner.precision == Precision::Float64) return field_view(self, field, width, true);
   std::vector<Float32Of<T>>& data = owner.float32.*single;
-  return view(data.data(), static_cast<int>(data.size() / width), width, self, true);
+  return view(data.data(), width > 0 ? static_cast<int>(data.size() / width) : 0, width, self, true);
 }
 
 // to_numpy / from_numpy of a State or Control: its fields as Python holds them, by name

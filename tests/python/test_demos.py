@@ -92,10 +92,6 @@ def robots_stand(s, solver):
     assert s["upright"] == s["robots"]
 
 
-# the maximal-coordinate solvers refuse a massless moving body, as the importer makes the first link of a two-hinge hip
-MASSLESS_LINKS = pytest.mark.xfail(raises=ValueError, strict=True, reason="the imported hips' first links are massless")
-
-
 @pytest.mark.parametrize("solver", ["semi_implicit", "xpbd"])
 @pytest.mark.parametrize(
     "demo, steps, options, outcome",
@@ -105,7 +101,7 @@ MASSLESS_LINKS = pytest.mark.xfail(raises=ValueError, strict=True, reason="the i
         pytest.param(demo_rope, 240, {}, rope_stays_attached, id="rope"),
         pytest.param(demo_newtons_cradle_pendulum, 1100, {}, cradle_passes_momentum, id="newtons_cradle"),
         pytest.param(demo_wrecking_ball, 360, {}, ball_knocks_boxes, id="wrecking_ball"),
-        pytest.param(demo_100_robots, 100, {"side": 2}, robots_stand, id="100_robots", marks=MASSLESS_LINKS),
+        pytest.param(demo_100_robots, 100, {"side": 2}, robots_stand, id="100_robots"),
     ],
 )
 def test_demo_under_maximal_coordinates(demo, steps, options, outcome, solver):

@@ -208,3 +208,14 @@ def test_contacts_of_another_model_with_the_same_counts_are_refused():
         novaphy.solvers.SolverFeatherstone(a).step(a.state(), a.state(), a.control(), other, 0.01)
     with pytest.raises(ValueError, match="contacts buffer was not made by this pipeline"):
         novaphy.CollisionPipeline(a).collide(a.state(), other)
+
+
+def test_a_field_of_width_zero_is_an_empty_view():
+    """keyframe_ctrl of a model without actuators is (keyframes, 0): an empty view, not a division by zero."""
+    builder = novaphy.ModelBuilder()
+    body = builder.add_body(novaphy.RigidBody.from_box(1.0, np.array([0.1, 0.1, 0.1])))
+    builder.add_joint_free(-1, body)
+    builder.add_keyframe("start", [0, 1, 0, 0, 0, 0, 1])
+    model = builder.finalize()
+    assert model.keyframe_ctrl.size == 0
+    assert model.keyframe_q.shape == (1, 7)
