@@ -317,6 +317,8 @@ def main():
     wp.set_device("cpu")
 
     load_start = os.getloadavg()
+    so_mtime = os.path.getmtime(novaphy._novaphy.__file__)
+    so_time = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(so_mtime))
     t_start = time.time()
     rows, refs = [], {}
     for scene in args.scenes:
@@ -328,12 +330,13 @@ def main():
                     rows.append(measure(engine, scene, solver, worlds, args.steps, args.rounds, refs[scene][0]))
 
     load_end = os.getloadavg()
+    so_changed = os.path.getmtime(novaphy._novaphy.__file__) != so_mtime
     cpu = next((ln.split(":", 1)[1].strip() for ln in subprocess.run(["lscpu"], capture_output=True, text=True)
                 .stdout.splitlines() if ln.startswith("Model name")), platform.processor())
     commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
-    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"], capture_output=True,
-                           text=True).stdout.strip()
+    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                            ":!bench/newton_compare.py", ":!bench/results"], capture_output=True, text=True).stdout.strip()
     cmd = "OMP_NUM_THREADS=1 /work/newton-venv/bin/python bench/newton_compare.py " + " ".join(
         [f"--steps {args.steps}", f"--rounds {args.rounds}", "--worlds " + " ".join(map(str, args.worlds)),
          "--scenes " + " ".join(args.scenes)] + ([f"--out {args.out}"] if args.out else []))
@@ -342,9 +345,13 @@ def main():
              f"Made by `{cmd}` (from /work/main).", "",
              f"- Machine: {cpu}, {os.cpu_count()} logical CPUs, everything on 1 thread (OMP_NUM_THREADS=1, NovaPhy "
              "`settings.num_threads = 1` and `CollisionPipeline(num_threads=1)`, warp's CPU backend runs kernels "
-             "serially).",
+             f"serially). Load average (1/5/15 min) at the start {load_start[0]:.2f}/{load_start[1]:.2f}/{load_start[2]:.2f}"
+             f", at the end {load_end[0]:.2f}/{load_end[1]:.2f}/{load_end[2]:.2f} (other work shared the 2 CPUs); the "
+             f"whole run took {(time.time() - t_start) / 60:.1f} min.",
              f"- Versions: newton {newton.__version__}, warp-lang {wp.__version__}, NovaPhy {commit}"
-             + (" (with uncommitted changes in tracked files)" if dirty else "") + f", Python {platform.python_version()}, "
+             + (" (with uncommitted changes in tracked files)" if dirty else "")
+             + f" (its module {os.path.basename(novaphy._novaphy.__file__)} modified {so_time}"
+             + (", **rebuilt during the run**" if so_changed else "") + f"), Python {platform.python_version()}, "
              f"NumPy {np.__version__}.",
              f"- Each row: one untimed run of {args.steps} steps (Newton compiles its kernels here; its final state gives the "
              f"error), then {args.rounds} timed runs of {args.steps} steps from the initial state; robot-steps/s = steps × "

@@ -124,6 +124,9 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(Scalar, joint_angular_compliance, 0, 0, kUnbounded, "rad/(N m)",                                                 \
     "Compliance added to every joint's rotational constraints.")                                                     \
   X(Scalar, rigid_contact_relaxation, 1.0, 0, 2, "", "Share of a contact's correction applied per pass.")            \
+  X(Scalar, max_depenetration_velocity, 1.0, 0, kUnbounded, "m/s",                                                   \
+    "A penetration a step starts with is pushed out no faster than this (PhysX's name): corrected at once, a "       \
+    "keyframe's feet sunk into the floor would leave at penetration / substep.")                                     \
   X(Scalar, angular_damping, 0.0, 0, kUnbounded, "1/s",                                                              \
     "Each body's angular velocity is scaled by (1 - angular_damping h) each substep h.")                             \
   X(bool, enable_restitution, false, 0, 0, "", "Contacts bounce by their shapes' restitution.")                      \

@@ -178,18 +178,19 @@ AxisSpring MaximalSolver::axis_spring(const MaximalConstraint& c, int k, const S
   const int d = c.dof[k];
   if (d < 0) return s;
   const Scalar ke = control.joint_target_ke[d], kd = control.joint_target_kd[d];
-  s.force = control.joint_f[d] + ke * control.joint_target_pos[d] + kd * control.joint_target_vel[d];
+  s.pull = ke * control.joint_target_pos[d];
+  s.force = control.joint_f[d] + kd * control.joint_target_vel[d];
   s.stiffness = ke;
   s.damping = kd + model_.joint_damping[d];
   const auto type = static_cast<JointType>(model_.joint_type[c.joint]);
   if (type == JointType::Revolute || type == JointType::Prismatic) {
     const int q = model_.joint_q_start[c.joint];
-    s.force += model_.joint_stiffness[d] * model_.joint_q_ref[q];
+    s.pull += model_.joint_stiffness[d] * model_.joint_q_ref[q];
     s.stiffness += model_.joint_stiffness[d];
     for (int i = dof_actuator_start_[d]; i < dof_actuator_start_[d + 1]; ++i) {
       const int u = dof_actuators_[i];
       const ActuatorForce a = actuator_force(model_, u, control.actuator_ctrl[u], in.joint_q[q], in.joint_qd[d]);
-      s.force += a.force;
+      (a.stiffness > 0 ? s.pull : s.force) += a.force;
       s.stiffness += a.stiffness;
       s.damping += a.damping;
     }

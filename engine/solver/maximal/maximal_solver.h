@@ -19,12 +19,16 @@
 namespace novaphy {
 
 // the forces along one axis of a constraint with a dof (model.h: a joint's spring, damper, PD drive, actuators and
-// joint_f): force - stiffness (x - ...) - damping x_dot, with x the axis's coordinate, taken implicitly
+// joint_f): pull + force - stiffness x - damping x_dot, with x the axis's coordinate, taken implicitly. pull is what
+// the stiffnesses pull towards (sum K_i x_i: a drive's ke target_pos, a spring's stiffness q_ref, a servo's kp ctrl),
+// force the rest (joint_f, a drive's kd target_vel, a motor's force)
 struct AxisSpring {
-  Scalar force = 0;      // what does not depend on x and x_dot
+  Scalar pull = 0, force = 0;
   Scalar stiffness = 0;  // K
   Scalar damping = 0;    // D
-  bool any() const { return force != 0 || stiffness != 0 || damping != 0; }
+  bool any() const { return pull != 0 || force != 0 || stiffness != 0 || damping != 0; }
+  // where the stiffness alone would hold the axis (K > 0)
+  Scalar rest() const { return pull / stiffness; }
 };
 
 // what the divergence guard reads of a solver's settings

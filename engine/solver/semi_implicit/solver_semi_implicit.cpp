@@ -50,15 +50,15 @@ BodyRow turn_row(int a, int b, const Vec3& axis) {
   return r;
 }
 
-// a row that is a spring of stiffness K and damping D along a coordinate x (its velocity the row's), with the
-// constant force f, taken implicitly over dt: J v_next + cfm lambda = target
+// a row that is a spring of stiffness K and damping D along a coordinate x (its velocity the row's), with its pull
+// and constant force, taken implicitly over dt: J v_next + cfm lambda = target
 bool spring_row(const AxisSpring& s, Scalar x, Scalar dt, BodyRow& r) {
   const Scalar denominator = s.damping + dt * s.stiffness;
   if (!(denominator > 0)) return false;
   r.kind = RowKind::Bounded;
   r.bound = std::numeric_limits<Scalar>::infinity();
   r.cfm = 1 / (dt * denominator);
-  r.target = (s.force - s.stiffness * x) / denominator;
+  r.target = (s.pull + s.force - s.stiffness * x) / denominator;
   return true;
 }
 
@@ -209,7 +209,7 @@ void SolverSemiImplicit::constraint_rows(int w, const StepInput& step, Scalar sh
         add(r, 3 * k + 2);
       } else {  // a constant force alone
         finish_row(r, s, 0);
-        apply(r, dt * spring.force, s.bodies);
+        apply(r, dt * (spring.pull + spring.force), s.bodies);
       }
     }
   }

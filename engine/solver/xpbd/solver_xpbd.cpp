@@ -11,6 +11,7 @@ namespace {
 
 constexpr Scalar kPi = 3.14159265358979323846;
 constexpr Scalar kTiny = 1e-12;
+constexpr int kMultipliers = 8;  // per constraint: its rotation, its offset (or distance), each axis's stiffness
 
 // the slots of constraint c's bodies among its world's (-1: the world)
 int slot_of(const std::vector<int>& body_slot, int body) { return body >= 0 ? body_slot[body] : -1; }
@@ -47,14 +48,11 @@ void SolverXPBD::apply_impulse(int a, int b, const Vec3& pa, const Vec3& pb, con
   }
 }
 
-Scalar SolverXPBD::correct_position(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& correction,
-                                    Scalar alpha_h, Scalar* lambda, Scalar relaxation, Scratch& s) const {
-  const Scalar c = correction.norm();
-  if (c < kTiny) return 0;
-  const Vec3 n = correction / c;
+Scalar SolverXPBD::push(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& n, Scalar C, Scalar alpha_h,
+                        Scalar* lambda, Scalar relaxation, Scratch& s) const {
   const Scalar w = inverse_mass(a, pa, n, s) + inverse_mass(b, pb, n, s);
   if (w + alpha_h < kTiny) return 0;
-  const Scalar change = (c - alpha_h * *lambda) / (w + alpha_h);
+  const Scalar change = (-C - alpha_h * *lambda) / (w + alpha_h);
   *lambda += change;
   const Vec3 p = (relaxation * change) * n;
   if (b >= 0 && s.bodies[b].inv_mass > 0) {
@@ -72,16 +70,13 @@ Scalar SolverXPBD::correct_position(int a, int b, const Vec3& pa, const Vec3& pb
   return change;
 }
 
-void SolverXPBD::correct_rotation(int a, int b, const Vec3& correction, Scalar alpha_h, Scalar* lambda,
-                                  Scalar relaxation, Scratch& s) const {
-  const Scalar c = correction.norm();
-  if (c < kTiny) return;
-  const Vec3 n = correction / c;
+void SolverXPBD::turn(int a, int b, const Vec3& n, Scalar C, Scalar alpha_h, Scalar* lambda, Scalar relaxation,
+                      Scratch& s) const {
   Scalar w = 0;
   if (a >= 0) w += n.dot(s.bodies[a].inv_inertia * n);
   if (b >= 0) w += n.dot(s.bodies[b].inv_inertia * n);
   if (w + alpha_h < kTiny) return;
-  const Scalar change = (c - alpha_h * *lambda) / (w + alpha_h);
+  const Scalar change = (-C - alpha_h * *lambda) / (w + alpha_h);
   *lambda += change;
   const Vec3 p = (relaxation * change) * n;
   if (b >= 0 && s.bodies[b].inv_mass > 0) {
@@ -96,6 +91,18 @@ void SolverXPBD::correct_rotation(int a, int b, const Vec3& correction, Scalar a
   }
 }
 
+Scalar SolverXPBD::correct_position(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& correction,
+                                    Scalar alpha_h, Scalar* lambda, Scalar relaxation, Scratch& s) const {
+  const Scalar c = correction.norm();
+  return c < kTiny ? 0 : push(a, b, pa, pb, correction / c, -c, alpha_h, lambda, relaxation, s);
+}
+
+void SolverXPBD::correct_rotation(int a, int b, const Vec3& correction, Scalar alpha_h, Scalar* lambda,
+                                  Scalar relaxation, Scratch& s) const {
+  const Scalar c = correction.norm();
+  if (c >= kTiny) turn(a, b, correction / c, -c, alpha_h, lambda, relaxation, s);
+}
+
 void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) const {
   forces(w, step.in, step.control, h, s.bodies);
   for (size_t i = 0; i < s.bodies.size(); ++i) {
@@ -107,7 +114,8 @@ void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) con
   }
 }
 
-void SolverXPBD::solve_constraint(const MaximalConstraint& c, Scalar h, Scalar* lambda, Scratch& s) const {
+void SolverXPBD::solve_constraint(const MaximalConstraint& c, const AxisSpring* springs, const State& in, Scalar h,
+                                  Scalar* lambda, Scratch& s) const {
   const int a = slot_of(body_slot_, c.a), b = slot_of(body_slot_, c.b);
   auto frames = [&](Transform& frame_a, Transform& frame_b) {
     frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
@@ -123,8 +131,8 @@ void SolverXPBD::solve_constraint(const MaximalConstraint& c, Scalar h, Scalar* 
     const Scalar length = gap.norm();
     if (length < kTiny) return;
     const Scalar held = std::clamp(length, c.lower[3], c.upper[3]);
-    correct_position(a, b, frame_a.p, frame_b.p, (held - length) / length * gap, alpha_linear, &lambda[1],
-                     settings.joint_linear_relaxation, s);
+    push(a, b, frame_a.p, frame_b.p, gap / length, length - held, alpha_linear, &lambda[1],
+         settings.joint_linear_relaxation, s);
     return;
   }
   Scalar coordinate[6];
@@ -148,6 +156,22 @@ void SolverXPBD::solve_constraint(const MaximalConstraint& c, Scalar h, Scalar* 
   if (!offset_error.isZero())
     correct_position(a, b, frame_a.p, frame_b.p, -(frame_a.q * offset_error), alpha_linear, &lambda[1],
                      settings.joint_linear_relaxation, s);
+  // the stiffnesses along free and limited axes (drives, springs, servos) as constraints of compliance 1 / K towards
+  // their rest
+  for (int k = 0; k < 6; ++k) {
+    const AxisSpring& spring = springs[k];
+    if (c.mode[k] == AxisMode::Locked || !(spring.stiffness > 0)) continue;
+    frames(frame_a, frame_b);
+    constraint_coordinates(c, frame_a, frame_b, coordinate);
+    const Scalar x = wound(c, k, in, coordinate[k]);
+    const Vec3 axis = frame_a.q * Vec3::Unit(k % 3);
+    const Scalar alpha = 1 / (spring.stiffness * h2);
+    if (k < 3)
+      turn(a, b, axis, x - spring.rest(), alpha, &lambda[2 + k], settings.joint_angular_relaxation, s);
+    else
+      push(a, b, frame_b.p, frame_b.p, axis, x - spring.rest(), alpha, &lambda[2 + k], settings.joint_linear_relaxation,
+           s);
+  }
 }
 
 void SolverXPBD::solve_contact(XContact& c, Scratch& s) const {
@@ -155,7 +179,7 @@ void SolverXPBD::solve_contact(XContact& c, Scratch& s) const {
   const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
   auto at = [](const BodyMotion* m, const Vec3& r) { return m ? Vec3(m->x + m->q * r) : r; };
   const Vec3 pa = at(A, c.r_a), pb = at(B, c.r_b);
-  const Scalar depth = (pa - pb).dot(c.n);
+  const Scalar depth = (pa - pb).dot(c.n) - c.allowed;
   if (depth <= 0) return;
   Scalar unused = 0;
   c.lambda_n += correct_position(c.a, c.b, pa, pb, depth * c.n, 0, &unused, settings.rigid_contact_relaxation, s);
@@ -181,48 +205,50 @@ void SolverXPBD::hold_contact(XContact& c, Scratch& s) const {
   c.lambda_t += correct_position(c.a, c.b, pa_now, pb_now, slide, 0, &unused, settings.rigid_contact_relaxation, s);
 }
 
-void SolverXPBD::velocity_pass(int w, const StepInput& step, Scalar h, Scratch& s) const {
+void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
   const Vec3 g(model_.world_gravity[3 * w], model_.world_gravity[3 * w + 1], model_.world_gravity[3 * w + 2]);
-  for (XContact& c : s.contacts) {
-    if (c.lambda_n <= 0) continue;
+  // a contact's points now and their relative velocity (b's minus a's)
+  auto relative = [&](const XContact& c, Vec3& pa, Vec3& pb) {
     const BodyMotion* A = c.a >= 0 ? &s.bodies[c.a] : nullptr;
     const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
-    const Vec3 pa = A ? Vec3(A->x + A->q * c.r_a) : c.r_a, pb = B ? Vec3(B->x + B->q * c.r_b) : c.r_b;
-    const Vec3 v = (B ? B->point_velocity(pb) : Vec3::Zero()) - (A ? A->point_velocity(pa) : Vec3::Zero());
-    const Scalar vn = c.n.dot(v);
-    const Vec3 vt = v - vn * c.n;
-    // dynamic friction: at most mu times the normal force's impulse over the substep
-    Vec3 change = Vec3::Zero();
-    const Scalar speed = vt.norm();
-    if (speed > kTiny) change -= (std::min(c.mu * c.lambda_n / h, speed) / speed) * vt;
-    // the normal velocity: what the restitution leaves of the approach, none where it is slow
-    const Scalar e = settings.enable_restitution && std::abs(c.approach) > 2 * g.norm() * h ? c.restitution : 0;
-    change += (std::max(-e * c.approach, Scalar(0)) - vn) * c.n;
-    const Scalar size = change.norm();
-    if (size < kTiny) continue;
-    const Vec3 n = change / size;
-    const Scalar inv = inverse_mass(c.a, pa, n, s) + inverse_mass(c.b, pb, n, s);
-    if (inv > kTiny) apply_impulse(c.a, c.b, pa, pb, change / inv, s);
+    pa = A ? Vec3(A->x + A->q * c.r_a) : c.r_a;
+    pb = B ? Vec3(B->x + B->q * c.r_b) : c.r_b;
+    return Vec3((B ? B->point_velocity(pb) : Vec3::Zero()) - (A ? A->point_velocity(pa) : Vec3::Zero()));
+  };
+  // the normal velocities of the contacts this substep pushed apart, Gauss-Seidel `iterations` times over them (one
+  // pass leaves a resting box spinning from its corners' turns): what the restitution leaves of the approach, none
+  // where it was slow
+  for (int it = 0; it < settings.iterations; ++it)
+    for (const XContact& c : s.contacts) {
+      if (c.lambda_n <= 0) continue;
+      Vec3 pa, pb;
+      const Scalar vn = c.n.dot(relative(c, pa, pb));
+      const Scalar e = settings.enable_restitution && std::abs(c.approach) > 2 * g.norm() * h ? c.restitution : 0;
+      const Scalar inv = inverse_mass(c.a, pa, c.n, s) + inverse_mass(c.b, pb, c.n, s);
+      if (inv > kTiny) apply_impulse(c.a, c.b, pa, pb, ((std::max(-e * c.approach, Scalar(0)) - vn) / inv) * c.n, s);
+    }
+  // dynamic friction: an impulse against the sliding of at most mu times the normal impulse (lambda_n / h)
+  for (const XContact& c : s.contacts) {
+    if (c.lambda_n <= 0) continue;
+    Vec3 pa, pb;
+    const Vec3 v = relative(c, pa, pb);
+    const Vec3 slide = v - c.n.dot(v) * c.n;
+    const Scalar speed = slide.norm();
+    if (speed < kTiny) continue;
+    const Vec3 t = slide / speed;
+    const Scalar inv = inverse_mass(c.a, pa, t, s) + inverse_mass(c.b, pb, t, s);
+    if (inv > kTiny) apply_impulse(c.a, c.b, pa, pb, -std::min(c.mu * c.lambda_n / h, speed / inv) * t, s);
   }
-  // each axis's spring, implicitly over h, at the substep's end
+  // each axis's damper and constant force, implicitly over h, at the substep's end (its stiffness was a constraint)
   for (int ci = built_.world_start[w]; ci < built_.world_start[w + 1]; ++ci) {
     const MaximalConstraint& c = built_.constraints[ci];
+    const AxisSpring* springs = &s.springs[6 * static_cast<size_t>(ci - built_.world_start[w])];
     const int a = slot_of(body_slot_, c.a), b = slot_of(body_slot_, c.b);
     const Transform frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
     const Transform frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
-    Scalar coordinate[6];
-    constraint_coordinates(c, frame_a, frame_b, coordinate);
     for (int k = 0; k < 6; ++k) {
-      if (c.dof[k] < 0 || c.mode[k] == AxisMode::Locked) continue;
-      const AxisSpring spring = axis_spring(c, k, step.in, step.control);
-      if (!spring.any()) continue;
-      // the coordinate as the joint's (a Revolute angle winds on)
-      Scalar x = coordinate[k];
-      if (c.joint >= 0) {
-        const Scalar joint_x = axis_coordinate(c, k, step.in, coordinate[k]);
-        if (joint_x != coordinate[k])
-          x = joint_x + (k < 3 ? wrapped(coordinate[k] - joint_x) : coordinate[k] - joint_x);
-      }
+      const AxisSpring& spring = springs[k];
+      if (c.mode[k] == AxisMode::Locked || (spring.damping == 0 && spring.force == 0)) continue;
       const Vec3 axis = frame_a.q * Vec3::Unit(k % 3);
       Scalar x_dot, inv;
       const Vec3 p = frame_b.p;
@@ -235,14 +261,10 @@ void SolverXPBD::velocity_pass(int w, const StepInput& step, Scalar h, Scratch& 
                          (a >= 0 ? s.bodies[a].point_velocity(p) : Vec3::Zero()));
         inv = inverse_mass(a, p, axis, s) + inverse_mass(b, p, axis, s);
       }
-      const Scalar denominator = spring.damping + h * spring.stiffness;
-      Scalar impulse;
-      if (denominator > 0) {
-        const Scalar cfm = 1 / (h * denominator);
-        impulse = ((spring.force - spring.stiffness * x) / denominator - x_dot) / (inv + cfm);
-      } else {
-        impulse = h * spring.force;
-      }
+      // (D v_next = force - lambda / h: a damper of the force's own speed)
+      const Scalar impulse = spring.damping > 0
+                                 ? (spring.force / spring.damping - x_dot) / (inv + 1 / (h * spring.damping))
+                                 : h * spring.force;
       if (k < 3) {
         if (b >= 0) s.bodies[b].w += s.bodies[b].inv_inertia * (impulse * axis);
         if (a >= 0) s.bodies[a].w -= s.bodies[a].inv_inertia * (impulse * axis);
@@ -251,6 +273,12 @@ void SolverXPBD::velocity_pass(int w, const StepInput& step, Scalar h, Scratch& 
       }
     }
   }
+}
+
+Scalar SolverXPBD::wound(const MaximalConstraint& c, int k, const State& in, Scalar coordinate) const {
+  const Scalar joint_x = axis_coordinate(c, k, in, coordinate);
+  if (joint_x == coordinate) return coordinate;
+  return joint_x + (k < 3 ? wrapped(coordinate - joint_x) : coordinate - joint_x);
 }
 
 void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
@@ -275,6 +303,7 @@ void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
     x.n = Vec3(in.contact_normal[3 * c], in.contact_normal[3 * c + 1], in.contact_normal[3 * c + 2]);
     const Vec3 point(in.contact_point[3 * c], in.contact_point[3 * c + 1], in.contact_point[3 * c + 2]);
     const Scalar depth = in.contact_depth[c];
+    x.depth = depth;
     const Vec3 pa = point + 0.5 * depth * x.n, pb = point - 0.5 * depth * x.n;
     x.r_a = x.a >= 0 ? Vec3(s.bodies[x.a].q.conjugate() * (pa - s.bodies[x.a].x)) : pa;
     x.r_b = x.b >= 0 ? Vec3(s.bodies[x.b].q.conjugate() * (pb - s.bodies[x.b].x)) : pb;
@@ -283,12 +312,17 @@ void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
     x.restitution = read.restitution;
   }
   const int constraints = built_.world_start[w + 1] - built_.world_start[w];
-  s.lambda.resize(2 * static_cast<size_t>(constraints));
+  s.lambda.resize(kMultipliers * static_cast<size_t>(constraints));
+  s.springs.resize(6 * static_cast<size_t>(constraints));
+  for (int ci = 0; ci < constraints; ++ci)
+    for (int k = 0; k < 6; ++k)
+      s.springs[6 * ci + k] = axis_spring(built_.constraints[built_.world_start[w] + ci], k, step.in, step.control);
   const Scalar h = step.dt / settings.substeps;
   for (int sub = 0; sub < settings.substeps; ++sub) {
     s.before = s.bodies;
     for (XContact& c : s.contacts) {
       c.lambda_n = c.lambda_t = 0;
+      c.allowed = std::max(Scalar(0), c.depth - settings.max_depenetration_velocity * (sub + 1) * h);
       const BodyMotion* A = c.a >= 0 ? &s.bodies[c.a] : nullptr;
       const BodyMotion* B = c.b >= 0 ? &s.bodies[c.b] : nullptr;
       const Vec3 pa = A ? Vec3(A->x + A->q * c.r_a) : c.r_a, pb = B ? Vec3(B->x + B->q * c.r_b) : c.r_b;
@@ -298,7 +332,8 @@ void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
     predict(w, step, h, s);
     for (int it = 0; it < settings.iterations; ++it) {
       for (int ci = 0; ci < constraints; ++ci)
-        solve_constraint(built_.constraints[built_.world_start[w] + ci], h, &s.lambda[2 * ci], s);
+        solve_constraint(built_.constraints[built_.world_start[w] + ci], &s.springs[6 * ci], step.in, h,
+                         &s.lambda[kMultipliers * ci], s);
       for (XContact& c : s.contacts) solve_contact(c, s);
       for (XContact& c : s.contacts) hold_contact(c, s);
     }
@@ -312,7 +347,7 @@ void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
       if (turn.w() < 0) turn.coeffs() *= -1;
       m.w = (2 / h) * turn.vec();
     }
-    velocity_pass(w, step, h, s);
+    velocity_pass(w, h, s);
     const Scalar damping = std::max(Scalar(0), 1 - settings.angular_damping * h);
     for (BodyMotion& m : s.bodies) m.w *= damping;
   }

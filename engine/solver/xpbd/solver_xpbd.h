@@ -3,10 +3,10 @@
 // Extended Position Based Dynamics"). Per world and substep h = dt / substeps:
 //   predict (v += h (g + f / m), w += h I^-1 (tau - w x I w), x += h v, q turned by h w) ->
 //   `iterations` passes over the constraints (each locked or limited axis, engine/solver/maximal/constraints.h: the
-//   rotation first, then the anchors' offset; a distance) and the contacts (penetration, static friction), each a
+//   rotation first, then the anchors' offset; a distance; then each axis's stiffness, AxisSpring's drives, springs
+//   and servos, towards its rest with compliance 1 / K) and the contacts (penetration, then static friction), each a
 //   position correction of compliance alpha / h^2 -> velocities from the positions -> the velocity pass: contacts'
-//   dynamic friction and restitution, each axis's spring (drives, damping, actuators, joint_f: AxisSpring taken
-//   implicitly over h) -> angular damping
+//   dynamic friction and restitution, each axis's damping and constant force (implicitly over h) -> angular damping
 // A constraint's compliance is the joint's own (model.joint_compliance) plus the settings' joint_*_compliance.
 #pragma once
 
@@ -30,12 +30,15 @@ class SolverXPBD : public MaximalSolver {
     Scalar mu = 0, restitution = 0;
     Scalar lambda_n = 0, lambda_t = 0;  // this substep's
     Scalar approach = 0;                // the normal velocity before the substep
+    Scalar depth = 0;                   // the penetration at the step's start (contact_depth)
+    Scalar allowed = 0;                 // the penetration left this substep (max_depenetration_velocity)
   };
   struct Scratch {
     std::vector<BodyMotion> bodies, before;  // now, and at the substep's start
     std::vector<int> body;                   // each slot's body
     std::vector<XContact> contacts;
-    std::vector<Scalar> lambda;  // per constraint of the world: angular, linear (or distance)
+    std::vector<Scalar> lambda;       // per constraint of the world: rotation, offset (or distance), 6 axes' stiffness
+    std::vector<AxisSpring> springs;  // per constraint of the world: each axis's, for the step
   };
   void step_world(int w, const StepInput& step, int thread) override;
   void check_settings() const override { settings.check(); }
@@ -45,18 +48,29 @@ class SolverXPBD : public MaximalSolver {
   }
   // one substep's pieces
   void predict(int w, const StepInput& step, Scalar h, Scratch& s) const;
-  void solve_constraint(const MaximalConstraint& c, Scalar h, Scalar* lambda, Scratch& s) const;
+  // constraint c's rotation, offset or distance, then its axes' stiffnesses (springs [6])
+  void solve_constraint(const MaximalConstraint& c, const AxisSpring* springs, const State& in, Scalar h,
+                        Scalar* lambda, Scratch& s) const;
+  // an axis's coordinate as its joint's (a Revolute angle winds on from the step's start)
+  Scalar wound(const MaximalConstraint& c, int k, const State& in, Scalar coordinate) const;
   // a contact's penetration undone (its normal multiplier accumulating into lambda_n), then, once every contact's
   // was, its static friction: the points' relative tangential motion over the substep undone while
   // lambda_t + its multiplier stays below mu lambda_n
   void solve_contact(XContact& c, Scratch& s) const;
   void hold_contact(XContact& c, Scratch& s) const;
-  void velocity_pass(int w, const StepInput& step, Scalar h, Scratch& s) const;
-  // a position correction moving b's point pb by `correction` relative to a's point pa, of compliance alpha_h
-  // (alpha / h^2), accumulating its multiplier into *lambda; returns the multiplier's change
+  void velocity_pass(int w, Scalar h, Scratch& s) const;
+  // a scalar constraint C along the unit direction n (C grows as b's point pb moves along n relative to a's point pa)
+  // of compliance alpha_h (alpha / h^2), corrected towards 0 with its multiplier accumulating into *lambda (XPBD's
+  // delta lambda = (-C - alpha_h lambda) / (w_a + w_b + alpha_h)); returns the multiplier's change
+  Scalar push(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& n, Scalar C, Scalar alpha_h, Scalar* lambda,
+              Scalar relaxation, Scratch& s) const;
+  // the same for a rotation of b about n relative to a
+  void turn(int a, int b, const Vec3& n, Scalar C, Scalar alpha_h, Scalar* lambda, Scalar relaxation, Scratch& s) const;
+  // a position correction moving b's point pb by the vector `correction` relative to a's point pa (push along its
+  // direction, by its length)
   Scalar correct_position(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& correction, Scalar alpha_h,
                           Scalar* lambda, Scalar relaxation, Scratch& s) const;
-  // a rotation turning b by `correction` relative to a
+  // a rotation turning b by the rotation vector `correction` relative to a
   void correct_rotation(int a, int b, const Vec3& correction, Scalar alpha_h, Scalar* lambda, Scalar relaxation,
                         Scratch& s) const;
   // an impulse p on b at its point pb (a: -p at pa)
