@@ -317,6 +317,11 @@ def main():
     wp.set_device("cpu")
 
     load_start = os.getloadavg()
+    # the commit and tree as the module was loaded (a build may land, and HEAD move, while this runs)
+    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                            ":!bench/newton_compare.py", ":!bench/results"], capture_output=True, text=True).stdout.strip()
     so_mtime = os.path.getmtime(novaphy._novaphy.__file__)
     so_time = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(so_mtime))
     t_start = time.time()
@@ -333,10 +338,8 @@ def main():
     so_changed = os.path.getmtime(novaphy._novaphy.__file__) != so_mtime
     cpu = next((ln.split(":", 1)[1].strip() for ln in subprocess.run(["lscpu"], capture_output=True, text=True)
                 .stdout.splitlines() if ln.startswith("Model name")), platform.processor())
-    commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip()
-    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
-                            ":!bench/newton_compare.py", ":!bench/results"], capture_output=True, text=True).stdout.strip()
+    commit_end = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
+                                text=True).stdout.strip()
     cmd = "OMP_NUM_THREADS=1 /work/newton-venv/bin/python bench/newton_compare.py " + " ".join(
         [f"--steps {args.steps}", f"--rounds {args.rounds}", "--worlds " + " ".join(map(str, args.worlds)),
          "--scenes " + " ".join(args.scenes)] + ([f"--out {args.out}"] if args.out else []))
@@ -348,15 +351,17 @@ def main():
              f"serially). Load average (1/5/15 min) at the start {load_start[0]:.2f}/{load_start[1]:.2f}/{load_start[2]:.2f}"
              f", at the end {load_end[0]:.2f}/{load_end[1]:.2f}/{load_end[2]:.2f} (other work shared the 2 CPUs); the "
              f"whole run took {(time.time() - t_start) / 60:.1f} min.",
-             f"- Versions: newton {newton.__version__}, warp-lang {wp.__version__}, NovaPhy {commit}"
+             f"- Versions: newton {newton.__version__}, warp-lang {wp.__version__}, NovaPhy {commit} at the start"
              + (" (with uncommitted changes in tracked files)" if dirty else "")
              + f" (its module {os.path.basename(novaphy._novaphy.__file__)} modified {so_time}"
-             + (", **rebuilt during the run**" if so_changed else "") + f"), Python {platform.python_version()}, "
+             + (", **rebuilt during the run**" if so_changed else "")
+             + (f"; HEAD moved to {commit_end} during the run" if commit_end != commit else "")
+             + f"), Python {platform.python_version()}, "
              f"NumPy {np.__version__}.",
              f"- Each row: one untimed run of {args.steps} steps (Newton compiles its kernels here; its final state gives the "
              f"error), then {args.rounds} timed runs of {args.steps} steps from the initial state; robot-steps/s = steps × "
              f"worlds / median wall time of the timed runs (collision + solver step, the engine's whole Python loop).",
-             "- finite?: every body pose and velocity finite at the end of every run; where not, the first step with a non-finite pose.",
+             "- finite?: every body pose and velocity finite at the end of every run; where not, the first step with a non-finite pose or velocity.",
              "- error: distance of the tracked body's final position (world 0) from NovaPhy SolverFeatherstone at dt/10 "
              "over the same simulated time.", ""]
     for scene in args.scenes:

@@ -38,16 +38,16 @@ def mjcf(path):
 
 
 def rope():
-    """20 capsule segments on Ball joints, laid out level from a pivot: it swings down."""
+    """20 capsule segments on Ball joints, laid out level from a pivot (the first joint's frame turned a quarter about
+    z, so the segments' -y runs along +x): it swings down."""
     builder = novaphy.ModelBuilder()
     builder.add_ground_plane(y=-3.0)
     parent, half = -1, 0.05
-    turn = [0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)]  # the segment's y axis along -x
-    for i in range(20):
-        body = builder.add_body(novaphy.RigidBody.from_capsule(0.1, 0.015, half),
-                                xform=novaphy.Transform([2 * half * i + half, 0, 0], turn))
-        builder.add_joint_ball(parent, body, parent_xform=novaphy.Transform([0, -half, 0] if parent >= 0 else [0, 0, 0]),
-                               child_xform=novaphy.Transform([0, half, 0]))
+    turn = [0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)]
+    for _ in range(20):
+        body = builder.add_body(novaphy.RigidBody.from_capsule(0.1, 0.015, half))
+        at = novaphy.Transform([0, -half, 0]) if parent >= 0 else novaphy.Transform([0, 0, 0], turn)
+        builder.add_joint_ball(parent, body, parent_xform=at, child_xform=novaphy.Transform([0, half, 0]))
         parent = body
     return builder
 

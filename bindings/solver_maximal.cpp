@@ -1,5 +1,9 @@
 // novaphy.solvers.SolverSemiImplicit and SolverXPBD: the solvers in maximal coordinates, their keyword arguments
 // mirrored into solver.settings (names as Newton's where the meaning is the same).
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "bindings/bindings.h"
 #include "engine/solver/semi_implicit/solver_semi_implicit.h"
 #include "engine/solver/xpbd/solver_xpbd.h"
@@ -10,6 +14,18 @@ namespace {
 
 // what both solvers' classes share: step (the GIL released, a float32 state widened and rounded back), settings,
 // joint_support, diverged
+// a UserWarning naming what of the model the solver does not model
+template <typename Solver>
+Solver* warned(std::unique_ptr<Solver> solver) {
+  const std::vector<std::string>& ignored = solver->ignored();
+  if (ignored.empty()) return solver.release();
+  std::string text = std::string(ignored.size() == 1 ? "1 thing" : std::to_string(ignored.size()) + " things") +
+                     " of the model not modelled by this solver (solver.ignored lists them): " + ignored[0];
+  if (ignored.size() > 1) text += ", ...";
+  if (PyErr_WarnEx(PyExc_UserWarning, text.c_str(), 1) != 0) throw py::error_already_set();
+  return solver.release();
+}
+
 template <typename Solver>
 void def_maximal(py::class_<Solver>& c) {
   c.def_readwrite("settings", &Solver::settings)
@@ -28,6 +44,9 @@ void def_maximal(py::class_<Solver>& c) {
           "Advances state_in by dt into state_out (they may be the same State): the bodies' body_q and body_qd, "
           "and joint_q and joint_qd from them; one step at a time per solver (another thread's raises).")
       .def("joint_support", [](const Solver& self) { return self.joint_support(); })
+      .def_property_readonly(
+          "ignored", [](const Solver& self) { return self.ignored(); },
+          "What of the model the solver does not model, by name (a joint's armature and dry friction).")
       .def_property_readonly(
           "diverged",
           [](py::object self) {
@@ -80,7 +99,7 @@ void bind_solver_maximal(py::module_& m) {
              settings.angular_damping = angular_damping;
              settings.friction_smoothing = friction_smoothing;
              settings.num_iterations = num_iterations;
-             return new SolverSemiImplicit(model, settings);
+             return warned(std::make_unique<SolverSemiImplicit>(model, settings));
            }),
            py::arg("model"), py::kw_only(), py::arg("angular_damping") = 0.05, py::arg("friction_smoothing") = 1.0,
            py::arg("num_iterations") = 20, py::keep_alive<1, 2>());
@@ -103,7 +122,7 @@ void bind_solver_maximal(py::module_& m) {
              settings.rigid_contact_relaxation = rigid_contact_relaxation;
              settings.angular_damping = angular_damping;
              settings.enable_restitution = enable_restitution;
-             return new SolverXPBD(model, settings);
+             return warned(std::make_unique<SolverXPBD>(model, settings));
            }),
            py::arg("model"), py::kw_only(), py::arg("iterations") = SolverXPBDSettings{}.iterations,
            py::arg("substeps") = SolverXPBDSettings{}.substeps,

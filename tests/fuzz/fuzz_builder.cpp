@@ -1,12 +1,14 @@
-// libFuzzer target: a random sequence of ModelBuilder calls (valid and invalid arguments), then
-// finalize, forward dynamics and a few steps with contacts. Errors must be novaphy::Error; a crash,
-// a sanitizer report or any other exception is a finding.
+// libFuzzer target: a random sequence of ModelBuilder calls (valid and invalid arguments; the maximal-coordinate
+// joints among them), then finalize, forward dynamics and a few steps with contacts by one of the three solvers. Errors
+// must be novaphy::Error; a crash, a sanitizer report or any other exception is a finding.
 #include <cstdint>
 
 #include "engine/eval/eval.h"
 #include "engine/model/builder.h"
 #include "engine/model/error.h"
+#include "engine/solver/semi_implicit/solver_semi_implicit.h"
 #include "engine/solver/solver_featherstone.h"
+#include "engine/solver/xpbd/solver_xpbd.h"
 #include "fuzz_support.h"
 
 using namespace novaphy;
@@ -15,7 +17,7 @@ namespace {
 
 void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
   const int bodies = builder.body_count(), joints = builder.joint_count();
-  switch (data.ConsumeIntegralInRange(0, 8)) {
+  switch (data.ConsumeIntegralInRange(0, 9)) {
     case 0: {
       RigidBody body;
       body.mass = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(0.1, 5) : fuzz::number(data);
@@ -93,7 +95,48 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
       if (data.ConsumeBool()) builder.add_tendon_actuator(tendon);
       break;
     }
+    case 8: {  // a maximal-coordinate joint: Distance, D6 (a few axes, any directions) or Cable
+      JointOptions options;
+      options.parent_xform = fuzz::transform(data);
+      options.child_xform = fuzz::transform(data);
+      const int parent = data.ConsumeIntegralInRange(-2, bodies), child = data.ConsumeIntegralInRange(-1, bodies);
+      switch (data.ConsumeIntegralInRange(0, 2)) {
+        case 0:
+          builder.add_joint_distance(parent, child, options, fuzz::number(data), fuzz::number(data),
+                                     fuzz::number(data));
+          break;
+        case 1: {
+          std::vector<JointDofConfig> axes[2];
+          for (auto& list : axes)
+            for (int k = 0, n = data.ConsumeIntegralInRange(0, 4); k < n; ++k) {
+              JointDofConfig dof;
+              dof.axis = data.ConsumeBool() ? Vec3::Unit(data.ConsumeIntegralInRange(0, 2)) : fuzz::vec3(data);
+              if (data.ConsumeBool()) dof.limit_lower = fuzz::number(data), dof.limit_upper = fuzz::number(data);
+              if (data.ConsumeBool()) dof.target_ke = fuzz::number(data), dof.target_kd = fuzz::number(data);
+              list.push_back(dof);
+            }
+          builder.add_joint_d6(parent, child, options, axes[0], axes[1], fuzz::number(data), fuzz::number(data));
+          break;
+        }
+        default: builder.add_joint_cable(parent, child, options, fuzz::number(data), fuzz::number(data)); break;
+      }
+      break;
+    }
     default: builder.add_ground_plane(fuzz::number(data)); break;
+  }
+}
+
+// a few steps of `solver` (its settings fuzzed by `settings`)
+template <typename Solver, typename Settings>
+void steps(FuzzedDataProvider& data, const Model& model, State& state, const Control& control,
+           const Settings& settings) {
+  CollisionPipeline pipeline(model);
+  Contacts contacts = pipeline.contacts();
+  Solver solver(model);
+  solver.settings = settings;
+  for (int k = 0; k < 3; ++k) {
+    pipeline.collide(state, contacts);
+    solver.step(state, state, control, contacts, data.ConsumeBool() ? 0.01 : fuzz::number(data));
   }
 }
 
@@ -105,16 +148,29 @@ void simulate(FuzzedDataProvider& data, const Model& model) {
   eval_forward_dynamics(model, state, control,
                         data.ConsumeBool() ? ForwardDynamicsMethod::Aba : ForwardDynamicsMethod::Crba);
   if (model.articulation_count == 0) return;
-  CollisionPipeline pipeline(model);
-  Contacts contacts = pipeline.contacts();
-  SolverFeatherstoneSettings settings;
-  settings.num_iterations = data.ConsumeIntegralInRange(-1, 30);
-  settings.erp = fuzz::number(data);
-  SolverFeatherstone solver(model);
-  solver.settings = settings;
-  for (int k = 0; k < 3; ++k) {
-    pipeline.collide(state, contacts);
-    solver.step(state, state, control, contacts, data.ConsumeBool() ? 0.01 : fuzz::number(data));
+  switch (data.ConsumeIntegralInRange(0, 2)) {
+    case 0: {
+      SolverFeatherstoneSettings settings;
+      settings.num_iterations = data.ConsumeIntegralInRange(-1, 30);
+      settings.erp = fuzz::number(data);
+      steps<SolverFeatherstone>(data, model, state, control, settings);
+      break;
+    }
+    case 1: {
+      SolverSemiImplicitSettings settings;
+      settings.num_iterations = data.ConsumeIntegralInRange(-1, 30);
+      settings.erp = fuzz::number(data);
+      steps<SolverSemiImplicit>(data, model, state, control, settings);
+      break;
+    }
+    default: {
+      SolverXPBDSettings settings;
+      settings.iterations = data.ConsumeIntegralInRange(-1, 8);
+      settings.substeps = data.ConsumeIntegralInRange(-1, 8);
+      settings.joint_linear_compliance = fuzz::number(data);
+      steps<SolverXPBD>(data, model, state, control, settings);
+      break;
+    }
   }
 }
 

@@ -157,3 +157,14 @@ def test_bad_input_is_named():
     contacts = novaphy.CollisionPipeline(model).contacts()
     with pytest.raises(ValueError, match=r"settings.erp must be in \[0, 1\], got 2"):
         solver.step(state, state, control, contacts, 0.01)
+
+
+@pytest.mark.parametrize("solver_type", SOLVERS)
+def test_what_a_solver_does_not_model_is_warned_by_name(solver_type):
+    builder = novaphy.ModelBuilder()
+    body = builder.add_body(novaphy.RigidBody.from_box(1.0, np.array([0.1, 0.1, 0.1])))
+    builder.add_joint_revolute(-1, body, axis=[0, 0, 1], armature=0.01, frictionloss=0.5, name="knee")
+    model = builder.finalize()
+    with pytest.warns(UserWarning, match="joint 0 'knee': armature"):
+        solver = solver_type(model)
+    assert solver.ignored == ["joint 0 'knee': armature 0.010000", "joint 0 'knee': frictionloss 0.500000"]

@@ -38,6 +38,16 @@ MaximalSolver::MaximalSolver(const Model& model, const char* name)
   for (int u = 0; u < model.actuator_count; ++u)
     dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
   diverged_.assign(model.world_count, 0);
+  for (int j = 0; j < model.joint_count; ++j) {
+    Scalar armature = 0, friction = 0;
+    for (int d = model.joint_qd_start[j]; d < model.joint_qd_start[j + 1]; ++d)
+      armature = std::max(armature, model.joint_armature[d]),
+      friction = std::max(friction, model.joint_frictionloss[d]);
+    const std::string joint =
+        "joint " + std::to_string(j) + (model.joint_name[j].empty() ? "" : " '" + model.joint_name[j] + "'");
+    if (armature > 0) ignored_.push_back(joint + ": armature " + std::to_string(armature));
+    if (friction > 0) ignored_.push_back(joint + ": frictionloss " + std::to_string(friction));
+  }
   read_materials();
   read_masses();
 }

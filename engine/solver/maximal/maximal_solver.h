@@ -52,6 +52,8 @@ class MaximalSolver {
   // per world: 1 where the last step's divergence guard fired
   const std::vector<std::uint8_t>& diverged() const { return diverged_; }
   const Model& model() const { return model_; }
+  // what of the model the solver does not model, by name (a joint's armature and dry friction): the binding warns
+  const std::vector<std::string>& ignored() const { return ignored_; }
 
  protected:
   MaximalSolver(const Model& model, const char* name);
@@ -115,6 +117,7 @@ class MaximalSolver {
   std::vector<int> dof_actuator_start_, dof_actuators_;  // the actuators of each dof
   std::vector<int> contact_start_, world_contacts_;
   std::vector<std::uint8_t> diverged_;
+  std::vector<std::string> ignored_;
   CallFlag busy_;
 };
 
