@@ -86,7 +86,6 @@ void SolverSemiImplicit::finish_row(BodyRow& r, Scratch& s, Scalar start) const 
   }
   r.inv_mass = row_inv_mass(jmj, static_cast<Scalar>(settings.cfm) + r.cfm);
   r.lambda = start;
-  if (start != 0) apply(r, start, s.bodies);
 }
 
 void SolverSemiImplicit::contact_rows(int w, const StepInput& step, Scratch& s) const {
@@ -271,6 +270,10 @@ void SolverSemiImplicit::step_world(int w, const StepInput& step, int thread) {
   contact_rows(w, step, s);
   forces(w, step.in, step.control, step.dt, s.bodies);
   constraint_rows(w, step, share, s);
+  // the rows' starting impulses, once every row read the velocities it starts from (a contact's restitution, a
+  // limit's crossing): applied as each row was made, one contact's warm start changed the next one's approach
+  for (const BodyRow& r : s.rows)
+    if (r.lambda != 0) apply(r, r.lambda, s.bodies);
   converged_[w] = sweep(s);
   for (BodyRow& r : s.rows)
     if (r.kept) *r.kept = std::isfinite(r.lambda) ? r.lambda : 0;

@@ -51,7 +51,8 @@ class SolverSemiImplicit : public MaximalSolver {
   // the rows of world w's constraints (each axis locked, limited or driven) and contacts
   void constraint_rows(int w, const StepInput& step, Scalar share, Scratch& s);
   void contact_rows(int w, const StepInput& step, Scratch& s) const;
-  // the row's inverse inertias and effective mass (the bodies' and cfm), its starting impulse applied
+  // the row's inverse inertias and effective mass (the bodies' and cfm), and its starting impulse (applied once all
+  // rows are made)
   void finish_row(BodyRow& row, Scratch& s, Scalar start) const;
   // the sweeps; returns whether they converged
   bool sweep(Scratch& s) const;
