@@ -86,6 +86,13 @@ Quat turned(const Quat& q, const Vec3& r) {
   return (e * q).normalized();
 }
 
+Quat turned_slightly(const Quat& q, const Vec3& r) {
+  const Quat e(0, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z());
+  Quat out = e * q;
+  out.coeffs() += q.coeffs();
+  return out.normalized();
+}
+
 MaximalConstraints MaximalConstraints::of(const Model& model, const std::string& solver) {
   if (model.tendon_count > 0)
     fail(solver, " does not model fixed tendons (tendon 0 '", model.tendon_name[0], "'): use SolverFeatherstone");

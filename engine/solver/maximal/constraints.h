@@ -58,6 +58,9 @@ struct MaximalConstraints {
 Vec3 rotation_vector(const Quat& q);
 // q turned by the rotation vector r (world frame), renormalised: exp(r) q
 Quat turned(const Quat& q, const Vec3& r);
+// the same to first order in r, renormalised, (1 + r / 2) q: XPBD's update of an orientation by a correction or a
+// substep's turn (no trigonometry)
+Quat turned_slightly(const Quat& q, const Vec3& r);
 
 // a body as a step of the maximal solvers sees it: its centre of mass x, orientation q, COM velocity v and angular
 // velocity w (world), inverse mass and inverse inertia (in its frame and in the world; 0 for the world and static
@@ -72,7 +75,10 @@ struct BodyMotion {
   // body b's pose and velocity in the state (b = -1: the world, at rest), no mass
   static BodyMotion of(const Model& model, const State& state, int b);
   // the world inverse inertia again at the orientation q
-  void orient() { inv_inertia = q * inv_inertia_body * q.conjugate(); }
+  void orient() {
+    const Mat3 R = q.toRotationMatrix();
+    inv_inertia = R * inv_inertia_body * R.transpose();
+  }
   // the velocity of the world point p riding on the body
   Vec3 point_velocity(const Vec3& p) const { return v + w.cross(p - x); }
   // the body's frame (its origin's pose) from x and q

@@ -58,13 +58,13 @@ Scalar SolverXPBD::push(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3
   if (b >= 0 && s.bodies[b].inv_mass > 0) {
     BodyMotion& B = s.bodies[b];
     B.x += B.inv_mass * p;
-    B.q = turned(B.q, B.inv_inertia * (pb - B.x).cross(p));
+    B.q = turned_slightly(B.q, B.inv_inertia * (pb - B.x).cross(p));
     B.orient();
   }
   if (a >= 0 && s.bodies[a].inv_mass > 0) {
     BodyMotion& A = s.bodies[a];
     A.x -= A.inv_mass * p;
-    A.q = turned(A.q, -(A.inv_inertia * (pa - A.x).cross(p)));
+    A.q = turned_slightly(A.q, -(A.inv_inertia * (pa - A.x).cross(p)));
     A.orient();
   }
   return change;
@@ -81,12 +81,12 @@ void SolverXPBD::turn(int a, int b, const Vec3& n, Scalar C, Scalar alpha_h, Sca
   const Vec3 p = (relaxation * change) * n;
   if (b >= 0 && s.bodies[b].inv_mass > 0) {
     BodyMotion& B = s.bodies[b];
-    B.q = turned(B.q, B.inv_inertia * p);
+    B.q = turned_slightly(B.q, B.inv_inertia * p);
     B.orient();
   }
   if (a >= 0 && s.bodies[a].inv_mass > 0) {
     BodyMotion& A = s.bodies[a];
-    A.q = turned(A.q, -(A.inv_inertia * p));
+    A.q = turned_slightly(A.q, -(A.inv_inertia * p));
     A.orient();
   }
 }
@@ -109,7 +109,7 @@ void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) con
     BodyMotion& m = s.bodies[i];
     if (m.inv_mass == 0) continue;
     m.x += h * m.v;
-    m.q = turned(m.q, h * m.w);
+    m.q = turned_slightly(m.q, h * m.w);
     m.orient();
   }
 }
