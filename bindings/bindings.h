@@ -11,7 +11,9 @@
 #include <string>
 #include <type_traits>
 
+#include "engine/collision/pipeline.h"
 #include "engine/model/model.h"
+#include "engine/threads/exclusive_call.h"
 #include "engine/threads/parallel.h"
 
 namespace novaphy::python {
@@ -96,6 +98,24 @@ inline py::dict serial_seconds_dict(const SerialSeconds& t) {
   d["steps"] = t.steps;
   d["share"] = t.share();
   return d;
+}
+
+// a solver's step(state_in, state_out, control, contacts, dt): the solver's one-call flag held before a float32
+// state or control is widened (a refused call writes nothing), the GIL released
+template <typename Solver, typename Class>
+void def_step(Class& c, const char* doc) {
+  c.def(
+      "step",
+      [](Solver& self, State& in, State& out, Control& control, Contacts& contacts, Scalar dt) {
+        const int threads = self.settings.num_threads;
+        const ExclusiveCall held = self.hold();
+        const Widened<State> written(out, true, threads);
+        if (&in != &out) in.from_float32(threads);
+        const Widened<Control> read(control, false, threads);
+        self.step(in, out, control, contacts, dt);
+      },
+      py::arg("state_in"), py::arg("state_out"), py::arg("control"), py::arg("contacts"), py::arg("dt"),
+      py::call_guard<py::gil_scoped_release>(), doc);
 }
 
 }  // namespace novaphy::python

@@ -44,8 +44,9 @@ void bind_solver_featherstone(py::module_& m) {
       .def("__str__", &JointSupportMatrix::to_string)
       .def("__repr__", &JointSupportMatrix::to_string);
 
-  py::class_<SolverFeatherstone>(m, "SolverFeatherstone",
-                                 "Featherstone articulated-body solver: CRBA + Cholesky, sequential-impulse PGS.")
+  py::class_<SolverFeatherstone> featherstone(
+      m, "SolverFeatherstone", "Featherstone articulated-body solver: CRBA + Cholesky, sequential-impulse PGS.");
+  featherstone
       .def(py::init([](const Model& model, Scalar angular_damping, int update_mass_matrix_interval,
                        Scalar friction_smoothing, bool use_tile_gemm, bool fuse_cholesky) {
              Settings settings;
@@ -60,20 +61,6 @@ void bind_solver_featherstone(py::module_& m) {
            py::arg("update_mass_matrix_interval") = 1, py::arg("friction_smoothing") = 1.0,
            py::arg("use_tile_gemm") = false, py::arg("fuse_cholesky") = true, py::keep_alive<1, 2>())
       .def_readwrite("settings", &SolverFeatherstone::settings)
-      .def(
-          "step",
-          [](SolverFeatherstone& self, State& in, State& out, Control& control, Contacts& contacts, Scalar dt) {
-            const int threads = self.settings.num_threads;
-            const ExclusiveCall held = self.hold();  // (before the conversions: a refused call writes nothing)
-            const Widened<State> written(out, true, threads);
-            if (&in != &out) in.from_float32(threads);
-            const Widened<Control> read(control, false, threads);
-            self.step(in, out, control, contacts, dt);
-          },
-          py::arg("state_in"), py::arg("state_out"), py::arg("control"), py::arg("contacts"), py::arg("dt"),
-          py::call_guard<py::gil_scoped_release>(),
-          "Advances state_in by dt into state_out (they may be the same State); one step at a time per solver "
-          "(another thread's raises).")
       .def(
           "set_reset_state",
           [](SolverFeatherstone& self, State& state) {
@@ -114,6 +101,9 @@ void bind_solver_featherstone(py::module_& m) {
             return view(flags.data(), static_cast<int>(flags.size()), 1, self, false);
           },
           "Per articulation: 1 where the last step's divergence guard fired (a read-only view).");
+  def_step<SolverFeatherstone>(featherstone,
+                               "Advances state_in by dt into state_out (they may be the same State); one step at a "
+                               "time per solver (another thread's raises).");
   m.def(
       "simulate",
       [](CollisionPipeline& pipeline, SolverFeatherstone& solver, State& state, Control& control, Contacts& contacts,

@@ -28,21 +28,11 @@ Solver* warned(std::unique_ptr<Solver> solver) {
 
 template <typename Solver>
 void def_maximal(py::class_<Solver>& c) {
+  def_step<Solver>(c,
+                   "Advances state_in by dt into state_out (they may be the same State): the bodies' body_q and "
+                   "body_qd, and joint_q and joint_qd from them; one step at a time per solver (another thread's "
+                   "raises).");
   c.def_readwrite("settings", &Solver::settings)
-      .def(
-          "step",
-          [](Solver& self, State& in, State& out, Control& control, Contacts& contacts, Scalar dt) {
-            const int threads = self.settings.num_threads;
-            const ExclusiveCall held = self.hold();  // (before the conversions: a refused call writes nothing)
-            const Widened<State> written(out, true, threads);
-            if (&in != &out) in.from_float32(threads);
-            const Widened<Control> read(control, false, threads);
-            self.step(in, out, control, contacts, dt);
-          },
-          py::arg("state_in"), py::arg("state_out"), py::arg("control"), py::arg("contacts"), py::arg("dt"),
-          py::call_guard<py::gil_scoped_release>(),
-          "Advances state_in by dt into state_out (they may be the same State): the bodies' body_q and body_qd, "
-          "and joint_q and joint_qd from them; one step at a time per solver (another thread's raises).")
       .def("joint_support", [](const Solver& self) { return self.joint_support(); })
       .def_property_readonly(
           "ignored", [](const Solver& self) { return self.ignored(); },

@@ -11,6 +11,7 @@
 #include "engine/model/finite_checks.h"
 #include "engine/model/tendon.h"
 #include "engine/solver/solver_featherstone.h"
+#include "engine/solver/step_arguments.h"
 
 namespace novaphy {
 
@@ -18,12 +19,7 @@ void SolverFeatherstone::check_step(const State& in, const State& out, const Con
                                     Scalar dt) {
   if (!(dt > 0) || !std::isfinite(dt)) fail("dt must be finite and > 0, got ", dt);
   settings.check();
-  model_.check(in);
-  model_.check(out);
-  model_.check(control);
-  if (!same_layout(contacts, model_) || contacts.model_id != model_.model_id)
-    fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
-         " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
+  check_step_arguments(model_, in, out, control, contacts, dt);
   bool loose_finite = true;
   for (const int b : built_.loose_bodies)
     for (int k = 0; k < 6; ++k) loose_finite &= std::isfinite(in.body_f[6 * static_cast<size_t>(b) + k]);

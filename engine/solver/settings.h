@@ -85,6 +85,18 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
     "The blocks write body_q and body_qd around the caches (non-temporal stores) when the step's data, the state's "  \
     "arrays and the solver's, exceed this (0: always); tools/stream_threshold.py finds a machine's.")
 
+// the settings both maximal-coordinate solvers read alike: threads over the worlds and the divergence guard
+#define NOVAPHY_MAXIMAL_STEP_SETTINGS(X)                                                                             \
+  X(int, num_threads, 0, 0, kIntUnbounded, "",                                                                       \
+    "OpenMP threads (0: all available) over the worlds; results are bit-identical for any count.")                   \
+  X(DivergencePolicy, on_divergence, DivergencePolicy::Flag, 0, 0, "",                                               \
+    "What step does with a world that diverged (a body's state went non-finite or too fast, or a contact too "       \
+    "deep): Raise (nothing written), Flag (it keeps its previous state; diverged() marks it) or Reset (it restarts " \
+    "from joint_q0 at rest, marked in the output's world_reset).")                                                   \
+  X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A body speed beyond which its world diverged.")     \
+  X(Scalar, divergence_depth, 0.5, 0, kUnbounded, "m",                                                               \
+    "A contact deeper than this among those a step is given marks its world diverged.")
+
 // SolverSemiImplicit (engine/solver/semi_implicit/solver_semi_implicit.h)
 #define NOVAPHY_SEMI_IMPLICIT_SETTINGS(X)                                                                              \
   X(int, num_iterations, 20, 0, kIntUnbounded, "", "PGS sweeps per step over every row of a world, at most.")          \
@@ -103,42 +115,26 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
     "Each body's angular velocity is scaled by (1 - angular_damping dt) each step.")                                   \
   X(int, max_condim, 6, 3, 6, "", "The most friction a contact gets of its shapes' condim (as SolverFeatherstone's).") \
   X(Scalar, friction_smoothing, 1.0, 0, 1, "", "0: box friction per tangent; 1: circular cone; between: a blend.")     \
-  X(int, num_threads, 0, 0, kIntUnbounded, "",                                                                         \
-    "OpenMP threads (0: all available) over the worlds; results are bit-identical for any count.")                     \
-  X(DivergencePolicy, on_divergence, DivergencePolicy::Flag, 0, 0, "",                                                 \
-    "What step does with a world that diverged (a body's state went non-finite or too fast, or a contact too "         \
-    "deep): Raise (nothing written), Flag (it keeps its previous state; diverged() marks it) or Reset (it restarts "   \
-    "from joint_q0 at rest, marked in the output's world_reset).")                                                     \
-  X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A body speed beyond which its world diverged.")       \
-  X(Scalar, divergence_depth, 0.5, 0, kUnbounded, "m",                                                                 \
-    "A contact deeper than this among those a step is given marks its world diverged.")
+  NOVAPHY_MAXIMAL_STEP_SETTINGS(X)
 
 // SolverXPBD (engine/solver/xpbd/solver_xpbd.h); names as Newton's SolverXPBD's where the meaning is the same
-#define NOVAPHY_XPBD_SETTINGS(X)                                                                                     \
-  X(int, iterations, 2, 1, kIntUnbounded, "", "Constraint passes per substep.")                                      \
-  X(int, substeps, 8, 1, kIntUnbounded, "", "Substeps per step (each of dt / substeps).")                            \
-  X(Scalar, joint_linear_relaxation, 1.0, 0, 2, "", "Share of a joint's positional correction applied per pass.")    \
-  X(Scalar, joint_angular_relaxation, 1.0, 0, 2, "", "Share of a joint's rotational correction applied per pass.")   \
-  X(Scalar, joint_linear_compliance, 0, 0, kUnbounded, "m/N",                                                        \
-    "Compliance added to every joint's positional constraints (a joint's own: model.joint_compliance).")             \
-  X(Scalar, joint_angular_compliance, 0, 0, kUnbounded, "rad/(N m)",                                                 \
-    "Compliance added to every joint's rotational constraints.")                                                     \
-  X(Scalar, rigid_contact_relaxation, 1.0, 0, 2, "", "Share of a contact's correction applied per pass.")            \
-  X(Scalar, max_depenetration_velocity, 1.0, 0, kUnbounded, "m/s",                                                   \
-    "A penetration a step starts with is pushed out no faster than this (PhysX's name): corrected at once, a "       \
-    "keyframe's feet sunk into the floor would leave at penetration / substep.")                                     \
-  X(Scalar, angular_damping, 0.0, 0, kUnbounded, "1/s",                                                              \
-    "Each body's angular velocity is scaled by (1 - angular_damping h) each substep h.")                             \
-  X(bool, enable_restitution, false, 0, 0, "", "Contacts bounce by their shapes' restitution.")                      \
-  X(int, num_threads, 0, 0, kIntUnbounded, "",                                                                       \
-    "OpenMP threads (0: all available) over the worlds; results are bit-identical for any count.")                   \
-  X(DivergencePolicy, on_divergence, DivergencePolicy::Flag, 0, 0, "",                                               \
-    "What step does with a world that diverged (a body's state went non-finite or too fast, or a contact too "       \
-    "deep): Raise (nothing written), Flag (it keeps its previous state; diverged() marks it) or Reset (it restarts " \
-    "from joint_q0 at rest, marked in the output's world_reset).")                                                   \
-  X(Scalar, divergence_speed, 1e6, 0, kUnbounded, "m/s, rad/s", "A body speed beyond which its world diverged.")     \
-  X(Scalar, divergence_depth, 0.5, 0, kUnbounded, "m",                                                               \
-    "A contact deeper than this among those a step is given marks its world diverged.")
+#define NOVAPHY_XPBD_SETTINGS(X)                                                                                   \
+  X(int, iterations, 2, 1, kIntUnbounded, "", "Constraint passes per substep.")                                    \
+  X(int, substeps, 8, 1, kIntUnbounded, "", "Substeps per step (each of dt / substeps).")                          \
+  X(Scalar, joint_linear_relaxation, 1.0, 0, 2, "", "Share of a joint's positional correction applied per pass.")  \
+  X(Scalar, joint_angular_relaxation, 1.0, 0, 2, "", "Share of a joint's rotational correction applied per pass.") \
+  X(Scalar, joint_linear_compliance, 0, 0, kUnbounded, "m/N",                                                      \
+    "Compliance added to every joint's positional constraints (a joint's own: model.joint_compliance).")           \
+  X(Scalar, joint_angular_compliance, 0, 0, kUnbounded, "rad/(N m)",                                               \
+    "Compliance added to every joint's rotational constraints.")                                                   \
+  X(Scalar, rigid_contact_relaxation, 1.0, 0, 2, "", "Share of a contact's correction applied per pass.")          \
+  X(Scalar, max_depenetration_velocity, 1.0, 0, kUnbounded, "m/s",                                                 \
+    "A penetration a step starts with is pushed out no faster than this (PhysX's name): corrected at once, a "     \
+    "keyframe's feet sunk into the floor would leave at penetration / substep.")                                   \
+  X(Scalar, angular_damping, 0.0, 0, kUnbounded, "1/s",                                                            \
+    "Each body's angular velocity is scaled by (1 - angular_damping h) each substep h.")                           \
+  X(bool, enable_restitution, false, 0, 0, "", "Contacts bounce by their shapes' restitution.")                    \
+  NOVAPHY_MAXIMAL_STEP_SETTINGS(X)
 
 struct SolverFeatherstoneSettings {
 #define NOVAPHY_DECLARE_SETTING(type, name, value, lowest, highest, unit, doc) type name = value;

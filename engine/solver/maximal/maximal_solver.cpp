@@ -8,6 +8,7 @@
 #include "engine/model/actuator.h"
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
+#include "engine/solver/step_arguments.h"
 #include "kernels/joint.h"
 
 namespace novaphy {
@@ -86,12 +87,7 @@ void MaximalSolver::check_step(const State& in, const State& out, const Control&
                                Scalar dt) {
   if (!(dt > 0) || !std::isfinite(dt)) fail("dt must be finite and > 0, got ", dt);
   check_settings();
-  model_.check(in);
-  model_.check(out);
-  model_.check(control);
-  if (!same_layout(contacts, model_) || contacts.model_id != model_.model_id)
-    fail("contacts buffer is from another model (", contacts.body_count, " bodies, ", contacts.shape_count,
-         " shapes; the model has ", model_.body_count, " and ", model_.shape_count, ")");
+  check_step_arguments(model_, in, out, control, contacts, dt);
   Checked arrays[] = {{&in.body_q, "state_in.body_q"},
                       {&in.body_qd, "state_in.body_qd"},
                       {&in.body_f, "state_in.body_f"},
