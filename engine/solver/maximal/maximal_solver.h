@@ -74,6 +74,8 @@ class MaximalSolver {
   // world w's bodies (their slots' motions) sped up by the forces over dt: gravity, body_f, the gyroscopic torque,
   // and joint_f of Free and Ball joints (a scalar dof's is its axis's AxisSpring force)
   void forces(int w, const State& in, const Control& control, Scalar dt, std::vector<BodyMotion>& bodies) const;
+  // body b's place among its world's bodies (-1: the world)
+  int slot(int b) const { return b >= 0 ? body_slot_[b] : -1; }
   // body b's motion at the step's start (a static body's: at rest, no mass)
   BodyMotion start_motion(const State& in, int b) const;
   // the spring along constraint c's axis k (its dof's; none without one), at the axis's coordinate x (a Revolute or

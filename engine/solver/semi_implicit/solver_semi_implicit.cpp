@@ -6,7 +6,6 @@
 #include "engine/solver/parts/contact_rows.h"
 #include "engine/solver/parts/equality_rows.h"
 #include "engine/solver/parts/limit_row.h"
-#include "kernels/joint.h"
 
 namespace novaphy {
 
@@ -97,7 +96,7 @@ void SolverSemiImplicit::contact_rows(int w, const StepInput& step, Scratch& s) 
   for (int i = 0; i < count; ++i) {
     const int c = list[i];
     const int body_a = contacts.contact_body_a[c], body_b = contacts.contact_body_b[c];
-    const int a = body_a >= 0 ? body_slot_[body_a] : -1, b = body_b >= 0 ? body_slot_[body_b] : -1;
+    const int a = slot(body_a), b = slot(body_b);
     ContactInput<Scalar> in = ContactRows::read(contacts, c, shapes_, model_.impratio);
     if (fresh)
       for (int m = 0; m < 3; ++m) in.impulse[m] = in.spin[m] = 0;
@@ -139,7 +138,7 @@ void SolverSemiImplicit::constraint_rows(int w, const StepInput& step, Scalar sh
     Scalar* kept = &kept_[kKeptPerConstraint * static_cast<size_t>(ci)];
     Scalar start[kKeptPerConstraint];
     for (int k = 0; k < kKeptPerConstraint; ++k) start[k] = share * kept[k], kept[k] = 0;
-    const int a = c.a >= 0 ? body_slot_[c.a] : -1, b = c.b >= 0 ? body_slot_[c.b] : -1;
+    const int a = slot(c.a), b = slot(c.b);
     const BodyMotion* A = a >= 0 ? &s.bodies[a] : nullptr;
     const BodyMotion* B = b >= 0 ? &s.bodies[b] : nullptr;
     const Transform frame_a = A ? A->frame(model_, c.a) * c.X_a : c.X_a;

@@ -13,9 +13,6 @@ constexpr Scalar kPi = 3.14159265358979323846;
 constexpr Scalar kTiny = 1e-12;
 constexpr int kMultipliers = 8;  // per constraint: its rotation, its offset (or distance), each axis's stiffness
 
-// the slots of constraint c's bodies among its world's (-1: the world)
-int slot_of(const std::vector<int>& body_slot, int body) { return body >= 0 ? body_slot[body] : -1; }
-
 // an angular coordinate's change wrapped to (-pi, pi]
 Scalar wrapped(Scalar x) { return std::remainder(x, 2 * kPi); }
 
@@ -116,7 +113,7 @@ void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) con
 
 void SolverXPBD::solve_constraint(const MaximalConstraint& c, const AxisSpring* springs, const State& in, Scalar h,
                                   Scalar* lambda, Scratch& s) const {
-  const int a = slot_of(body_slot_, c.a), b = slot_of(body_slot_, c.b);
+  const int a = slot(c.a), b = slot(c.b);
   auto frames = [&](Transform& frame_a, Transform& frame_b) {
     frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
     frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
@@ -243,7 +240,7 @@ void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
   for (int ci = built_.world_start[w]; ci < built_.world_start[w + 1]; ++ci) {
     const MaximalConstraint& c = built_.constraints[ci];
     const AxisSpring* springs = &s.springs[6 * static_cast<size_t>(ci - built_.world_start[w])];
-    const int a = slot_of(body_slot_, c.a), b = slot_of(body_slot_, c.b);
+    const int a = slot(c.a), b = slot(c.b);
     const Transform frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
     const Transform frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
     for (int k = 0; k < 6; ++k) {
@@ -298,8 +295,8 @@ void SolverXPBD::step_world(int w, const StepInput& step, int thread) {
     const int c = list[i];
     const Contacts& in = step.contacts;
     XContact& x = s.contacts[i];
-    x.a = slot_of(body_slot_, in.contact_body_a[c]);
-    x.b = slot_of(body_slot_, in.contact_body_b[c]);
+    x.a = slot(in.contact_body_a[c]);
+    x.b = slot(in.contact_body_b[c]);
     x.n = Vec3(in.contact_normal[3 * c], in.contact_normal[3 * c + 1], in.contact_normal[3 * c + 2]);
     const Vec3 point(in.contact_point[3 * c], in.contact_point[3 * c + 1], in.contact_point[3 * c + 2]);
     const Scalar depth = in.contact_depth[c];
