@@ -1,10 +1,10 @@
 """NovaPhy beside NVIDIA Newton (PyPI `newton`, warp's CPU backend) on the same scenes, one thread, in one run.
 
-Runs in a virtual environment that has newton and warp-lang (made with
-`/usr/bin/python3 -m venv --system-site-packages /work/newton-venv && /work/newton-venv/bin/pip install newton==1.8.*`)
+Runs in the virtual environment tools/setup_newton.sh makes (build/venv-newton: newton and warp-lang from PyPI)
 and imports NovaPhy from build/python (built for the same Python as /usr/bin/python3):
 
-    OMP_NUM_THREADS=1 /work/newton-venv/bin/python bench/newton_compare.py [--steps 500] [--worlds 1 64]
+    bash tools/setup_newton.sh
+    OMP_NUM_THREADS=1 build/venv-newton/bin/python bench/newton_compare.py [--steps 500] [--worlds 1 64]
         [--out bench/results/newton_compare.md]
 
 Scenes, each built with each engine's own builder: a 15-link pendulum chain of revolute joints (boxes, collisions
@@ -340,7 +340,7 @@ def main():
                 .stdout.splitlines() if ln.startswith("Model name")), platform.processor())
     commit_end = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True).stdout.strip()
-    cmd = "OMP_NUM_THREADS=1 /work/newton-venv/bin/python bench/newton_compare.py " + " ".join(
+    cmd = "OMP_NUM_THREADS=1 build/venv-newton/bin/python bench/newton_compare.py " + " ".join(
         [f"--steps {args.steps}", f"--rounds {args.rounds}", "--worlds " + " ".join(map(str, args.worlds)),
          "--scenes " + " ".join(args.scenes)] + ([f"--out {args.out}"] if args.out else []))
     dts = {"chain": CHAIN["dt"], "rope": ROPE["dt"], "go1": 0.002}
