@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/solver/maximal/corrections.h"
 #include "engine/solver/parts/contact_rows.h"
 #include "engine/solver/parts/equality_rows.h"
 #include "engine/solver/parts/limit_row.h"
@@ -288,17 +289,29 @@ void SolverSemiImplicit::step_world(int w, const StepInput& step, int thread) {
     for (int m = 0; m < 3; ++m)
       step.contacts.contact_impulse[3 * c + m] = P[m], step.contacts.contact_spin_impulse[3 * c + m] = P[3 + m];
   }
-  // semi-implicit integration
+  // semi-implicit integration, then the rigid joints' drift taken out of the positions
   const Scalar dt = step.dt, damping = std::max(Scalar(0), 1 - settings.angular_damping * dt);
-  for (int i = 0; i < count; ++i) {
-    BodyMotion& m = s.bodies[i];
-    const int b = built_.world_bodies[first + i];
+  for (BodyMotion& m : s.bodies) {
     if (m.inv_mass == 0) continue;
     m.w *= damping;
     m.x += dt * m.v;
     m.q = turned(m.q, dt * m.w);
-    next_[b] = m;
+    m.orient();
   }
+  hold_joints(w, s);
+  for (int i = 0; i < count; ++i)
+    if (s.bodies[i].inv_mass > 0) next_[built_.world_bodies[first + i]] = s.bodies[i];
+}
+
+void SolverSemiImplicit::hold_joints(int w, Scratch& s) const {
+  Scalar lambda[2];
+  for (int pass = 0; pass < settings.position_iterations; ++pass)
+    for (int ci = built_.world_start[w]; ci < built_.world_start[w + 1]; ++ci) {
+      const MaximalConstraint& c = built_.constraints[ci];
+      if (c.compliance[0] > 0 || c.compliance[1] > 0) continue;  // (a compliant one is a spring: its drift is its own)
+      lambda[0] = lambda[1] = 0;
+      hold_constraint(model_, c, slot(c.a), slot(c.b), HoldSettings{}, lambda, s.bodies);
+    }
 }
 
 }  // namespace novaphy

@@ -2,7 +2,8 @@
 //   per world: external forces (gravity, body_f, joint_f, gyroscopic) -> velocity rows: each constraint's locked,
 //   limited and driven axes (engine/solver/maximal/constraints.h), each contact's normal and friction rows ->
 //   PGS sweeps (sequential impulses, Catto 2005) -> semi-implicit integration of every body (x += dt v, q turned by
-//   dt w, renormalised)
+//   dt w, renormalised) -> position passes over the rigid joints (engine/solver/maximal/corrections.h: the drift the
+//   rows' Baumgarte term leaves at speed taken out of the positions, the velocities left alone)
 // The rows are the parts SolverFeatherstone's rows are (engine/solver/parts/: ContactRows, LimitRow, EqualityRow),
 // with Jacobians over the two bodies' velocities; a compliant or driven axis is a soft row (AxisSpring taken
 // implicitly). Worlds are stepped one per thread at a time (engine/solver/maximal/maximal_solver.h).
@@ -54,6 +55,8 @@ class SolverSemiImplicit : public MaximalSolver {
   // the row's inverse inertias and effective mass (the bodies' and cfm), and its starting impulse (applied once all
   // rows are made)
   void finish_row(BodyRow& row, Scratch& s, Scalar start) const;
+  // settings.position_iterations passes moving world w's bodies back where their rigid joints allow (positions only)
+  void hold_joints(int w, Scratch& s) const;
   // the sweeps; returns whether they converged
   bool sweep(Scratch& s) const;
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/solver/maximal/corrections.h"
 #include "engine/solver/parts/contact_rows.h"
 
 namespace novaphy {
@@ -24,82 +25,6 @@ SolverXPBD::SolverXPBD(const Model& model, const SolverXPBDSettings& settings_)
   scratch_.resize(threads_);
 }
 
-Scalar SolverXPBD::inverse_mass(int i, const Vec3& p, const Vec3& n, const Scratch& s) const {
-  if (i < 0) return 0;
-  const BodyMotion& m = s.bodies[i];
-  if (m.inv_mass == 0) return 0;
-  const Vec3 rn = (p - m.x).cross(n);
-  return m.inv_mass + rn.dot(m.inv_inertia * rn);
-}
-
-void SolverXPBD::apply_impulse(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& p, Scratch& s) const {
-  if (b >= 0 && s.bodies[b].inv_mass > 0) {
-    BodyMotion& B = s.bodies[b];
-    B.v += B.inv_mass * p;
-    B.w += B.inv_inertia * (pb - B.x).cross(p);
-  }
-  if (a >= 0 && s.bodies[a].inv_mass > 0) {
-    BodyMotion& A = s.bodies[a];
-    A.v -= A.inv_mass * p;
-    A.w -= A.inv_inertia * (pa - A.x).cross(p);
-  }
-}
-
-Scalar SolverXPBD::push(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& n, Scalar C, Scalar alpha_h,
-                        Scalar* lambda, Scalar relaxation, Scratch& s) const {
-  const Scalar w = inverse_mass(a, pa, n, s) + inverse_mass(b, pb, n, s);
-  if (w + alpha_h < kTiny) return 0;
-  const Scalar change = (-C - alpha_h * *lambda) / (w + alpha_h);
-  *lambda += change;
-  const Vec3 p = (relaxation * change) * n;
-  if (b >= 0 && s.bodies[b].inv_mass > 0) {
-    BodyMotion& B = s.bodies[b];
-    B.x += B.inv_mass * p;
-    B.q = turned_slightly(B.q, B.inv_inertia * (pb - B.x).cross(p));
-    B.orient();
-  }
-  if (a >= 0 && s.bodies[a].inv_mass > 0) {
-    BodyMotion& A = s.bodies[a];
-    A.x -= A.inv_mass * p;
-    A.q = turned_slightly(A.q, -(A.inv_inertia * (pa - A.x).cross(p)));
-    A.orient();
-  }
-  return change;
-}
-
-void SolverXPBD::turn(int a, int b, const Vec3& n, Scalar C, Scalar alpha_h, Scalar* lambda, Scalar relaxation,
-                      Scratch& s) const {
-  Scalar w = 0;
-  if (a >= 0) w += n.dot(s.bodies[a].inv_inertia * n);
-  if (b >= 0) w += n.dot(s.bodies[b].inv_inertia * n);
-  if (w + alpha_h < kTiny) return;
-  const Scalar change = (-C - alpha_h * *lambda) / (w + alpha_h);
-  *lambda += change;
-  const Vec3 p = (relaxation * change) * n;
-  if (b >= 0 && s.bodies[b].inv_mass > 0) {
-    BodyMotion& B = s.bodies[b];
-    B.q = turned_slightly(B.q, B.inv_inertia * p);
-    B.orient();
-  }
-  if (a >= 0 && s.bodies[a].inv_mass > 0) {
-    BodyMotion& A = s.bodies[a];
-    A.q = turned_slightly(A.q, -(A.inv_inertia * p));
-    A.orient();
-  }
-}
-
-Scalar SolverXPBD::correct_position(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& correction,
-                                    Scalar alpha_h, Scalar* lambda, Scalar relaxation, Scratch& s) const {
-  const Scalar c = correction.norm();
-  return c < kTiny ? 0 : push(a, b, pa, pb, correction / c, -c, alpha_h, lambda, relaxation, s);
-}
-
-void SolverXPBD::correct_rotation(int a, int b, const Vec3& correction, Scalar alpha_h, Scalar* lambda,
-                                  Scalar relaxation, Scratch& s) const {
-  const Scalar c = correction.norm();
-  if (c >= kTiny) turn(a, b, correction / c, -c, alpha_h, lambda, relaxation, s);
-}
-
 void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) const {
   forces(w, step.in, step.control, h, s.bodies);
   for (size_t i = 0; i < s.bodies.size(); ++i) {
@@ -114,60 +39,31 @@ void SolverXPBD::predict(int w, const StepInput& step, Scalar h, Scratch& s) con
 void SolverXPBD::solve_constraint(const MaximalConstraint& c, const AxisSpring* springs, const State& in, Scalar h,
                                   Scalar* lambda, Scratch& s) const {
   const int a = slot(c.a), b = slot(c.b);
-  auto frames = [&](Transform& frame_a, Transform& frame_b) {
-    frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
-    frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
-  };
   const Scalar h2 = h * h;
-  const Scalar alpha_linear = (c.compliance[0] + settings.joint_linear_compliance) / h2;
-  const Scalar alpha_angular = (c.compliance[1] + settings.joint_angular_compliance) / h2;
+  HoldSettings hold;
+  hold.alpha_linear = (c.compliance[0] + settings.joint_linear_compliance) / h2;
+  hold.alpha_angular = (c.compliance[1] + settings.joint_angular_compliance) / h2;
+  hold.relax_linear = settings.joint_linear_relaxation;
+  hold.relax_angular = settings.joint_angular_relaxation;
+  hold_constraint(model_, c, a, b, hold, lambda, s.bodies);
   Transform frame_a, frame_b;
-  frames(frame_a, frame_b);
-  if (c.distance) {
-    const Vec3 gap = frame_b.p - frame_a.p;
-    const Scalar length = gap.norm();
-    if (length < kTiny) return;
-    const Scalar held = std::clamp(length, c.lower[3], c.upper[3]);
-    push(a, b, frame_a.p, frame_b.p, gap / length, length - held, alpha_linear, &lambda[1],
-         settings.joint_linear_relaxation, s);
-    return;
-  }
   Scalar coordinate[6];
-  constraint_coordinates(c, frame_a, frame_b, coordinate);
-  // an axis's error: how far its coordinate is past what the axis allows
-  auto error = [&](int k) {
-    switch (c.mode[k]) {
-      case AxisMode::Free: return Scalar(0);
-      case AxisMode::Locked: return coordinate[k] - c.lower[k];
-      case AxisMode::Limited: return coordinate[k] - std::clamp(coordinate[k], c.lower[k], c.upper[k]);
-    }
-    return Scalar(0);
-  };
-  const Vec3 turn_error(error(0), error(1), error(2));
-  if (!turn_error.isZero()) {
-    correct_rotation(a, b, -(frame_a.q * turn_error), alpha_angular, &lambda[0], settings.joint_angular_relaxation, s);
-    frames(frame_a, frame_b);
-    constraint_coordinates(c, frame_a, frame_b, coordinate);
-  }
-  const Vec3 offset_error(error(3), error(4), error(5));
-  if (!offset_error.isZero())
-    correct_position(a, b, frame_a.p, frame_b.p, -(frame_a.q * offset_error), alpha_linear, &lambda[1],
-                     settings.joint_linear_relaxation, s);
   // the stiffnesses along free and limited axes (drives, springs, servos) as constraints of compliance 1 / K towards
   // their rest
   for (int k = 0; k < 6; ++k) {
     const AxisSpring& spring = springs[k];
     if (c.mode[k] == AxisMode::Locked || !(spring.stiffness > 0)) continue;
-    frames(frame_a, frame_b);
+    frame_a = a >= 0 ? s.bodies[a].frame(model_, c.a) * c.X_a : c.X_a;
+    frame_b = b >= 0 ? s.bodies[b].frame(model_, c.b) * c.X_b : c.X_b;
     constraint_coordinates(c, frame_a, frame_b, coordinate);
     const Scalar x = wound(c, k, in, coordinate[k]);
     const Vec3 axis = frame_a.q * Vec3::Unit(k % 3);
     const Scalar alpha = 1 / (spring.stiffness * h2);
     if (k < 3)
-      turn(a, b, axis, x - spring.rest(), alpha, &lambda[2 + k], settings.joint_angular_relaxation, s);
+      turn(s.bodies, a, b, axis, x - spring.rest(), alpha, &lambda[2 + k], settings.joint_angular_relaxation);
     else
-      push(a, b, frame_b.p, frame_b.p, axis, x - spring.rest(), alpha, &lambda[2 + k], settings.joint_linear_relaxation,
-           s);
+      push(s.bodies, a, b, frame_b.p, frame_b.p, axis, x - spring.rest(), alpha, &lambda[2 + k],
+           settings.joint_linear_relaxation);
   }
 }
 
@@ -179,7 +75,8 @@ void SolverXPBD::solve_contact(XContact& c, Scratch& s) const {
   const Scalar depth = (pa - pb).dot(c.n) - c.allowed;
   if (depth <= 0) return;
   Scalar unused = 0;
-  c.lambda_n += correct_position(c.a, c.b, pa, pb, depth * c.n, 0, &unused, settings.rigid_contact_relaxation, s);
+  c.lambda_n +=
+      correct_position(s.bodies, c.a, c.b, pa, pb, depth * c.n, 0, &unused, settings.rigid_contact_relaxation);
 }
 
 void SolverXPBD::hold_contact(XContact& c, Scratch& s) const {
@@ -197,9 +94,10 @@ void SolverXPBD::hold_contact(XContact& c, Scratch& s) const {
   const Scalar length = slide.norm();
   if (length < kTiny) return;
   const Vec3 t = slide / length;
-  const Scalar w = inverse_mass(c.a, pa_now, t, s) + inverse_mass(c.b, pb_now, t, s);
+  const Scalar w = inverse_mass(s.bodies, c.a, pa_now, t) + inverse_mass(s.bodies, c.b, pb_now, t);
   if (w < kTiny || c.lambda_t + length / w >= c.mu * c.lambda_n) return;
-  c.lambda_t += correct_position(c.a, c.b, pa_now, pb_now, slide, 0, &unused, settings.rigid_contact_relaxation, s);
+  c.lambda_t +=
+      correct_position(s.bodies, c.a, c.b, pa_now, pb_now, slide, 0, &unused, settings.rigid_contact_relaxation);
 }
 
 void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
@@ -221,8 +119,9 @@ void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
       Vec3 pa, pb;
       const Scalar vn = c.n.dot(relative(c, pa, pb));
       const Scalar e = settings.enable_restitution && std::abs(c.approach) > 2 * g.norm() * h ? c.restitution : 0;
-      const Scalar inv = inverse_mass(c.a, pa, c.n, s) + inverse_mass(c.b, pb, c.n, s);
-      if (inv > kTiny) apply_impulse(c.a, c.b, pa, pb, ((std::max(-e * c.approach, Scalar(0)) - vn) / inv) * c.n, s);
+      const Scalar inv = inverse_mass(s.bodies, c.a, pa, c.n) + inverse_mass(s.bodies, c.b, pb, c.n);
+      if (inv > kTiny)
+        apply_impulse(s.bodies, c.a, c.b, pa, pb, ((std::max(-e * c.approach, Scalar(0)) - vn) / inv) * c.n);
     }
   // dynamic friction: an impulse against the sliding of at most mu times the normal impulse (lambda_n / h)
   for (const XContact& c : s.contacts) {
@@ -233,8 +132,8 @@ void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
     const Scalar speed = slide.norm();
     if (speed < kTiny) continue;
     const Vec3 t = slide / speed;
-    const Scalar inv = inverse_mass(c.a, pa, t, s) + inverse_mass(c.b, pb, t, s);
-    if (inv > kTiny) apply_impulse(c.a, c.b, pa, pb, -std::min(c.mu * c.lambda_n / h, speed / inv) * t, s);
+    const Scalar inv = inverse_mass(s.bodies, c.a, pa, t) + inverse_mass(s.bodies, c.b, pb, t);
+    if (inv > kTiny) apply_impulse(s.bodies, c.a, c.b, pa, pb, -std::min(c.mu * c.lambda_n / h, speed / inv) * t);
   }
   // each axis's damper and constant force, implicitly over h, at the substep's end (its stiffness was a constraint)
   for (int ci = built_.world_start[w]; ci < built_.world_start[w + 1]; ++ci) {
@@ -256,7 +155,7 @@ void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
       } else {
         x_dot = axis.dot((b >= 0 ? s.bodies[b].point_velocity(p) : Vec3::Zero()) -
                          (a >= 0 ? s.bodies[a].point_velocity(p) : Vec3::Zero()));
-        inv = inverse_mass(a, p, axis, s) + inverse_mass(b, p, axis, s);
+        inv = inverse_mass(s.bodies, a, p, axis) + inverse_mass(s.bodies, b, p, axis);
       }
       // (D v_next = force - lambda / h: a damper of the force's own speed)
       const Scalar impulse = spring.damping > 0
@@ -266,7 +165,7 @@ void SolverXPBD::velocity_pass(int w, Scalar h, Scratch& s) const {
         if (b >= 0) s.bodies[b].w += s.bodies[b].inv_inertia * (impulse * axis);
         if (a >= 0) s.bodies[a].w -= s.bodies[a].inv_inertia * (impulse * axis);
       } else {
-        apply_impulse(a, b, p, p, impulse * axis, s);
+        apply_impulse(s.bodies, a, b, p, p, impulse * axis);
       }
     }
   }

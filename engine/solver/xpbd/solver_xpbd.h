@@ -59,24 +59,6 @@ class SolverXPBD : public MaximalSolver {
   void solve_contact(XContact& c, Scratch& s) const;
   void hold_contact(XContact& c, Scratch& s) const;
   void velocity_pass(int w, Scalar h, Scratch& s) const;
-  // a scalar constraint C along the unit direction n (C grows as b's point pb moves along n relative to a's point pa)
-  // of compliance alpha_h (alpha / h^2), corrected towards 0 with its multiplier accumulating into *lambda (XPBD's
-  // delta lambda = (-C - alpha_h lambda) / (w_a + w_b + alpha_h)); returns the multiplier's change
-  Scalar push(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& n, Scalar C, Scalar alpha_h, Scalar* lambda,
-              Scalar relaxation, Scratch& s) const;
-  // the same for a rotation of b about n relative to a
-  void turn(int a, int b, const Vec3& n, Scalar C, Scalar alpha_h, Scalar* lambda, Scalar relaxation, Scratch& s) const;
-  // a position correction moving b's point pb by the vector `correction` relative to a's point pa (push along its
-  // direction, by its length)
-  Scalar correct_position(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& correction, Scalar alpha_h,
-                          Scalar* lambda, Scalar relaxation, Scratch& s) const;
-  // a rotation turning b by the rotation vector `correction` relative to a
-  void correct_rotation(int a, int b, const Vec3& correction, Scalar alpha_h, Scalar* lambda, Scalar relaxation,
-                        Scratch& s) const;
-  // an impulse p on b at its point pb (a: -p at pa)
-  void apply_impulse(int a, int b, const Vec3& pa, const Vec3& pb, const Vec3& p, Scratch& s) const;
-  // the generalised inverse mass of slot i at point p along the unit direction n (0 for the world)
-  Scalar inverse_mass(int i, const Vec3& p, const Vec3& n, const Scratch& s) const;
 
   std::vector<Scratch> scratch_;  // per thread
 };

@@ -30,8 +30,11 @@ def build(*, solver="featherstone"):
         offset = PIVOT if i == 0 else np.array([LINK_LENGTH, 0.0, 0.0])
         builder.add_joint_revolute(parent, link, parent_xform=novaphy.Transform(offset), axis=[0, 0, 1], damping=0.002)
         parent = link
-    # XPBD: two passes a substep let the whipping links' hinge axes flip over out of the plane; eight hold them
-    return Simulation(builder.finalize(), dt=DT, solver=solver, iterations=8)
+    sim = Simulation(builder.finalize(), dt=DT, solver=solver)
+    # SemiImplicit: two position passes a step keep the whipping links joined within millimetres (without, its rows'
+    # erp lets them open by 2 cm: docs/solvers.md)
+    sim.set_setting("position_iterations", 2)
+    return sim
 
 
 def link_end(pose):
