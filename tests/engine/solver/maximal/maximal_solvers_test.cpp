@@ -355,12 +355,6 @@ TEST(MaximalSolvers, ModelsTheyDoNotModelAreRefused) {
   EXPECT_NOVAPHY_ERROR(SolverXPBD{model}, "SolverXPBD does not model fixed tendons");
 }
 
-}  // namespace
-}  // namespace novaphy
-
-namespace novaphy {
-namespace {
-
 // SolverSemiImplicit's position passes take out of the positions the drift its rows leave: a chain of hinged links
 // whipping down from level opens its joints less with them
 TEST(MaximalSolvers, PositionPassesHoldAWhippingChainCloser) {
