@@ -8,7 +8,6 @@
 #include <cstring>
 #include <map>
 #include <optional>
-#include <sstream>
 #include <type_traits>
 
 #include "engine/model/actuator.h"
