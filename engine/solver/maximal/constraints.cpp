@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "engine/model/error.h"
+#include "engine/model/group_by_key.h"
 #include "engine/solver/parts/equality_rows.h"
 #include "kernels/joint.h"
 
@@ -154,12 +155,10 @@ MaximalConstraints MaximalConstraints::of(const Model& model, const std::string&
     out.world_start.push_back(static_cast<int>(out.constraints.size()));
   }
   auto group = [&](int count, auto world_of, std::vector<int>& items, std::vector<int>& start) {
-    start.assign(model.world_count + 1, 0);
-    for (int i = 0; i < count; ++i) ++start[world_of(i) + 1];
-    for (int w = 0; w < model.world_count; ++w) start[w + 1] += start[w];
-    items.assign(count, 0);
-    std::vector<int> next(start.begin(), start.end() - 1);
-    for (int i = 0; i < count; ++i) items[next[world_of(i)]++] = i;
+    start.resize(model.world_count + 1);
+    items.resize(count);
+    std::vector<int> next(model.world_count + 1);
+    group_by_key(count, model.world_count, world_of, start.data(), items.data(), next.data());
   };
   group(
       model.body_count, [&](int b) { return model.body_world[b]; }, out.world_bodies, out.body_start);

@@ -8,6 +8,7 @@
 #include "engine/model/actuator.h"
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
+#include "engine/model/group_by_key.h"
 #include "engine/solver/step_arguments.h"
 #include "kernels/joint.h"
 
@@ -30,14 +31,14 @@ MaximalSolver::MaximalSolver(const Model& model, const char* name)
   for (int w = 0; w < model.world_count; ++w)
     for (int i = built_.body_start[w]; i < built_.body_start[w + 1]; ++i)
       body_slot_[built_.world_bodies[i]] = i - built_.body_start[w];
-  dof_actuator_start_.assign(model.joint_dof_count + 1, 0);
-  for (int u = 0; u < model.actuator_count; ++u)
-    ++dof_actuator_start_[model.joint_qd_start[model.actuator_joint[u]] + 1];
-  for (int d = 0; d < model.joint_dof_count; ++d) dof_actuator_start_[d + 1] += dof_actuator_start_[d];
-  dof_actuators_.assign(model.actuator_count, 0);
-  std::vector<int> next(dof_actuator_start_.begin(), dof_actuator_start_.end() - 1);
-  for (int u = 0; u < model.actuator_count; ++u)
-    dof_actuators_[next[model.joint_qd_start[model.actuator_joint[u]]]++] = u;
+  dof_actuator_start_.resize(model.joint_dof_count + 1);
+  dof_actuators_.resize(model.actuator_count);
+  std::vector<int> next(model.joint_dof_count + 1);
+  group_by_key(
+      model.actuator_count, model.joint_dof_count, [&](int u) { return model.joint_qd_start[model.actuator_joint[u]]; },
+      dof_actuator_start_.data(), dof_actuators_.data(), next.data());
+  contact_start_.resize(model.world_count + 1);
+  contact_next_.resize(model.world_count + 1);
   diverged_.assign(model.world_count, 0);
   for (int j = 0; j < model.joint_count; ++j) {
     Scalar armature = 0, friction = 0;
@@ -106,19 +107,14 @@ void MaximalSolver::check_step(const State& in, const State& out, const Control&
 }
 
 void MaximalSolver::list_contacts(const Contacts& contacts) {
-  const int n = contacts.contact_count;
+  // (a contact between two static shapes, which collide does not make, is no world's)
   auto world_of = [&](int c) {
     const int a = contacts.contact_body_a[c], b = contacts.contact_body_b[c];
-    return model_.body_world[a >= 0 ? a : b];
+    return a >= 0 ? model_.body_world[a] : b >= 0 ? model_.body_world[b] : -1;
   };
-  contact_start_.assign(model_.world_count + 1, 0);
-  for (int c = 0; c < n; ++c)
-    if (contacts.contact_body_a[c] >= 0 || contacts.contact_body_b[c] >= 0) ++contact_start_[world_of(c) + 1];
-  for (int w = 0; w < model_.world_count; ++w) contact_start_[w + 1] += contact_start_[w];
-  world_contacts_.resize(contact_start_.back());
-  std::vector<int> next(contact_start_.begin(), contact_start_.end() - 1);
-  for (int c = 0; c < n; ++c)
-    if (contacts.contact_body_a[c] >= 0 || contacts.contact_body_b[c] >= 0) world_contacts_[next[world_of(c)]++] = c;
+  if (static_cast<int>(world_contacts_.size()) < contacts.contact_count) world_contacts_.resize(contacts.contact_count);
+  group_by_key(contacts.contact_count, model_.world_count, world_of, contact_start_.data(), world_contacts_.data(),
+               contact_next_.data());
 }
 
 BodyMotion MaximalSolver::start_motion(const State& in, int b) const {

@@ -116,8 +116,8 @@ class MaximalSolver {
   std::vector<int> shape_material_;
   std::vector<Scalar> shape_weight_;
   std::uint64_t parameters_read_ = 0;
-  std::vector<int> dof_actuator_start_, dof_actuators_;  // the actuators of each dof
-  std::vector<int> contact_start_, world_contacts_;
+  std::vector<int> dof_actuator_start_, dof_actuators_;             // the actuators of each dof
+  std::vector<int> contact_start_, world_contacts_, contact_next_;  // this step's contacts by world (group_by_key)
   std::vector<std::uint8_t> diverged_;
   std::vector<std::string> ignored_;
   CallFlag busy_;
