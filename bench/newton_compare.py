@@ -80,7 +80,19 @@ def novaphy_go1():
     return b
 
 
-class NovaPhyRun:
+class Run:
+    """What both engines' runs share: the first step at which a run from the start goes non-finite."""
+
+    def first_nonfinite(self, steps):
+        self.reset()
+        for i in range(steps):
+            self.run(1)
+            if not self.finite():
+                return i + 1
+        return None
+
+
+class NovaPhyRun(Run):
     def __init__(self, scene, solver, worlds, dt_scale=1):
         one = novaphy_go1() if scene == "go1" else novaphy_chain(CHAIN if scene == "chain" else ROPE)
         if worlds > 1:
@@ -121,14 +133,6 @@ class NovaPhyRun:
     def finite(self):
         return bool(np.isfinite(self.state.body_q).all() and np.isfinite(self.state.body_qd).all())
 
-    def first_nonfinite(self, steps):
-        self.reset()
-        for i in range(steps):
-            self.run(1)
-            if not self.finite():
-                return i + 1
-        return None
-
 
 # ----------------------------------------------------------------------------------------------------- Newton side
 def newton_chain(spec):
@@ -164,7 +168,7 @@ def newton_go1():
     return b, (q, ctrl)
 
 
-class NewtonRun:
+class NewtonRun(Run):
     def __init__(self, scene, solver, worlds):
         wp.set_device("cpu")
         one, key = newton_go1() if scene == "go1" else newton_chain(CHAIN if scene == "chain" else ROPE)
@@ -227,14 +231,6 @@ class NewtonRun:
 
     def finite(self):
         return bool(np.isfinite(self.s0.body_q.numpy()).all() and np.isfinite(self.s0.body_qd.numpy()).all())
-
-    def first_nonfinite(self, steps):
-        self.reset()
-        for i in range(steps):
-            self.run(1)
-            if not self.finite():
-                return i + 1
-        return None
 
 
 # ------------------------------------------------------------------------------------------------------ measuring

@@ -48,9 +48,25 @@ std::string setting_range(Low lowest, High highest) {
   }
 }
 
-// one line of a settings table (engine/solver/settings.h) bound, and described for Settings.fields(), in a scope that
-// names the struct Settings and holds py::class_<Settings> settings_class (NOVAPHY_BIND_SETTING) or a py::list
-// fields (NOVAPHY_DESCRIBE_SETTING)
+// the settings struct Type (read-write, one property a setting) of field table TABLE (engine/solver/settings.h) as
+// the Python class of that name, with its static fields(): per setting its name, C++ type, default, accepted range,
+// unit and doc
+#define NOVAPHY_BIND_SETTINGS_CLASS(module, Type, TABLE, doc)                                          \
+  do {                                                                                                 \
+    using Settings = Type;                                                                             \
+    py::class_<Settings> settings_class(module, #Type, doc);                                           \
+    settings_class.def(py::init<>());                                                                  \
+    TABLE(NOVAPHY_BIND_SETTING)                                                                        \
+    settings_class.def_static(                                                                         \
+        "fields",                                                                                      \
+        [] {                                                                                           \
+          py::list fields;                                                                             \
+          TABLE(NOVAPHY_DESCRIBE_SETTING)                                                              \
+          return fields;                                                                               \
+        },                                                                                             \
+        "The settings table: per setting its name, C++ type, default, accepted range, unit and doc."); \
+  } while (0)
+// (one line of a table, in NOVAPHY_BIND_SETTINGS_CLASS)
 #define NOVAPHY_BIND_SETTING(type, name, value, lowest, highest, unit, doc) \
   settings_class.def_readwrite(#name, &Settings::name, doc);
 #define NOVAPHY_DESCRIBE_SETTING(type, name, value, lowest, highest, unit, doc)                                  \

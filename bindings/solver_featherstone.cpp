@@ -19,18 +19,8 @@ void bind_solver_featherstone(py::module_& m) {
       .value("Reset", DivergencePolicy::Reset,
              "the articulation restarts from the reset state (set_reset_state, set_reset_keyframe; else joint_q0 at "
              "rest)");
-  py::class_<Settings> settings_class(m, "SolverFeatherstoneSettings",
-                                      "Every knob of SolverFeatherstone (docs/settings.md); checked at each step.");
-  settings_class.def(py::init<>());
-  NOVAPHY_SOLVER_SETTINGS(NOVAPHY_BIND_SETTING)
-  settings_class.def_static(
-      "fields",
-      [] {
-        py::list fields;
-        NOVAPHY_SOLVER_SETTINGS(NOVAPHY_DESCRIBE_SETTING)
-        return fields;
-      },
-      "The settings table: per setting its name, C++ type, default, accepted range, unit and doc.");
+  NOVAPHY_BIND_SETTINGS_CLASS(m, SolverFeatherstoneSettings, NOVAPHY_SOLVER_SETTINGS,
+                              "Every knob of SolverFeatherstone (docs/settings.md); checked at each step.");
 
   py::class_<JointSupportMatrix>(m, "JointSupportMatrix", "Which joint types a solver enforces.")
       .def("supports", &JointSupportMatrix::supports, py::arg("joint"))

@@ -49,36 +49,10 @@ void def_maximal(py::class_<Solver>& c) {
 }  // namespace
 
 void bind_solver_maximal(py::module_& m) {
-  {
-    using Settings = SolverSemiImplicitSettings;
-    py::class_<Settings> settings_class(m, "SolverSemiImplicitSettings",
-                                        "Every knob of SolverSemiImplicit (docs/settings.md); checked at each step.");
-    settings_class.def(py::init<>());
-    NOVAPHY_SEMI_IMPLICIT_SETTINGS(NOVAPHY_BIND_SETTING)
-    settings_class.def_static(
-        "fields",
-        [] {
-          py::list fields;
-          NOVAPHY_SEMI_IMPLICIT_SETTINGS(NOVAPHY_DESCRIBE_SETTING)
-          return fields;
-        },
-        "The settings table: per setting its name, C++ type, default, accepted range, unit and doc.");
-  }
-  {
-    using Settings = SolverXPBDSettings;
-    py::class_<Settings> settings_class(m, "SolverXPBDSettings",
-                                        "Every knob of SolverXPBD (docs/settings.md); checked at each step.");
-    settings_class.def(py::init<>());
-    NOVAPHY_XPBD_SETTINGS(NOVAPHY_BIND_SETTING)
-    settings_class.def_static(
-        "fields",
-        [] {
-          py::list fields;
-          NOVAPHY_XPBD_SETTINGS(NOVAPHY_DESCRIBE_SETTING)
-          return fields;
-        },
-        "The settings table: per setting its name, C++ type, default, accepted range, unit and doc.");
-  }
+  NOVAPHY_BIND_SETTINGS_CLASS(m, SolverSemiImplicitSettings, NOVAPHY_SEMI_IMPLICIT_SETTINGS,
+                              "Every knob of SolverSemiImplicit (docs/settings.md); checked at each step.");
+  NOVAPHY_BIND_SETTINGS_CLASS(m, SolverXPBDSettings, NOVAPHY_XPBD_SETTINGS,
+                              "Every knob of SolverXPBD (docs/settings.md); checked at each step.");
 
   py::class_<SolverSemiImplicit> semi(
       m, "SolverSemiImplicit",
