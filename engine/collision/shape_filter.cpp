@@ -1,6 +1,7 @@
 #include "engine/collision/shape_filter.h"
 
 #include "engine/model/error.h"
+#include "kernels/joint.h"
 
 namespace novaphy {
 
@@ -34,14 +35,38 @@ void ShapeFilter::list_exclusions() {
 
 void ShapeFilter::link_bodies() {
   const Model& model = model_;
-  body_parent_.assign(model.body_count, -1);
+  std::vector<int> parent(model.body_count, -1), joint_of(model.body_count, -1);
   body_articulation_.assign(model.body_count, -1);
   for (int j = 0; j < model.joint_count; ++j) {
-    // the parent through massless links (a MuJoCo body with several joints is a chain of them)
-    int parent = model.joint_parent[j];
-    while (parent >= 0 && model.body_mass[parent] == 0) parent = body_parent_[parent];
-    body_parent_[model.joint_child[j]] = parent;
-    body_articulation_[model.joint_child[j]] = model.joint_articulation[j];
+    const int child = model.joint_child[j];
+    joint_of[child] = j;
+    parent[child] = model.joint_parent[j];
+    body_articulation_[child] = model.joint_articulation[j];
+  }
+  // a body's weld: its parent's where a Fixed joint holds it (the world's: -1), else itself; up the chain, memoised
+  // (a body's parent may come after it in the model)
+  constexpr int kUnknown = -2;
+  body_weld_.assign(model.body_count, kUnknown);
+  std::vector<int> path;
+  for (int b = 0; b < model.body_count; ++b) {
+    int at = b;
+    while (at >= 0 && body_weld_[at] == kUnknown && joint_of[at] >= 0 &&
+           static_cast<JointType>(model.joint_type[joint_of[at]]) == JointType::Fixed) {
+      path.push_back(at);
+      at = parent[at];
+    }
+    const int weld = at < 0 ? -1 : body_weld_[at] == kUnknown ? at : body_weld_[at];
+    if (at >= 0) body_weld_[at] = weld;
+    for (int p : path) body_weld_[p] = weld;
+    path.clear();
+  }
+  // a weld's parent: the weld of the body above it, past massless links
+  weld_parent_.assign(model.body_count, -1);
+  for (int b = 0; b < model.body_count; ++b) {
+    if (body_weld_[b] != b) continue;
+    int above = parent[b];
+    while (above >= 0 && model.body_mass[above] == 0) above = parent[above];
+    weld_parent_[b] = above < 0 ? -1 : body_weld_[above];
   }
 }
 

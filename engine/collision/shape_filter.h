@@ -22,8 +22,11 @@ class ShapeFilter {
   ShapeFilter(const Model& model, bool self_collision);
 
   // shapes a and b may collide: on different bodies, in one world (or either in none), each in a group the other's
-  // mask takes (both under MuJoCo's rule: either), not an excluded pair, not a parent body and its child, and not of
-  // one articulation where self_collision is off (inline: the broad phase's test of every pair it lets through)
+  // mask takes (both under MuJoCo's rule: either), not an excluded pair, not on bodies welded together, not a body
+  // and its parent, and not of one articulation where self_collision is off. Welded, as MuJoCo's filter: a body held
+  // to its parent by a Fixed joint counts as that parent (to the world: as the world, so it meets only moving
+  // bodies), and the parent rule applies to those it counts as (inline: the broad phase's test of every pair it lets
+  // through)
   bool may_collide(int a, int b) const {
     const int ba = model_.shape_body[a], bb = model_.shape_body[b];
     if (ba == bb) return false;
@@ -33,8 +36,10 @@ class ShapeFilter {
     const bool ba_ = (model_.shape_collision_group[b] & model_.shape_collision_mask[a]) != 0;
     if (model_.collision_filter == CollisionFilter::Mujoco ? !(ab || ba_) : !(ab && ba_)) return false;
     if (excluded(a, b)) return false;
-    if (ba < 0 || bb < 0) return true;
-    if (body_parent_[ba] == bb || body_parent_[bb] == ba) return false;
+    const int weld_a = ba < 0 ? -1 : body_weld_[ba], weld_b = bb < 0 ? -1 : body_weld_[bb];
+    if (weld_a == weld_b) return false;
+    if (weld_a < 0 || weld_b < 0) return true;
+    if (weld_parent_[weld_a] == weld_b || weld_parent_[weld_b] == weld_a) return false;
     return self_collision_ || body_articulation_[ba] != body_articulation_[bb];
   }
   // shape s collides with no shape (shape_visual_only)
@@ -49,7 +54,7 @@ class ShapeFilter {
   // the constructor's stages, in this order:
   // exclude_start_ and exclude_other_ from the model's excluded shape pairs
   void list_exclusions();
-  // each body's parent (skipping massless links) and articulation
+  // each body's weld (the body it counts as), its weld's parent's weld, and its articulation
   void link_bodies();
 
   const Model& model_;
@@ -57,7 +62,9 @@ class ShapeFilter {
   // per shape s, the shapes it never collides with, ascending: exclude_other_[exclude_start_[s] .. exclude_start_[s +
   // 1])
   std::vector<int> exclude_start_, exclude_other_;
-  std::vector<int> body_parent_;  // parent body of each body through its joint (skipping massless links), -1
+  // per body: the body it counts as, up its Fixed joints (-1: the world); per such body, what its parent (through
+  // its joint, skipping massless links: a MuJoCo body of several joints is a chain of them) counts as
+  std::vector<int> body_weld_, weld_parent_;
   std::vector<int> body_articulation_;
 };
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -115,18 +116,18 @@ inline void check_actuator(const std::string& item, const ActuatorOptions& optio
   check_range(item, "force range", options.force_lower, options.force_upper);
 }
 
-// a shape's solref, solimp, solmix, margin and gap within MuJoCo's ranges (ShapeOptions)
+// a shape's solref, solimp, solmix, margin and gap as MuJoCo takes them (ShapeOptions)
 inline void check_softness(const std::string& item, const ShapeOptions& o) {
   const Scalar t = o.solref[0], r = o.solref[1];
   if (!((t == 0 && r == 0) || (t > 0 && r > 0 && std::isfinite(t) && std::isfinite(r)) ||
         (t < 0 && r <= 0 && std::isfinite(t) && std::isfinite(r))))
     fail(item, ": solref must be (time constant > 0, damping ratio > 0), (-stiffness < 0, -damping <= 0) or (0, 0) ",
          "for a rigid contact, got (", t, ", ", r, ")");
+  // any finite solimp: MuJoCo accepts them and clamps each use (contact_impedance, contact_softness.h)
   const auto& i = o.solimp;
-  if (!(i[0] >= 0 && i[0] <= 1 && i[1] >= 0 && i[1] <= 1 && i[2] >= 0 && std::isfinite(i[2]) && i[3] >= 0 &&
-        i[3] <= 1 && i[4] >= 1 && std::isfinite(i[4])))
-    fail(item, ": solimp must be (dmin, dmax in [0, 1], width >= 0, midpoint in [0, 1], power >= 1), got (", i[0], ", ",
-         i[1], ", ", i[2], ", ", i[3], ", ", i[4], ")");
+  if (!std::all_of(i.begin(), i.end(), [](Scalar x) { return std::isfinite(x); }))
+    fail(item, ": solimp must be five finite numbers (dmin, dmax, width, midpoint, power), got (", i[0], ", ", i[1],
+         ", ", i[2], ", ", i[3], ", ", i[4], ")");
   check_nonnegative(item, "solmix", o.solmix);
   check_nonnegative(item, "margin", o.margin);
   check_nonnegative(item, "gap", o.gap);

@@ -231,5 +231,5 @@ def test_new_shapes_and_soft_contacts_from_python():
     assert 0.09 < heights[2] < 0.1 - solver.settings.linear_slop  # soft: deeper than a rigid contact's slop
     with pytest.raises(ValueError, match="mesh 1 \\('flat'\\): the points span no volume"):
         b.add_mesh(cube * [1, 0, 1], name="flat")
-    with pytest.raises(ValueError, match="solimp must be"):
-        b.add_shape_sphere(can, 0.1, solimp=(0.9, 1.5, 0.001, 0.5, 2))
+    with pytest.raises(ValueError, match="solimp must be five finite numbers"):
+        b.add_shape_sphere(can, 0.1, solimp=(0.9, float("nan"), 0.001, 0.5, 2))

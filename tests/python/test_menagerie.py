@@ -21,7 +21,6 @@ NOT_YET = {
     "i2rt_yam": "gravity compensation (gravcomp) has no translation for MuJoCo 2.2.2 and is not modelled",
     "robotiq_2f85": "a fixed tendon over joints in separate subtrees joins articulations not one after another",
     "skydio_x2": "the compiler's assetdir has no translation for MuJoCo 2.2.2's parser",
-    "trossen_vx300s": "solimp above 1 (MuJoCo clamps it) is refused by the builder",
 }
 
 

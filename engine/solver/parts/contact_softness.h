@@ -15,19 +15,21 @@
 
 namespace novaphy {
 
-// MuJoCo's impedance at a distance x past the active margin, from solimp (dmin, dmax, width, midpoint, power)
+// MuJoCo's impedance at a distance x past the active margin, from solimp (dmin, dmax, width, midpoint, power),
+// each clamped as MuJoCo clamps them where it reads them: dmin, dmax and midpoint into [1e-4, 0.9999], width to
+// >= 0, power to >= 1 (the builder takes any finite solimp, as MuJoCo's compiler does)
 inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
   constexpr Scalar kMin = 1e-4, kMax = 0.9999;  // (MuJoCo's mjMINIMP, mjMAXIMP)
   const Scalar dmin = std::clamp(solimp[0], kMin, kMax), dmax = std::clamp(solimp[1], kMin, kMax);
-  const Scalar width = solimp[2], mid = std::clamp(solimp[3], kMin, kMax), power = solimp[4];
+  const Scalar width = solimp[2], mid = std::clamp(solimp[3], kMin, kMax), power = std::max(Scalar(1), solimp[4]);
   if (dmin == dmax || width <= 1e-15) return 0.5 * (dmin + dmax);
   const Scalar u = std::abs(x) / width;
   if (u >= 1) return dmax;
-  // (power 2, MuJoCo's default, without std::pow: this runs per contact and step)
-  const auto raise = [power](Scalar x, Scalar p) { return power == 2 ? (p == 2 ? x * x : x) : std::pow(x, p); };
-  const Scalar y = power == 1 ? u
-                   : u <= mid ? raise(u, power) / raise(mid, power - 1)
-                              : 1 - raise(1 - u, power) / raise(1 - mid, power - 1);
+  // MuJoCo's u^p / mid^(p-1) below the midpoint and 1 - (1-u)^p / (1-mid)^(p-1) above, written as ratios <= 1
+  // raised to p so that no power underflows to 0 / 0 (power 2, MuJoCo's default, without std::pow: this runs per
+  // contact and step)
+  const auto raise = [power](Scalar x) { return power == 2 ? x * x : std::pow(x, power); };
+  const Scalar y = power == 1 ? u : u <= mid ? mid * raise(u / mid) : 1 - (1 - mid) * raise((1 - u) / (1 - mid));
   return dmin + y * (dmax - dmin);
 }
 

@@ -67,6 +67,33 @@ TEST(ShapeFilter, ParentThroughMasslessLinks) {
   EXPECT_EQ(colliding_pairs(model, ShapeFilter(model, true)), (std::set<std::pair<int, int>>{{0, 2}}));
 }
 
+// MuJoCo's weld rule: a body held by a Fixed joint counts as the body it is welded to. A stand welded to the world
+// meets no world shape; a tip welded to b never meets b nor b's parent a; c, whose parent is the tip, counts b as
+// its parent (Allegro's fingertips: without the rule c met b)
+TEST(ShapeFilter, WeldedBodiesCountAsTheBodyTheyAreWeldedTo) {
+  const std::string path = test::write_temp_file("welded.xml", R"(
+<mujoco>
+  <worldbody>
+    <geom type="plane" size="1 1 0.1"/>
+    <body name="stand" pos="0 0 0.5"><geom type="box" size="0.1 0.1 0.1"/></body>
+    <body name="a" pos="0 0 1"><freejoint/><geom type="sphere" size="0.1"/>
+      <body name="b" pos="0.1 0 0"><joint type="hinge"/><geom type="sphere" size="0.1"/>
+        <body name="tip" pos="0.1 0 0"><geom type="sphere" size="0.1"/>
+          <body name="c" pos="0.1 0 0"><joint type="hinge"/><geom type="sphere" size="0.1"/></body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)");
+  ModelBuilder builder(Vec3(0, 0, -9.81));
+  builder.add_mjcf(path);
+  std::filesystem::remove(path);
+  const Model model = builder.finalize();
+  ASSERT_EQ(model.shape_count, 6);  // plane, stand, a, b, tip, c
+  EXPECT_EQ(colliding_pairs(model, ShapeFilter(model, true)),
+            (std::set<std::pair<int, int>>{{0, 2}, {0, 3}, {0, 4}, {0, 5}, {1, 2}, {1, 3}, {1, 4}, {1, 5}, {2, 5}}));
+}
+
 // excluded pairs never collide, either way round; groups and masks under the builder's rule (both ways) and MuJoCo's
 // (either way); a shape whose group or mask is empty is visual only (under MuJoCo's rule: both)
 TEST(ShapeFilter, ExcludedPairsGroupsMasksAndVisualShapes) {
