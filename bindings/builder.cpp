@@ -182,6 +182,9 @@ void bind_builder(py::module_& m) {
           },
           py::arg("body"), py::kw_only(), py::arg("xform") = py::none(), py::arg("name") = "",
           "Adds a body and returns its index; xform is its initial pose (free bodies, Free joints).")
+      .def("set_body_gravcomp", &ModelBuilder::set_body_gravcomp, py::arg("body"), py::arg("gravcomp"),
+           "The share of the body's weight a force through its centre of mass carries (MuJoCo's gravcomp: 0 none, "
+           "1 it floats).")
       .def("add_articulation", &ModelBuilder::add_articulation, py::arg("joints"))
       .def("add_motor", &ModelBuilder::add_motor, py::arg("joint"), py::kw_only(), py::arg("gear") = 1.0,
            py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY, py::arg("force_lower") = -INFINITY,

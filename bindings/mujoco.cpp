@@ -124,6 +124,7 @@ class MjModelFields {
     f_.body_iquat = field<double>("body_iquat", nb, 4);
     f_.body_inertia = field<double>("body_inertia", nb, 3);
     f_.body_gravcomp = newer_field<double>("body_gravcomp", nb);
+    f_.jnt_actgravcomp = newer_field<MjByte>("jnt_actgravcomp", nj);
     f_.jnt_type = field<int>("jnt_type", nj);
     f_.jnt_qposadr = field<int>("jnt_qposadr", nj);
     f_.jnt_dofadr = field<int>("jnt_dofadr", nj);

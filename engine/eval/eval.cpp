@@ -15,6 +15,7 @@
 #include "engine/model/finite_checks.h"
 #include "engine/model/tendon.h"
 #include "engine/solver/blocks/blocks.h"
+#include "engine/solver/parts/gravity_compensation.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -26,10 +27,18 @@ namespace novaphy {
 
 namespace {
 
-// RNEA at qdd minus the passive joint forces: tau = H qdd + bias for one articulation
+// the applied wrenches: the state's body_f, with gravity compensation added where the model has some (into
+// `compensated`)
+const Scalar* applied_wrenches(const Model& model, const State& state, std::vector<Scalar>& compensated) {
+  if (!compensates_gravity(model)) return state.body_f.data();
+  with_gravity_compensation(model, state.body_f, compensated);
+  return compensated.data();
+}
+
+// RNEA at qdd minus the passive joint forces: tau = H qdd + bias for one articulation, under the wrenches body_f
 void articulation_inverse_dynamics(const State& state, const ArticulationView& art, ArticulationScratch& s,
-                                   const Scalar* qdd, Scalar* tau) {
-  rnea(art, qdd, art.gravity(), state.body_f.data(), s, tau);
+                                   const Scalar* body_f, const Scalar* qdd, Scalar* tau) {
+  rnea(art, qdd, art.gravity(), body_f, s, tau);
   VecX passive(art.dof_count());
   passive_force(art, state.joint_q.data() + art.q_begin(), state.joint_qd.data() + art.qd_begin(), passive.data());
   Eigen::Map<VecX>(tau, art.dof_count()) -= passive;
@@ -88,9 +97,11 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
     if (!std::isfinite(qdd[k])) fail("qdd[", k, "] is not finite: ", qdd[k]);
   VecX tau(model.joint_dof_count);
   ArticulationScratch s;
+  std::vector<Scalar> compensated;
+  const Scalar* body_f = applied_wrenches(model, state, compensated);
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
-    articulation_inverse_dynamics(state, art, s, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
+    articulation_inverse_dynamics(state, art, s, body_f, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
   }
   return tau;
 }
@@ -161,7 +172,9 @@ void ForwardDynamics::evaluate(const State& state, const Control& control, Scala
   control_force(model_, control, &state, tau_.data());
   std::fill_n(qdd, model_.joint_dof_count, Scalar(0));
   std::fill(failure_.begin(), failure_.end(), -1);
-  batches_->accelerations(state, control, tau_.data(), wrenches, qdd, failure_.data());
+  const Scalar* body_f = applied_wrenches(model_, state, compensated_body_f_);
+  batches_->accelerations(state, control, tau_.data(), body_f, wrenches || body_f != state.body_f.data(), qdd,
+                          failure_.data());
   for (int a = 0; a < model_.articulation_count; ++a)
     if (failure_[a] >= 0)
       fail_not_positive_definite(model_, articulations_[a], failure_[a] - articulations_[a].qd_begin());
@@ -179,6 +192,8 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
   const VecX tau_control = eval_control_force(model, control, &state);
   VecX qdd(model.joint_dof_count);
   ArticulationScratch s;
+  std::vector<Scalar> compensated;
+  const Scalar* body_f = applied_wrenches(model, state, compensated);
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     const int nv = art.dof_count();
@@ -186,7 +201,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
     const auto tau = tau_control.segment(art.qd_begin(), nv);
     if (method == ForwardDynamicsMethod::Crba) {
       const VecX zero = VecX::Zero(nv);
-      articulation_inverse_dynamics(state, art, s, zero.data(), qdd_a);
+      articulation_inverse_dynamics(state, art, s, body_f, zero.data(), qdd_a);
       Eigen::Map<VecX>(qdd_a, nv) = tau - Eigen::Map<VecX>(qdd_a, nv);
       crba(art, s);
       const int bad = cholesky_factor(s.H);
@@ -197,7 +212,7 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
       passive_force(art, state.joint_q.data() + art.q_begin(), state.joint_qd.data() + art.qd_begin(),
                     tau_total.data());
       tau_total += tau;
-      const int bad = aba(art, tau_total.data(), art.gravity(), state.body_f.data(), s, qdd_a);
+      const int bad = aba(art, tau_total.data(), art.gravity(), body_f, s, qdd_a);
       if (bad >= 0) fail_not_positive_definite(model, art, art.qd_start(bad));
     }
   }

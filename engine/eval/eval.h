@@ -1,7 +1,8 @@
 // Whole-model evaluations over every articulation (contacts and limits off): forward kinematics,
 // mass matrix, bias forces, inverse and forward dynamics. The equations of motion are
 //   H(q) qdd = tau - bias(q, qd),   bias = C(q, qd) qd + g(q) - tau_passive - J^T f_ext
-// with f_ext the applied body wrenches state.body_f and tau_passive the joint damping and springs.
+// with f_ext the applied body wrenches state.body_f (and gravity compensation, the model's body_gravcomp) and
+// tau_passive the joint damping and springs.
 #pragma once
 
 #include <algorithm>
@@ -63,6 +64,7 @@ class ForwardDynamics {
   std::vector<ArticulationView> articulations_;
   std::unique_ptr<ArticulationBatches> batches_;
   std::vector<Scalar> tau_;
+  std::vector<Scalar> compensated_body_f_;  // body_f with gravity compensation, where the model has some
   std::vector<int> failure_;
 };
 

@@ -101,6 +101,8 @@ class MjcfImporter {
     builder_.take_gravity(vec3(m_.gravity), "the file's");
     builder_.take_timestep(m_.timestep);
     for (int b = 1; b < m_.nbody; ++b) add_body(b);
+    for (int b = 1; b < m_.nbody && m_.body_gravcomp; ++b)
+      if (m_.body_gravcomp[b] != 0 && !is_static(b)) builder_.set_body_gravcomp(out_.body_map[b], m_.body_gravcomp[b]);
     builder_.set_collision_filter(CollisionFilter::Mujoco);
     builder_.set_friction_rule(FrictionRule::Mujoco);
     builder_.set_impratio(m_.impratio);
@@ -555,9 +557,10 @@ class MjcfImporter {
 
   // what the import left out that changes the motion (sensors, cameras and lights do not)
   void report_unmodelled() {
-    for (int b = 0; b < m_.nbody && m_.body_gravcomp; ++b)
-      if (m_.body_gravcomp[b] != 0)
-        warn_motion("body '" + m_.name(MjKind::Body, b) + "': gravity compensation (gravcomp) is not modelled");
+    for (int j = 0; j < m_.njnt && m_.jnt_actgravcomp && m_.jnt_actfrclimited; ++j)
+      if (m_.jnt_actgravcomp[j] && m_.jnt_actfrclimited[j])
+        warn_motion("joint '" + m_.name(MjKind::Joint, j) +
+                    "': actuatorgravcomp under an actuatorfrcrange (the compensation is not clamped by the range)");
     if (m_.nflex > 0) warn_motion(std::to_string(m_.nflex) + " flex object(s) (deformables) are not modelled");
     if (m_.nplugin > 0) warn_motion(std::to_string(m_.nplugin) + " engine plugin instance(s) are not modelled");
     if (m_.npair > 0) warn_motion(std::to_string(m_.npair) + " explicit contact pair(s) are not modelled");
@@ -584,7 +587,7 @@ int mujoco_sensor_type(const std::string& name) {
   return -1;
 }
 
-mjModel* load_mujoco_model(const std::string& path) {
+mjModel* load_mujoco_model(const std::string& path, std::vector<double>* body_gravcomp) {
   if (!std::filesystem::exists(path)) fail("cannot load '", path, "': file does not exist");
   char error[1024] = "";
   // MJCF of MuJoCo >= 3 translated for 2.2.2's parser (engine/import/mjcf_translate.h); URDF as it is
@@ -595,6 +598,7 @@ mjModel* load_mujoco_model(const std::string& path) {
   if (m == nullptr) fail("cannot load '", path, "': ", error);
   try {
     apply_translation(m, translated);
+    if (body_gravcomp) *body_gravcomp = translated_gravcomp(m, translated);
   } catch (const Error& e) {
     mj_deleteModel(m);
     fail("cannot load '", path, "': ", e.what());
@@ -612,8 +616,11 @@ MujocoImport import_mujoco_model(ModelBuilder& builder, const mjModel* m, const 
 }
 
 MujocoImport import_mjcf(ModelBuilder& builder, const std::string& path, const ImportOptions& options) {
-  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path), mj_deleteModel);
-  return import_mujoco_model(builder, m.get(), options);
+  std::vector<double> body_gravcomp;
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(load_mujoco_model(path, &body_gravcomp), mj_deleteModel);
+  MujocoFields fields = mujoco_fields(m.get());
+  if (!body_gravcomp.empty()) fields.body_gravcomp = body_gravcomp.data();
+  return import_mujoco_fields(builder, fields, options);
 }
 
 std::vector<std::string> ModelBuilder::add_mjcf(const std::string& path, const ImportOptions& options) {

@@ -50,8 +50,10 @@ struct MujocoImport {
 // for any other (a compiled model of another version names its types; their values differ)
 int mujoco_sensor_type(const std::string& name);
 
-// loads an MJCF or URDF file; throws Error with MuJoCo's message when it does not exist or parse
-mjModel* load_mujoco_model(const std::string& path);
+// loads an MJCF or URDF file; throws Error with MuJoCo's message when it does not exist or parse. body_gravcomp
+// (where given): MuJoCo 3's body gravcomp by body id, which MuJoCo 2.2.2's model has no field for (empty where the
+// file gives none)
+mjModel* load_mujoco_model(const std::string& path, std::vector<double>* body_gravcomp = nullptr);
 
 // the one converter: a compiled model of any MuJoCo version, as a view of its fields
 MujocoImport import_mujoco_fields(ModelBuilder& builder, const MujocoFields& m, const ImportOptions& options = {});

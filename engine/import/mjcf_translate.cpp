@@ -23,9 +23,11 @@ using tinyxml2::XMLElement;
 using tinyxml2::XMLNode;
 
 // MuJoCo >= 3 attributes with no translation here: element, attribute
-constexpr const char* kUntranslated[][2] = {{"position", "timeconst"},     {"intvelocity", "inheritrange"},
-                                            {"joint", "actuatorgravcomp"}, {"body", "gravcomp"},
-                                            {"general", "actearly"},       {"compiler", "alignfree"}};
+constexpr const char* kUntranslated[][2] = {{"position", "timeconst"},
+                                            {"intvelocity", "inheritrange"},
+                                            {"joint", "actuatorgravcomp"},
+                                            {"general", "actearly"},
+                                            {"compiler", "alignfree"}};
 
 std::string where(const std::string& file, const XMLElement* e) {
   return file + " line " + std::to_string(e->GetLineNum()) + ": <" + e->Name() + ">";
@@ -191,13 +193,14 @@ class Translator {
     check_numbers(path, e, keys_ - 1, false);
     if (std::strcmp(e->Name(), "joint") == 0)
       after_compiling(path, e, defaults, {"actuatorfrcrange", "actuatorfrclimited"}, out_.joint_force_range);
+    if (std::strcmp(e->Name(), "body") == 0) after_compiling(path, e, defaults, {"gravcomp"}, out_.body_gravcomp);
     if (std::strcmp(e->Name(), "position") == 0) {
       after_compiling(path, e, defaults, {"inheritrange"}, out_.inherit_range);
       position_servo(path, e, defaults);
     }
   }
 
-  // MuJoCo 3 attributes of a joint or actuator (on it or from its class: its own, else an ancestor's
+  // MuJoCo 3 attributes of a joint, actuator or body (on it or from its class: its own, else an ancestor's
   // childclass) that load_mujoco_model applies to the compiled model (by the element's name): taken out of
   // the file, their values (the first attribute's numbers, or nothing where the second says "false") kept in
   // `to`; in a default they are dropped once the file is read
@@ -366,6 +369,18 @@ void apply_translation(mjModel* m, const TranslatedMjcf& translated) {
     m->actuator_ctrlrange[2 * u + 1] = middle + half;
     m->actuator_ctrllimited[u] = 1;
   }
+}
+
+std::vector<double> translated_gravcomp(const mjModel* m, const TranslatedMjcf& translated) {
+  if (translated.body_gravcomp.empty()) return {};
+  std::vector<double> gravcomp(m->nbody, 0);
+  for (const auto& [name, value] : translated.body_gravcomp) {
+    const int b = mj_name2id(m, mjOBJ_BODY, name.c_str());
+    if (b < 0) fail("MuJoCo 3's gravcomp of '", name, "': no such body in the compiled model");
+    if (value.size() != 1) fail("body '", name, "': gravcomp needs one number");
+    gravcomp[b] = value[0];
+  }
+  return gravcomp;
 }
 
 void set_dampratio(mjModel* m) {

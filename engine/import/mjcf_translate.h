@@ -18,8 +18,9 @@ struct TranslatedMjcf {
   std::vector<std::string> translations;                           // what was rewritten, one line each
   // a position servo's dampratio is carried as a positive biasprm[2]: set_dampratio turns it into its kv
   bool dampratio = false;
-  // by name: joints' actuatorfrcrange [lower, upper] and position servos' inheritrange [factor], taken out
-  std::vector<std::pair<std::string, std::vector<double>>> joint_force_range, inherit_range;
+  // by name: joints' actuatorfrcrange [lower, upper], position servos' inheritrange [factor] and bodies' gravcomp
+  // [share], taken out
+  std::vector<std::pair<std::string, std::vector<double>>> joint_force_range, inherit_range, body_gravcomp;
 };
 
 // the translated attributes that need the compiled model, applied to it (after mj_loadXML): set_dampratio;
@@ -27,6 +28,10 @@ struct TranslatedMjcf {
 // actuator's own; Error for several actuators); a servo's inheritrange as its control range, the joint's or
 // tendon's range scaled about its middle (Error without a range)
 void apply_translation(mjModel* m, const TranslatedMjcf& translated);
+
+// MuJoCo 3's body gravcomp by body id of the compiled model (empty where the file gives none); Error for a body
+// name the model lacks or a gravcomp that is not one number
+std::vector<double> translated_gravcomp(const mjModel* m, const TranslatedMjcf& translated);
 
 // MuJoCo 3's joint actuatorfrcrange [lower, upper] as the force range of the joint's one actuator, of gear
 // `gear`: intersected with the actuator's own [*force_lower, *force_upper] (both routes of the import use it)

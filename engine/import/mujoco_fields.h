@@ -76,7 +76,7 @@ struct MujocoFields {
 
   // MuJoCo >= 3 only (null where the model has none): a joint's limit on its actuators' total force, the
   // objects an equality joins (bodies or sites), and what the import reports when it is not zero
-  const MjByte *jnt_actfrclimited = nullptr;
+  const MjByte *jnt_actfrclimited = nullptr, *jnt_actgravcomp = nullptr;
   const double *jnt_actfrcrange = nullptr;
   const int *eq_objtype = nullptr;
   const double *body_gravcomp = nullptr, *actuator_damping = nullptr, *actuator_armature = nullptr,

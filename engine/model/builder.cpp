@@ -99,6 +99,7 @@ int ModelBuilder::add_body_checked(const RigidBody& body, const Transform& xform
   check_rigid_body(item, body, allow_massless);
   body_xform_.push_back(checked_transform(item, "xform", xform));
   body_mass_.push_back(body.mass);
+  body_gravcomp_.push_back(0);
   body_com_.push_back(body.com);
   body_inertia_.push_back(0.5 * (body.inertia + body.inertia.transpose()));
   body_name_.push_back(name);
@@ -106,6 +107,12 @@ int ModelBuilder::add_body_checked(const RigidBody& body, const Transform& xform
   body_world_.push_back(0);
   world_count_ = std::max(world_count_, 1);
   return body_count() - 1;
+}
+
+void ModelBuilder::set_body_gravcomp(int body, Scalar gravcomp) {
+  if (body < 0 || body >= body_count()) fail("set_body_gravcomp: body ", body, " out of range [0, ", body_count(), ")");
+  check_finite(label("body", body, body_name_[body]), "gravcomp", gravcomp);
+  body_gravcomp_[body] = gravcomp;
 }
 
 int ModelBuilder::add_joint_revolute(int parent, int child, const JointOptions& options) {
@@ -317,6 +324,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   const int body0 = body_count(), joint0 = joint_count(), shape0 = shape_count();
   for (int b = 0; b < other.body_count(); ++b) {
     body_mass_.push_back(other.body_mass_[b]);
+    body_gravcomp_.push_back(other.body_gravcomp_[b]);
     body_com_.push_back(other.body_com_[b]);
     body_inertia_.push_back(other.body_inertia_[b]);
     body_xform_.push_back(place * other.body_xform_[b]);
@@ -497,6 +505,7 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
 void ModelBuilder::lay_out_bodies(Model& model) const {
   for (int b = 0; b < body_count(); ++b) {
     model.body_mass[b] = body_mass_[b];
+    model.body_gravcomp[b] = body_gravcomp_[b];
     Eigen::Map<Vec3>(&model.body_com[3 * b]) = body_com_[b];
     Eigen::Map<Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(&model.body_inertia[9 * b]) = body_inertia_[b];
   }

@@ -132,6 +132,9 @@ class ModelBuilder {
 
   // xform: the body's initial pose in the world; used for free bodies and Free joints
   int add_body(const RigidBody& body, const Transform& xform = Transform::identity(), const std::string& name = "");
+  // the share of the body's weight a force through its centre of mass carries (MuJoCo's body gravcomp: 0 none, the
+  // default; 1 the body floats; any finite value)
+  void set_body_gravcomp(int body, Scalar gravcomp);
 
   int add_joint_revolute(int parent, int child, const JointOptions& options = {});
   int add_joint_prismatic(int parent, int child, const JointOptions& options = {});
@@ -348,7 +351,7 @@ class ModelBuilder {
   Precision precision_ = Precision::Float64;
   Scalar timestep_ = 0.002;
   bool gravity_given_ = false, precision_given_ = false, timestep_given_ = false;
-  std::vector<Scalar> body_mass_;
+  std::vector<Scalar> body_mass_, body_gravcomp_;
   std::vector<Vec3> body_com_;
   std::vector<Mat3> body_inertia_;
   std::vector<Transform> body_xform_;

@@ -109,7 +109,9 @@ const char* shape_type_name(ShapeType type);
 // [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
 // corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the mesh,
 // counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types. world_gravity: each
-// world's gravity (the builder's gravity in every world at finalize).
+// world's gravity (the builder's gravity in every world at finalize). body_gravcomp: the share of a body's weight
+// carried by a force through its centre of mass, MuJoCo's gravcomp (engine/solver/parts/gravity_compensation.h; 0:
+// none, 1: it floats).
 // joint_compliance: a maximal-coordinate joint's linear and angular compliance (builder.h: add_joint_distance, d6,
 // cable; 0 rigid), read by the solvers in maximal coordinates.
 // The parameters learning randomises may change per world after finalize, through Model::set_parameter only
@@ -120,6 +122,7 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, body_inertia, body_count, 9)                   \
   X(int, body_world, body_count, 1)                        \
   X(Scalar, body_invweight0, body_count, 2)                \
+  X(Scalar, body_gravcomp, body_count, 1)                  \
   X(int, joint_type, joint_count, 1)                       \
   X(int, joint_parent, joint_count, 1)                     \
   X(int, joint_child, joint_count, 1)                      \

@@ -84,7 +84,7 @@ bool SolverFeatherstone::scan_unit(const int* arts, int count, const StepContext
       ctrl.add(built_.art_actuator_runs[2 * k], built_.art_actuator_runs[2 * k + 1]);
   }
   inputs.drives = ke.flush() | kd.flush();
-  inputs.wrenches = body_f.flush();
+  inputs.wrenches = body_f.flush() || compensates_gravity_;
   ctrl.flush();
   const bool invalid = bad != 0 || negative;
   if (!valid) return invalid;

@@ -199,6 +199,9 @@ class SolverFeatherstone {
   // joint_qd)
   Sensors sensors_;
   std::vector<Scalar> start_q_, start_qd_;
+  // the model compensates some body's gravity: a step applies body_f with it added, kept here
+  bool compensates_gravity_ = false;
+  std::vector<Scalar> compensated_body_f_;
   CallFlag busy_;                // a step is running (ExclusiveCall)
   std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays
   int max_threads_ = 1;          // the threads the routes keep scratch for

@@ -1,5 +1,6 @@
 """Elements of MuJoCo models that change how real robots move, each against today's MuJoCo (PyPI) on an MJCF
-written here: solimp values outside MuJoCo's ranges (which it clamps where it reads them)."""
+written here or a shared Menagerie robot: solimp values outside MuJoCo's ranges (which it clamps where it reads
+them), the contact filter's weld rule, gravity compensation (gravcomp)."""
 
 import os
 
@@ -13,8 +14,9 @@ mujoco = pytest.importorskip(
 )
 
 
-def both(xml, tmp_path, steps):
-    """today's MuJoCo and NovaPhy (from_mujoco, SolverFeatherstone) step the model `steps` times from qpos0:
+def both(xml, tmp_path, steps, route="from_mujoco"):
+    """today's MuJoCo and NovaPhy (SolverFeatherstone; the model from today's MuJoCo's compile, or the file through
+    add_mjcf: a model of hinges and slides, whose joint_q is MuJoCo's qpos) step the model `steps` times from qpos0:
     their final qpos"""
     path = tmp_path / "model.xml"
     path.write_text(xml)
@@ -22,16 +24,21 @@ def both(xml, tmp_path, steps):
     d = mujoco.MjData(m)
     mujoco.mj_step(m, d, steps)
     builder = novaphy.ModelBuilder()
-    imported = builder.add_mujoco_model(m)
+    if route == "from_mujoco":
+        to_qpos = builder.add_mujoco_model(m).to_qpos
+    else:
+        builder.add_mjcf(str(path))
+        to_qpos = np.asarray
     model = builder.finalize()
     state, control = model.state(), model.control()
     pipeline = novaphy.CollisionPipeline(model)
     contacts = pipeline.contacts()
     solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.angular_damping = 0  # (MuJoCo has none)
     for _ in range(steps):
         pipeline.collide(state, contacts)
         solver.step(state, state, control, contacts, m.opt.timestep)
-    return d.qpos.copy(), imported.to_qpos(np.array(state.joint_q))
+    return d.qpos.copy(), to_qpos(np.array(state.joint_q))
 
 
 # a 1 kg box resting on the floor on its own solimp: (2, 1, ...) is Trossen's finger pads' (dmin and dmax clamped to
@@ -84,3 +91,81 @@ def test_welded_fingertips_meet_what_mujocos_filter_lets_them_meet():
     state.joint_q[:] = imported.to_joint_q(d.qpos)
     names = [n if n else "world" for n in model.body_name]
     assert contact_bodies(model, state, names) == expected
+
+
+# two arms of three hinges: one whose links all compensate their weight (gravcomp 1), one whose middle link carries
+# half of its own and whose tip none
+ARMS = """<mujoco><option timestep="0.002"/><worldbody>{}</worldbody></mujoco>""".format(
+    "".join(
+        f"""<body name="upper{k}" pos="0 {k / 2} 1" gravcomp="{a}"><joint type="hinge" axis="0 1 0" damping="0.01"/>
+          <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+          <body name="fore{k}" pos="0.3 0 0" gravcomp="{b}"><joint type="hinge" axis="0 1 0"/>
+            <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.03"/>
+            <body name="hand{k}" pos="0.3 0 0.1" gravcomp="{c}"><joint type="hinge" axis="1 0 0"/>
+              <geom type="box" size="0.05 0.03 0.02" pos="0.05 0 0"/></body></body></body>"""
+        for k, (a, b, c) in enumerate(((1, 1, 1), (1, 0.5, 0)))
+    )
+)
+
+
+@pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
+def test_gravity_compensation_holds_the_arms_as_mujoco_does(tmp_path, route):
+    expected, got = both(ARMS, tmp_path, 500, route)
+    np.testing.assert_allclose(got, expected, atol=1e-12)
+    np.testing.assert_allclose(got[:3], 0, atol=1e-12)  # the compensated arm floats where it was put
+    assert np.max(np.abs(got[3:])) > 0.1  # the other one sags
+
+
+# a free box whose gravcomp is 1 floats, one of 0.5 falls at g / 2, in every solver
+@pytest.mark.parametrize("solver", ["SolverFeatherstone", "SolverSemiImplicit", "SolverXPBD"])
+def test_gravity_compensation_lifts_a_share_of_the_weight_in_every_solver(solver):
+    b = novaphy.ModelBuilder(gravity=np.array([0.0, 0.0, -9.81]))
+    boxes = []
+    for k, share in enumerate((1.0, 0.5)):
+        box = b.add_body(novaphy.RigidBody.from_box(2.0, [0.1, 0.2, 0.3]), xform=novaphy.Transform([k, 0, 0]))
+        b.add_shape_box(box, [0.1, 0.2, 0.3], collision_group=0, collision_mask=0)
+        b.set_body_gravcomp(box, share)
+        boxes.append(box)
+    m = b.finalize()
+    assert list(m.body_gravcomp) == [1.0, 0.5]
+    state, control = m.state(), m.control()
+    pipeline = novaphy.CollisionPipeline(m)
+    contacts = pipeline.contacts()
+    step = getattr(novaphy.solvers, solver)(m)
+    for _ in range(100):
+        pipeline.collide(state, contacts)
+        step.step(state, state, control, contacts, 0.01)
+    qd = np.array(state.body_qd)
+    np.testing.assert_allclose(qd[boxes[0]], 0, atol=1e-12)
+    np.testing.assert_allclose(qd[boxes[1]][2], -0.5 * 9.81 * 1.0, rtol=1e-9)
+
+
+def test_a_gravcomp_not_finite_or_of_no_body_is_named():
+    b = novaphy.ModelBuilder()
+    body = b.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1), name="link")
+    with pytest.raises(ValueError, match="body 0 \\('link'\\): gravcomp is not finite: nan"):
+        b.set_body_gravcomp(body, float("nan"))
+    with pytest.raises(ValueError, match="set_body_gravcomp: body 3 out of range \\[0, 1\\)"):
+        b.set_body_gravcomp(3, 1.0)
+
+
+# the evaluations see the compensation as the step does: forward dynamics by each method equal MuJoCo's qacc
+# (constraints off) at a moving state, and inverse dynamics takes it back to the applied forces (none)
+@pytest.mark.parametrize("method", ["batched", "crba", "aba"])
+def test_gravity_compensation_in_the_evaluations_as_in_mujoco(tmp_path, method):
+    path = tmp_path / "arms.xml"
+    path.write_text(ARMS)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    d.qpos[:] = [0.3, -0.7, 1.1, -0.4, 0.9, -1.3]
+    d.qvel[:] = [1.0, -2.0, 0.5, 0.7, -0.3, 2.0]
+    mujoco.mj_forward(m, d)
+    builder = novaphy.ModelBuilder()
+    builder.add_mujoco_model(m)
+    model = builder.finalize()
+    state, control = model.state(), model.control()
+    state.joint_q[:] = d.qpos
+    state.joint_qd[:] = d.qvel
+    qdd = novaphy.eval_forward_dynamics(model, state, control, method=method)
+    np.testing.assert_allclose(qdd, d.qacc, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(novaphy.eval_inverse_dynamics(model, state, qdd), 0, atol=1e-10)

@@ -177,12 +177,13 @@ class Batches final : public ArticulationBatches {
     block_store(G, b, w, scratch.origin, w.q_next.data(), scratch.written, *step.out, step.stream);
   }
 
-  void accelerations(const State& in, const Control& control, const Scalar* tau, bool wrenches, Scalar* qdd,
-                     int* factor_failure) override {
+  void accelerations(const State& in, const Control& control, const Scalar* tau, const Scalar* body_f, bool wrenches,
+                     Scalar* qdd, int* factor_failure) override {
     StepContext step;
     step.in = &in;
     step.control = &control;
     step.tau = tau;
+    step.body_f = body_f;
     step.factor_failure = factor_failure;
     step.split = true;
     UnitInputs inputs;

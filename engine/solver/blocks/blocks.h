@@ -47,10 +47,10 @@ class ArticulationBatches : public StepRoute {
   virtual const std::vector<int>& limit_cells() const = 0;
   virtual int limit_cell_count() const = 0;
   // forward dynamics: qdd = M^-1 (tau - bias) with M = H + armature, in the blocks' precision, for every
-  // batched articulation (dt = 0, no drives, no angular damping); factor_failure[a] = the dof whose pivot
-  // failed, or left alone
-  virtual void accelerations(const State& in, const Control& control, const Scalar* tau, bool wrenches, Scalar* qdd,
-                             int* factor_failure) = 0;
+  // batched articulation (dt = 0, no drives, no angular damping) under the wrenches body_f [6 body] (applied
+  // where `wrenches`); factor_failure[a] = the dof whose pivot failed, or left alone
+  virtual void accelerations(const State& in, const Control& control, const Scalar* tau, const Scalar* body_f,
+                             bool wrenches, Scalar* qdd, int* factor_failure) = 0;
   // the rows stage's phases summed over the threads since the step began (settings.profile_stages)
   virtual RowPhaseSeconds row_phases() const = 0;
 

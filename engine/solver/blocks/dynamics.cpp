@@ -109,7 +109,7 @@ void block_dynamics(BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, cons
   batch_subspace(topo, w, kin.o, kin.S);
   batch_velocity(topo, kin.S, w.qd.data(), w);
   batch_link_inertia(topo, P, kin.o, w);
-  const bool pushed = inputs.wrenches && gather_wrenches(G, b, step.in->body_f.data(), kin.o, w);
+  const bool pushed = inputs.wrenches && gather_wrenches(G, b, step.body_f, kin.o, w);
   batch_bias(topo, kin.S, P.gravity, pushed ? w.f_ext.data() : nullptr, w, w.tau.data());
   add_joint_forces(G, b, P, step, inputs, w);
 

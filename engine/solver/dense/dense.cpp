@@ -66,7 +66,7 @@ void DenseArticulations::joint_forces(int a, const StepContext& step, const Unit
   const Control& control = *step.control;
   VecX& bias = s.tau_step;
   bias.resize(art.dof_count());
-  rnea(art, s.qdd_zero.data(), art.gravity(), link_wrenches(a, step.in->body_f.data()), s, bias.data());
+  rnea(art, s.qdd_zero.data(), art.gravity(), link_wrenches(a, step.body_f), s, bias.data());
   for (int i = 0; i < art.link_count(); ++i) {
     const bool coordinate = art.type(i) == JointType::Revolute || art.type(i) == JointType::Prismatic;
     for (int m = 0; m < art.dof(i); ++m) {

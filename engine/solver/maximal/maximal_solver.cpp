@@ -9,6 +9,7 @@
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
 #include "engine/model/group_by_key.h"
+#include "engine/solver/parts/gravity_compensation.h"
 #include "engine/solver/step_arguments.h"
 #include "kernels/joint.h"
 
@@ -139,7 +140,9 @@ void MaximalSolver::forces(int w, const State& in, const Control& control, Scala
     const int b = built_.world_bodies[first + i];
     const Scalar* f = &in.body_f[6 * static_cast<size_t>(b)];
     const Vec3 gyroscopic = -m.w.cross(m.q * (inertia_body_[b] * (m.q.conjugate() * m.w)));
-    m.v += dt * (g + m.inv_mass * Vec3(f[0], f[1], f[2]));
+    Vec3 force(f[0], f[1], f[2]);
+    if (model_.body_gravcomp[b] != 0) force += gravity_compensation(model_, b);
+    m.v += dt * (g + m.inv_mass * force);
     m.w += dt * (m.inv_inertia * (Vec3(f[3], f[4], f[5]) + gyroscopic));
   }
   for (int i = built_.joint_start[w]; i < built_.joint_start[w + 1]; ++i) {

@@ -71,8 +71,8 @@ class MaximalSolver {
   virtual int thread_count() const = 0;
   virtual GuardSettings guard_settings() const = 0;
 
-  // world w's bodies (their slots' motions) sped up by the forces over dt: gravity, body_f, the gyroscopic torque,
-  // and joint_f of Free and Ball joints (a scalar dof's is its axis's AxisSpring force)
+  // world w's bodies (their slots' motions) sped up by the forces over dt: gravity (less its compensation), body_f,
+  // the gyroscopic torque, and joint_f of Free and Ball joints (a scalar dof's is its axis's AxisSpring force)
   void forces(int w, const State& in, const Control& control, Scalar dt, std::vector<BodyMotion>& bodies) const;
   // body b's place among its world's bodies (-1: the world)
   int slot(int b) const { return b >= 0 ? body_slot_[b] : -1; }

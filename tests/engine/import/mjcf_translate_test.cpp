@@ -143,13 +143,36 @@ TEST(MjcfTranslate, AJointsActuatorForceRangeAndAServosInheritedRange) {
 }
 
 TEST(MjcfTranslate, AnAttributeWithoutATranslationIsNamedWithItsFileAndLine) {
-  const std::string path = test::write_temp_file("three_gravcomp.xml", R"(<mujoco>
-  <worldbody><body gravcomp="1"><joint name="j" type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
+  const std::string path = test::write_temp_file("three_actuatorgravcomp.xml", R"(<mujoco>
+  <worldbody><body><joint name="j" type="hinge" actuatorgravcomp="true"/><geom type="sphere" size="0.1"/></body>
+  </worldbody>
 </mujoco>)");
   ModelBuilder builder;
-  EXPECT_NOVAPHY_ERROR(builder.add_mjcf(path),
-                       "three_gravcomp.xml line 2: <body>: MuJoCo 3's attribute 'gravcomp' has no translation");
+  EXPECT_NOVAPHY_ERROR(
+      builder.add_mjcf(path),
+      "three_actuatorgravcomp.xml line 2: <joint>: MuJoCo 3's attribute 'actuatorgravcomp' has no translation");
   std::filesystem::remove(path);
+}
+
+// a body's gravcomp is taken out and set on the compiled body (by name: an unnamed one is an error)
+TEST(MjcfTranslate, GravcompIsSetOnTheNamedBody) {
+  const std::string path = test::write_temp_file("three_gravcomp.xml", R"(<mujoco>
+  <worldbody><body name="arm" gravcomp="0.75"><joint type="hinge"/><geom type="sphere" size="0.1"/>
+    <body name="hand" pos="0.2 0 0"><joint type="hinge"/><geom type="sphere" size="0.1"/></body></body>
+  </worldbody>
+</mujoco>)");
+  ModelBuilder builder;
+  builder.add_mjcf(path);
+  const Model model = builder.finalize();
+  EXPECT_EQ(model.body_gravcomp, (std::vector<Scalar>{0.75, 0}));
+  const std::string unnamed = test::write_temp_file("three_unnamed.xml", R"(<mujoco>
+  <worldbody><body gravcomp="1"><joint type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
+</mujoco>)");
+  EXPECT_NOVAPHY_ERROR(ModelBuilder().add_mjcf(unnamed),
+                       "three_unnamed.xml line 2: <body>: MuJoCo 3's 'gravcomp' is applied after compiling, by name: "
+                       "name the <body>");
+  std::filesystem::remove(path);
+  std::filesystem::remove(unnamed);
 }
 
 TEST(MjcfTranslate, AFileThatIsNotXmlOrADirectoryIsNamedInWords) {
