@@ -48,6 +48,8 @@ class MjModelFields {
     read_sites_and_sensors();
     for (auto [count, name] : {std::pair{&f_.nflex, "nflex"}, {&f_.nplugin, "nplugin"}})
       if (py::hasattr(m_, name)) *count = size(name);
+    f_.actuator_plugin = newer_field<int>("actuator_plugin", f_.nu);
+    f_.name_pluginadr = newer_field<int>("name_pluginadr", f_.nplugin);
   }
   const MujocoFields& fields() const { return f_; }
 

@@ -351,6 +351,13 @@ class MjcfImporter {
   // hinge, slide or fixed tendon without activation dynamics (engine/model/actuator.h); any other is reported
   void add_actuator(int u) {
     const std::string name = m_.name(MjKind::Actuator, u);
+    if (m_.actuator_plugin && m_.actuator_plugin[u] >= 0) {
+      const int p = m_.actuator_plugin[u];
+      const std::string instance = m_.name(MjKind::Plugin, p);
+      fail("actuator '", name, "': its force comes from engine plugin instance ", p,
+           instance[0] == '#' ? "" : " '" + instance + "'",
+           ", and NovaPhy does not run MuJoCo's engine plugins (mujoco.pid and others): not imported");
+    }
     const std::string unsupported = unsupported_actuator(u);
     if (!unsupported.empty()) {
       warn_motion("actuator '" + name + "' " + unsupported + ": not modelled");

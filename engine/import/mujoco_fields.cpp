@@ -19,8 +19,8 @@ constexpr int kJointCoords[kJointTypes] = {7, 4, 1, 1}, kJointDofs[kJointTypes] 
 const char* word(double x) { return std::isnan(x) ? "nan" : x > 0 ? "inf" : "-inf"; }
 
 const char* kind_word(MjKind kind) {
-  constexpr const char* words[] = {"body",     "joint",    "geom",     "mesh", "tendon",
-                                   "actuator", "keyframe", "equality", "site", "sensor"};
+  constexpr const char* words[] = {"body",     "joint",    "geom", "mesh",   "tendon",         "actuator",
+                                   "keyframe", "equality", "site", "sensor", "plugin instance"};
   return words[static_cast<int>(kind)];
 }
 
@@ -96,15 +96,15 @@ class FieldCheck {
 
   // each name address inside names, a NUL after it
   void names() const {
-    const std::pair<const int*, int> adr[] = {{m_.name_bodyadr, m_.nbody},     {m_.name_jntadr, m_.njnt},
-                                              {m_.name_geomadr, m_.ngeom},     {m_.name_meshadr, m_.nmesh},
-                                              {m_.name_tendonadr, m_.ntendon}, {m_.name_actuatoradr, m_.nu},
-                                              {m_.name_keyadr, m_.nkey},       {m_.name_eqadr, m_.neq},
-                                              {m_.name_siteadr, m_.nsite},     {m_.name_sensoradr, m_.nsensor}};
-    constexpr const char* fields[] = {"name_bodyadr",   "name_jntadr",      "name_geomadr", "name_meshadr",
-                                      "name_tendonadr", "name_actuatoradr", "name_keyadr",  "name_eqadr",
-                                      "name_siteadr",   "name_sensoradr"};
-    for (int kind = 0; kind < 10; ++kind) {
+    const std::pair<const int*, int> adr[] = {
+        {m_.name_bodyadr, m_.nbody},     {m_.name_jntadr, m_.njnt},       {m_.name_geomadr, m_.ngeom},
+        {m_.name_meshadr, m_.nmesh},     {m_.name_tendonadr, m_.ntendon}, {m_.name_actuatoradr, m_.nu},
+        {m_.name_keyadr, m_.nkey},       {m_.name_eqadr, m_.neq},         {m_.name_siteadr, m_.nsite},
+        {m_.name_sensoradr, m_.nsensor}, {m_.name_pluginadr, m_.nplugin}};
+    constexpr const char* fields[] = {"name_bodyadr",   "name_jntadr",      "name_geomadr",  "name_meshadr",
+                                      "name_tendonadr", "name_actuatoradr", "name_keyadr",   "name_eqadr",
+                                      "name_siteadr",   "name_sensoradr",   "name_pluginadr"};
+    for (int kind = 0; kind < 11; ++kind) {
       if (!adr[kind].first) continue;
       for (int id = 0; id < adr[kind].second; ++id) {
         const std::string who =
@@ -204,6 +204,7 @@ class FieldCheck {
       if (type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT)
         range("actuator_trnid", u, actuator, m_.actuator_trnid[2 * u], 0, m_.njnt, "[0]");
       if (type == mjTRN_TENDON) range("actuator_trnid", u, actuator, m_.actuator_trnid[2 * u], 0, m_.ntendon, "[0]");
+      if (m_.actuator_plugin) range("actuator_plugin", u, actuator, m_.actuator_plugin[u], -1, m_.nplugin);
     }
   }
 
@@ -260,8 +261,8 @@ class FieldCheck {
 }  // namespace
 
 std::string MujocoFields::name(MjKind kind, int id) const {
-  const int* adr[] = {name_bodyadr,     name_jntadr, name_geomadr, name_meshadr, name_tendonadr,
-                      name_actuatoradr, name_keyadr, name_eqadr,   name_siteadr, name_sensoradr};
+  const int* adr[] = {name_bodyadr, name_jntadr, name_geomadr, name_meshadr,   name_tendonadr, name_actuatoradr,
+                      name_keyadr,  name_eqadr,  name_siteadr, name_sensoradr, name_pluginadr};
   const int* at = adr[static_cast<int>(kind)];
   if (at && names && names[at[id]] != '\0') return names + at[id];
   return std::string(1, '#').append(std::to_string(id));

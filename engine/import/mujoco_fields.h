@@ -13,7 +13,7 @@ namespace novaphy {
 
 using MjByte = unsigned char;  // MuJoCo's mjtByte, numpy's bool
 
-enum class MjKind { Body, Joint, Geom, Mesh, Tendon, Actuator, Key, Equality, Site, Sensor };
+enum class MjKind { Body, Joint, Geom, Mesh, Tendon, Actuator, Key, Equality, Site, Sensor, Plugin };
 
 struct MujocoFields {
   int nq = 0, nv = 0, nu = 0, nbody = 0, njnt = 0, ngeom = 0, ntendon = 0, nkey = 0, neq = 0, nexclude = 0, npair = 0;
@@ -28,7 +28,7 @@ struct MujocoFields {
   const char *names = nullptr;
   const int *name_bodyadr = nullptr, *name_jntadr = nullptr, *name_geomadr = nullptr, *name_meshadr = nullptr,
             *name_tendonadr = nullptr, *name_actuatoradr = nullptr, *name_keyadr = nullptr, *name_eqadr = nullptr,
-            *name_siteadr = nullptr, *name_sensoradr = nullptr;
+            *name_siteadr = nullptr, *name_sensoradr = nullptr, *name_pluginadr = nullptr;
 
   const double *qpos0 = nullptr, *qpos_spring = nullptr;
   const int *body_parentid = nullptr, *body_jntnum = nullptr, *body_jntadr = nullptr;
@@ -81,7 +81,8 @@ struct MujocoFields {
   const int *eq_objtype = nullptr;
   const double *body_gravcomp = nullptr, *actuator_damping = nullptr, *actuator_armature = nullptr,
                *tendon_armature = nullptr;
-  int nflex = 0, nplugin = 0;  // deformables and engine plugins (MuJoCo >= 3)
+  int nflex = 0, nplugin = 0;            // deformables and engine plugins (MuJoCo >= 3)
+  const int *actuator_plugin = nullptr;  // the engine plugin instance that computes an actuator's force, or -1
 
   // the name of object `id` of a kind, or "#id" for an unnamed one (its name address checked first)
   std::string name(MjKind kind, int id) const;

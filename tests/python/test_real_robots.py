@@ -169,3 +169,15 @@ def test_gravity_compensation_in_the_evaluations_as_in_mujoco(tmp_path, method):
     qdd = novaphy.eval_forward_dynamics(model, state, control, method=method)
     np.testing.assert_allclose(qdd, d.qacc, rtol=1e-10, atol=1e-10)
     np.testing.assert_allclose(novaphy.eval_inverse_dynamics(model, state, qdd), 0, atol=1e-10)
+
+
+# an actuator computed by an engine plugin (shadow_dexee's mujoco.pid) is refused, naming the actuator and the
+# plugin instance: importing it as the unit-gain motor its compiled numbers describe would move it wrongly
+def test_a_plugin_actuator_is_refused_by_name():
+    xml = """<mujoco><extension><plugin plugin="mujoco.pid"><instance name="pid1"><config key="kp" value="40"/>
+      </instance></plugin></extension>
+      <worldbody><body><joint name="j" type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
+      <actuator><plugin joint="j" plugin="mujoco.pid" instance="pid1" name="servo"/></actuator></mujoco>"""
+    m = mujoco.MjModel.from_xml_string(xml)
+    with pytest.raises(ValueError, match="actuator 'servo': its force comes from engine plugin instance 0 'pid1'"):
+        novaphy.ModelBuilder().add_mujoco_model(m)

@@ -69,9 +69,10 @@ def test_what_is_not_an_mjmodel_is_named():
 
 def test_an_unmodelled_field_of_todays_mujoco_is_reported():
     m = mujoco.MjModel.from_xml_string(
-        '<mujoco><worldbody><body gravcomp="1"><joint type="hinge"/><geom size="0.1"/></body></worldbody></mujoco>'
+        '<mujoco><worldbody><body gravcomp="1"><joint name="j" type="hinge" actuatorgravcomp="true" '
+        'actuatorfrcrange="-1 1"/><geom size="0.1"/></body></worldbody></mujoco>'
     )
-    with pytest.warns(UserWarning, match="gravity compensation"):
+    with pytest.warns(UserWarning, match="joint 'j': actuatorgravcomp under an actuatorfrcrange"):
         novaphy.ModelBuilder().add_mujoco_model(m)
 
 
