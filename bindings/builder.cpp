@@ -250,6 +250,21 @@ void bind_builder(py::module_& m) {
           py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY, py::arg("name") = "",
           "add_actuator's affine actuator on a tendon (its length and velocity in place of a joint's), taken "
           "explicitly.")
+      .def(
+          "add_site_actuator",
+          [](ModelBuilder& self, int body, const Transform& site, const std::array<Scalar, 6>& gear, Scalar gain,
+             const Vec3& bias, Scalar ctrl_lower, Scalar ctrl_upper, Scalar force_lower, Scalar force_upper,
+             const std::string& name) {
+            return self.add_site_actuator(
+                body, site, gear,
+                actuator_options(1, ctrl_lower, ctrl_upper, force_lower, force_upper, name, gain, bias));
+          },
+          py::arg("body"), py::arg("site"), py::kw_only(), py::arg("gear"), py::arg("gain") = 1.0,
+          py::arg("bias") = Vec3::Zero(), py::arg("ctrl_lower") = -INFINITY, py::arg("ctrl_upper") = INFINITY,
+          py::arg("force_lower") = -INFINITY, py::arg("force_upper") = INFINITY, py::arg("name") = "",
+          "An actuator on a site (MuJoCo's site transmission, a thruster): add_actuator's force f with no position or "
+          "velocity term (bias[2] must be 0) pushes the body at the site (its frame in the body's) with the force "
+          "f * gear[0:3] and the torque f * gear[3:6], both in the site frame.")
       .def_property_readonly("tendon_count", &ModelBuilder::tendon_count)
       .def("add_connect", &ModelBuilder::add_connect, py::arg("body1"), py::arg("body2"), py::arg("anchor"),
            py::arg("name") = "", py::arg("anchor2") = Vec3::Constant(NAN),

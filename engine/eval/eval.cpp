@@ -15,7 +15,6 @@
 #include "engine/model/finite_checks.h"
 #include "engine/model/tendon.h"
 #include "engine/solver/blocks/blocks.h"
-#include "engine/solver/parts/gravity_compensation.h"
 #include "kernels/aba.h"
 #include "kernels/cholesky.h"
 #include "kernels/crba.h"
@@ -27,12 +26,13 @@ namespace novaphy {
 
 namespace {
 
-// the applied wrenches: the state's body_f, with gravity compensation added where the model has some (into
-// `compensated`)
-const Scalar* applied_wrenches(const Model& model, const State& state, std::vector<Scalar>& compensated) {
-  if (!compensates_gravity(model)) return state.body_f.data();
-  with_gravity_compensation(model, state.body_f, compensated);
-  return compensated.data();
+// the applied wrenches: the state's body_f, with what the model applies itself added where it has some (gravity
+// compensation; the site actuators where a control is given) into `applied`
+const Scalar* wrenches_of(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
+                          std::vector<Scalar>& applied) {
+  if (!wrenches.gravity_compensation && (!control || wrenches.site_actuators.empty())) return state.body_f.data();
+  applied_wrenches(model, wrenches, state, control, applied);
+  return applied.data();
 }
 
 // RNEA at qdd minus the passive joint forces: tau = H qdd + bias for one articulation, under the wrenches body_f
@@ -97,8 +97,8 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
     if (!std::isfinite(qdd[k])) fail("qdd[", k, "] is not finite: ", qdd[k]);
   VecX tau(model.joint_dof_count);
   ArticulationScratch s;
-  std::vector<Scalar> compensated;
-  const Scalar* body_f = applied_wrenches(model, state, compensated);
+  std::vector<Scalar> applied;
+  const Scalar* body_f = wrenches_of(model, ModelWrenches::of(model), state, nullptr, applied);
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     articulation_inverse_dynamics(state, art, s, body_f, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
@@ -148,7 +148,8 @@ VecX eval_control_force(const Model& model, const Control& control, const State*
   return tau;
 }
 
-ForwardDynamics::ForwardDynamics(const Model& model) : model_(model), tau_(model.joint_dof_count) {
+ForwardDynamics::ForwardDynamics(const Model& model)
+    : model_(model), wrenches_(ModelWrenches::of(model)), tau_(model.joint_dof_count) {
   std::vector<std::uint8_t> batched(model.articulation_count);
   for (int a = 0; a < model.articulation_count; ++a) {
     articulations_.push_back(model.articulation(a));
@@ -172,7 +173,7 @@ void ForwardDynamics::evaluate(const State& state, const Control& control, Scala
   control_force(model_, control, &state, tau_.data());
   std::fill_n(qdd, model_.joint_dof_count, Scalar(0));
   std::fill(failure_.begin(), failure_.end(), -1);
-  const Scalar* body_f = applied_wrenches(model_, state, compensated_body_f_);
+  const Scalar* body_f = wrenches_of(model_, wrenches_, state, &control, applied_body_f_);
   batches_->accelerations(state, control, tau_.data(), body_f, wrenches || body_f != state.body_f.data(), qdd,
                           failure_.data());
   for (int a = 0; a < model_.articulation_count; ++a)
@@ -192,8 +193,8 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
   const VecX tau_control = eval_control_force(model, control, &state);
   VecX qdd(model.joint_dof_count);
   ArticulationScratch s;
-  std::vector<Scalar> compensated;
-  const Scalar* body_f = applied_wrenches(model, state, compensated);
+  std::vector<Scalar> applied;
+  const Scalar* body_f = wrenches_of(model, ModelWrenches::of(model), state, &control, applied);
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     const int nv = art.dof_count();

@@ -1,8 +1,8 @@
 // Whole-model evaluations over every articulation (contacts and limits off): forward kinematics,
 // mass matrix, bias forces, inverse and forward dynamics. The equations of motion are
 //   H(q) qdd = tau - bias(q, qd),   bias = C(q, qd) qd + g(q) - tau_passive - J^T f_ext
-// with f_ext the applied body wrenches state.body_f (and gravity compensation, the model's body_gravcomp) and
-// tau_passive the joint damping and springs.
+// with f_ext the applied body wrenches state.body_f (and what the model applies itself: gravity compensation, and in
+// forward dynamics its actuators on sites) and tau_passive the joint damping and springs.
 #pragma once
 
 #include <algorithm>
@@ -13,6 +13,7 @@
 
 #include "engine/model/finite_checks.h"
 #include "engine/model/model.h"
+#include "engine/solver/parts/applied_wrenches.h"
 
 namespace novaphy {
 
@@ -63,8 +64,9 @@ class ForwardDynamics {
   const Model& model_;
   std::vector<ArticulationView> articulations_;
   std::unique_ptr<ArticulationBatches> batches_;
+  ModelWrenches wrenches_;  // what the model applies itself
   std::vector<Scalar> tau_;
-  std::vector<Scalar> compensated_body_f_;  // body_f with gravity compensation, where the model has some
+  std::vector<Scalar> applied_body_f_;  // body_f with what the model applies itself, where it has some
   std::vector<int> failure_;
 };
 

@@ -381,6 +381,14 @@ class MjcfImporter {
       warn_motion("actuator '" + name + "': armature is not modelled");
     a.name = name;
     const int target = m_.actuator_trnid[2 * u];
+    if (m_.actuator_trntype[u] == mjTRN_SITE) {
+      std::array<Scalar, 6> gear;
+      std::copy_n(m_.actuator_gear + 6 * u, 6, gear.begin());
+      a.gear = 1;
+      out_.actuator_map[u] = builder_.add_site_actuator(
+          out_.body_map[m_.site_bodyid[target]], pose(m_.site_pos + 3 * target, m_.site_quat + 4 * target), gear, a);
+      return;
+    }
     out_.actuator_map[u] = m_.actuator_trntype[u] == mjTRN_TENDON
                                ? builder_.add_tendon_actuator(tendon_index_[target], a)
                                : builder_.add_actuator(joint_index_[target], a);
@@ -419,8 +427,13 @@ class MjcfImporter {
     const int target = m_.actuator_trnid[2 * u];
     if (m_.actuator_trntype[u] == mjTRN_TENDON) {
       if (tendon_index_[target] < 0) return "drives tendon '" + m_.name(MjKind::Tendon, target) + "', not modelled";
+    } else if (m_.actuator_trntype[u] == mjTRN_SITE) {
+      if (m_.actuator_trnid[2 * u + 1] >= 0) return "drives a site relative to a reference site (refsite)";
+      if (is_static(m_.site_bodyid[target])) return "drives a site on a body that does not move";
+      if (m_.actuator_biastype[u] == mjBIAS_AFFINE && m_.actuator_biasprm[mjNBIAS * u + 2] != 0)
+        return "drives a site with a force on the site's velocity (biasprm[2])";
     } else if (m_.actuator_trntype[u] != mjTRN_JOINT) {
-      return "drives a site or body (joints and fixed tendons only are modelled)";
+      return "drives a body or a slider-crank (joints, fixed tendons and sites only are modelled)";
     } else if (m_.jnt_type[target] != mjJNT_HINGE && m_.jnt_type[target] != mjJNT_SLIDE) {
       return "drives a ball or free joint (hinges and slides only)";
     }

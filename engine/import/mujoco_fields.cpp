@@ -204,6 +204,10 @@ class FieldCheck {
       if (type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT)
         range("actuator_trnid", u, actuator, m_.actuator_trnid[2 * u], 0, m_.njnt, "[0]");
       if (type == mjTRN_TENDON) range("actuator_trnid", u, actuator, m_.actuator_trnid[2 * u], 0, m_.ntendon, "[0]");
+      if (type == mjTRN_SITE) {
+        range("actuator_trnid", u, actuator, m_.actuator_trnid[2 * u], 0, m_.nsite, "[0]");
+        range("actuator_trnid", u, actuator, m_.actuator_trnid[2 * u + 1], -1, m_.nsite, "[1]");
+      }
       if (m_.actuator_plugin) range("actuator_plugin", u, actuator, m_.actuator_plugin[u], -1, m_.nplugin);
     }
   }

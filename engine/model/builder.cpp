@@ -373,6 +373,7 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   for (ActuatorRecord actuator : other.actuators_) {
     if (actuator.joint >= 0) actuator.joint += joint0;
     if (actuator.tendon >= 0) actuator.tendon += tendon_count();
+    if (actuator.body >= 0) actuator.body += body0;
     actuators_.push_back(actuator);
   }
   for (EqualityRecord e : other.equalities_) {
@@ -519,6 +520,8 @@ void ModelBuilder::lay_out_actuators(Model& model) const {
     const ActuatorOptions& a = actuators_[u].options;
     model.actuator_joint[u] = actuators_[u].joint;
     model.actuator_tendon[u] = actuators_[u].tendon;
+    model.actuator_body[u] = actuators_[u].body;
+    std::copy(actuators_[u].wrench.begin(), actuators_[u].wrench.end(), &model.actuator_wrench[6 * u]);
     model.actuator_gear[u] = a.gear;
     model.actuator_gain[u] = a.gain;
     for (int k = 0; k < 3; ++k) model.actuator_bias[3 * u + k] = a.bias[k];

@@ -210,6 +210,11 @@ class ModelBuilder {
   // an actuator on tendon `tendon`: add_actuator's force with the tendon's length and velocity in place of a
   // joint's, pulling along the tendon; taken explicitly
   int add_tendon_actuator(int tendon, const ActuatorOptions& options = {});
+  // an actuator on a site (MuJoCo's site transmission, as quadrotors' thrusters): add_actuator's force f with no
+  // position or velocity (bias[2] must be 0; options.gear must be 1, the gear is `gear`) pushes `body` at the site
+  // `site` (its frame in the body's) with the force f gear[0..3) and the torque f gear[3..6), both in the site frame
+  int add_site_actuator(int body, const Transform& site, const std::array<Scalar, 6>& gear,
+                        const ActuatorOptions& options = {});
 
   // an equality constraint (model.h), held by rows of the step: the point `anchor` of body1 (its frame) stays
   // on the point of body2 (-1: the world) that coincides with it at the initial coordinates, or on `anchor2`
@@ -364,9 +369,11 @@ class ModelBuilder {
   std::vector<ShapeRecord> shapes_;
   std::vector<MeshRecord> meshes_;
   struct ActuatorRecord {
-    int joint;  // -1 on a tendon
+    int joint;  // -1 on a tendon or a site
     ActuatorOptions options;
     int tendon = -1;
+    int body = -1;                      // on a site of this body
+    std::array<Scalar, 6> wrench = {};  // a site's: of a unit force, in the body frame (model.h)
   };
   struct TendonRecord {
     std::vector<int> joints;

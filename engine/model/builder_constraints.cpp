@@ -35,6 +35,29 @@ int ModelBuilder::add_tendon_actuator(int tendon, const ActuatorOptions& options
   return actuator_count() - 1;
 }
 
+int ModelBuilder::add_site_actuator(int body, const Transform& site, const std::array<Scalar, 6>& gear,
+                                    const ActuatorOptions& options) {
+  const std::string item = label("actuator", actuator_count(), options.name);
+  if (body < 0 || body >= body_count())
+    fail(item, ": a site actuator's body ", body, " out of range [0, ", body_count(), ")");
+  const Transform frame = checked_transform(item, "site", site);
+  for (Scalar g : gear) check_finite(item, "gear", g);
+  check_actuator(item, options);
+  if (options.gear != 1)
+    fail(item, ": a site actuator's gear is its six numbers (force, torque); options.gear must be 1, got ",
+         options.gear);
+  if (options.bias[2] != 0)
+    fail(item, ": a site actuator's force cannot depend on the site's velocity (bias[2] = ", options.bias[2],
+         "): not modelled");
+  ActuatorRecord record{-1, options};
+  record.body = body;
+  const Vec3 force = frame.q * Vec3(gear[0], gear[1], gear[2]);
+  const Vec3 torque = frame.q * Vec3(gear[3], gear[4], gear[5]) + frame.p.cross(force);
+  for (int k = 0; k < 3; ++k) record.wrench[k] = force[k], record.wrench[3 + k] = torque[k];
+  actuators_.push_back(record);
+  return actuator_count() - 1;
+}
+
 void ModelBuilder::join_tendon_articulations(std::vector<JointRecord>& joints, int& articulation_count) const {
   // union-find over articulations, each group named by its smallest articulation
   std::vector<int> root(articulation_count);

@@ -91,7 +91,9 @@ const char* shape_type_name(ShapeType type);
 // A fixed tendon t is a linear combination of Revolute and Prismatic coordinates of one articulation:
 // length = sum of tendon_coef[e] joint_q[tendon_coord[e]] over its entries e in [tendon_start[t],
 // tendon_start[t + 1]); a force f along it is tendon_coef[e] f on dof tendon_dof[e]. An actuator drives
-// joint actuator_joint, or tendon actuator_tendon where actuator_joint is -1.
+// joint actuator_joint, or tendon actuator_tendon where actuator_joint is -1, or (both -1) pushes body
+// actuator_body at a site, MuJoCo's site transmission: its force f is the wrench f actuator_wrench, in the body's
+// frame (force, then torque about the body's origin: the gear's force and torque in the site frame, at the site).
 // An equality constraint e (MuJoCo's, held by rows of the step) of equality_type Connect keeps the point
 // equality_data[0..3) of body equality_object[0] (its frame) on the point equality_data[3..6) of body
 // equality_object[1] (-1: the world frame); one of type JointCoupling keeps q1 - q1_0 = a0 + a1 x + a2 x^2 +
@@ -185,6 +187,8 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, equality_data, equality_count, 10)             \
   X(int, actuator_joint, actuator_count, 1)                \
   X(int, actuator_tendon, actuator_count, 1)               \
+  X(int, actuator_body, actuator_count, 1)                 \
+  X(Scalar, actuator_wrench, actuator_count, 6)            \
   X(Scalar, actuator_gear, actuator_count, 1)              \
   X(Scalar, actuator_gain, actuator_count, 1)              \
   X(Scalar, actuator_bias, actuator_count, 3)              \

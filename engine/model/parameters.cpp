@@ -103,6 +103,8 @@ std::vector<int> entry_worlds(const Model& model, Over over) {
         const int j = model.actuator_joint[u], t = model.actuator_tendon[u];
         if (j >= 0) {
           world[u] = joint_world(j);
+        } else if (model.actuator_body[u] >= 0) {
+          world[u] = model.body_world[model.actuator_body[u]];
         } else {
           // a tendon's world: its first joint's
           world[u] = joint_world(dof_joint(model, model.tendon_dof[model.tendon_start[t]]));

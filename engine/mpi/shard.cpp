@@ -64,8 +64,10 @@ WorldLayout world_layout(const Model& model) {
   }
   for (int a = 0; a < model.articulation_count; ++a) articulations.push_back(joint_world(model.articulation_start[a]));
   for (int m = 0; m < model.actuator_count; ++m) {
-    const int j = model.actuator_joint[m];
-    actuators.push_back(j >= 0 ? joint_world(j) : dofs[model.tendon_dof[model.tendon_start[model.actuator_tendon[m]]]]);
+    const int j = model.actuator_joint[m], body = model.actuator_body[m];
+    actuators.push_back(j >= 0      ? joint_world(j)
+                        : body >= 0 ? model.body_world[body]
+                                    : dofs[model.tendon_dof[model.tendon_start[model.actuator_tendon[m]]]]);
   }
   layout.body_count = per_world("bodies", model.body_world, model.world_count);
   layout.joint_coord_count = per_world("coordinates", coords, model.world_count);

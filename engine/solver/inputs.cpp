@@ -84,7 +84,7 @@ bool SolverFeatherstone::scan_unit(const int* arts, int count, const StepContext
       ctrl.add(built_.art_actuator_runs[2 * k], built_.art_actuator_runs[2 * k + 1]);
   }
   inputs.drives = ke.flush() | kd.flush();
-  inputs.wrenches = body_f.flush() || compensates_gravity_;
+  inputs.wrenches = body_f.flush() || model_wrenches_.any();
   ctrl.flush();
   const bool invalid = bad != 0 || negative;
   if (!valid) return invalid;
@@ -140,7 +140,8 @@ void SolverFeatherstone::raise_bad_input(const StepContext& step) {
   auto dof_world = [&](int k) { return model_.articulation_world(built_.index.dof_articulation[k]); };
   auto body_world = [&](int k) { return model_.body_world[k / 6]; };
   auto actuator_world = [&](int u) {
-    const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u];
+    const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u], body = model_.actuator_body[u];
+    if (body >= 0) return model_.body_world[body];
     if (joint < 0 && tendon < 0) return -1;  // (on nothing: check_step checked it)
     return dof_world(joint >= 0 ? model_.joint_qd_start[joint] : model_.tendon_dof[model_.tendon_start[tendon]]);
   };

@@ -51,8 +51,8 @@ struct StepContext {
   Contacts* contacts = nullptr;  // geometry and warm starts in; contact_impulse out
   Scalar dt = 0;
   const Scalar* tau = nullptr;  // [dof] the control's joint forces with its actuators'
-  // [6 body] the wrenches the step applies: in's body_f, with gravity compensation added where the model has some
-  // (engine/solver/parts/gravity_compensation.h)
+  // [6 body] the wrenches the step applies: in's body_f, with what the model applies itself added where it has some
+  // (gravity compensation, site actuators: engine/solver/parts/applied_wrenches.h)
   const Scalar* body_f = nullptr;
 
   // the step's options: the settings table as the step began, and what it decides for this step

@@ -13,7 +13,6 @@
 #include "engine/model/actuator.h"
 #include "engine/model/error.h"
 #include "engine/solver/joint_support.h"
-#include "engine/solver/parts/gravity_compensation.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/threads/parallel.h"
 #include "kernels/crba.h"
@@ -43,7 +42,7 @@ SolverFeatherstone::SolverFeatherstone(const Model& model, const SolverFeatherst
       sensors_(model) {
   settings.check();
   max_threads_ = std::max(1, omp_get_max_threads());
-  compensates_gravity_ = compensates_gravity(model);
+  model_wrenches_ = ModelWrenches::of(model);
   if (model.articulation_count == 0) fail("SolverFeatherstone needs a model with at least one articulation");
   shape_contacts_ = {built_.contact_materials.data(),
                      built_.shape_material.data(),
@@ -246,9 +245,9 @@ StepContext SolverFeatherstone::begin_step(const State& in, State& out, const Co
   step.contacts = &contacts;
   step.dt = dt;
   step.body_f = in.body_f.data();
-  if (compensates_gravity_) {
-    with_gravity_compensation(model_, in.body_f, compensated_body_f_);
-    step.body_f = compensated_body_f_.data();
+  if (model_wrenches_.any()) {
+    applied_wrenches(model_, model_wrenches_, in, &control, applied_body_f_);
+    step.body_f = applied_body_f_.data();
   }
   step.settings = settings;
   step.refactor = refactor;

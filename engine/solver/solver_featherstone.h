@@ -23,6 +23,7 @@
 #include "engine/solver/dense/dense.h"
 #include "engine/solver/islands/rows.h"
 #include "engine/solver/joint_support.h"
+#include "engine/solver/parts/applied_wrenches.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/solver/settings.h"
 #include "engine/solver/solver_data.h"
@@ -199,9 +200,10 @@ class SolverFeatherstone {
   // joint_qd)
   Sensors sensors_;
   std::vector<Scalar> start_q_, start_qd_;
-  // the model compensates some body's gravity: a step applies body_f with it added, kept here
-  bool compensates_gravity_ = false;
-  std::vector<Scalar> compensated_body_f_;
+  // what the model applies itself (gravity compensation, site actuators): a step applies body_f with it added, kept
+  // in applied_body_f_
+  ModelWrenches model_wrenches_;
+  std::vector<Scalar> applied_body_f_;
   CallFlag busy_;                // a step is running (ExclusiveCall)
   std::int64_t step_bytes_ = 0;  // what a step touches: the solver's memory when made and the state's arrays
   int max_threads_ = 1;          // the threads the routes keep scratch for

@@ -154,8 +154,9 @@ void SolverModel::index_inputs(const Model& model) {
   group(
       model.actuator_count,
       [&](int u) {
-        const int joint = model.actuator_joint[u], tendon = model.actuator_tendon[u];
+        const int joint = model.actuator_joint[u], tendon = model.actuator_tendon[u], body = model.actuator_body[u];
         if (joint >= 0) return index.dof_articulation[model.joint_qd_start[joint]];
+        if (body >= 0) return index.body_articulation[body];
         return tendon >= 0 ? index.dof_articulation[model.tendon_dof[model.tendon_start[tendon]]] : -1;
       },
       art_actuator_start, art_actuator_runs, loose_actuators);

@@ -1,6 +1,7 @@
 """Elements of MuJoCo models that change how real robots move, each against today's MuJoCo (PyPI) on an MJCF
 written here or a shared Menagerie robot: solimp values outside MuJoCo's ranges (which it clamps where it reads
-them), the contact filter's weld rule, gravity compensation (gravcomp)."""
+them), the contact filter's weld rule, gravity compensation (gravcomp), actuators on sites (thrusters), engine
+plugin actuators (refused)."""
 
 import os
 
@@ -116,28 +117,36 @@ def test_gravity_compensation_holds_the_arms_as_mujoco_does(tmp_path, route):
     assert np.max(np.abs(got[3:])) > 0.1  # the other one sags
 
 
-# a free box whose gravcomp is 1 floats, one of 0.5 falls at g / 2, in every solver
-@pytest.mark.parametrize("solver", ["SolverFeatherstone", "SolverSemiImplicit", "SolverXPBD"])
-def test_gravity_compensation_lifts_a_share_of_the_weight_in_every_solver(solver):
+def two_boxes(dress):
+    """a model of two 2 kg boxes side by side (collisions off), box k dressed by dress(builder, box, k)"""
     b = novaphy.ModelBuilder(gravity=np.array([0.0, 0.0, -9.81]))
-    boxes = []
-    for k, share in enumerate((1.0, 0.5)):
+    for k in range(2):
         box = b.add_body(novaphy.RigidBody.from_box(2.0, [0.1, 0.2, 0.3]), xform=novaphy.Transform([k, 0, 0]))
         b.add_shape_box(box, [0.1, 0.2, 0.3], collision_group=0, collision_mask=0)
-        b.set_body_gravcomp(box, share)
-        boxes.append(box)
-    m = b.finalize()
-    assert list(m.body_gravcomp) == [1.0, 0.5]
-    state, control = m.state(), m.control()
+        dress(b, box, k)
+    return b.finalize()
+
+
+def velocities_after_a_second(m, solver, control):
+    """body_qd after 100 steps of 10 ms of the solver from the model's initial state"""
+    state = m.state()
     pipeline = novaphy.CollisionPipeline(m)
     contacts = pipeline.contacts()
     step = getattr(novaphy.solvers, solver)(m)
     for _ in range(100):
         pipeline.collide(state, contacts)
         step.step(state, state, control, contacts, 0.01)
-    qd = np.array(state.body_qd)
-    np.testing.assert_allclose(qd[boxes[0]], 0, atol=1e-12)
-    np.testing.assert_allclose(qd[boxes[1]][2], -0.5 * 9.81 * 1.0, rtol=1e-9)
+    return np.array(state.body_qd)
+
+
+# a free box whose gravcomp is 1 floats, one of 0.5 falls at g / 2, in every solver
+@pytest.mark.parametrize("solver", ["SolverFeatherstone", "SolverSemiImplicit", "SolverXPBD"])
+def test_gravity_compensation_lifts_a_share_of_the_weight_in_every_solver(solver):
+    m = two_boxes(lambda b, box, k: b.set_body_gravcomp(box, (1.0, 0.5)[k]))
+    assert list(m.body_gravcomp) == [1.0, 0.5]
+    qd = velocities_after_a_second(m, solver, m.control())
+    np.testing.assert_allclose(qd[0], 0, atol=1e-12)
+    np.testing.assert_allclose(qd[1][2], -0.5 * 9.81 * 1.0, rtol=1e-9)
 
 
 def test_a_gravcomp_not_finite_or_of_no_body_is_named():
@@ -181,3 +190,87 @@ def test_a_plugin_actuator_is_refused_by_name():
     m = mujoco.MjModel.from_xml_string(xml)
     with pytest.raises(ValueError, match="actuator 'servo': its force comes from engine plugin instance 0 'pid1'"):
         novaphy.ModelBuilder().add_mujoco_model(m)
+
+
+# a free body with four tilted thrusters off its centre (a quadrotor's) and an arm whose tip carries one: thrust and
+# torque on sites move them as in MuJoCo, on both routes of the import
+THRUSTERS = """<mujoco><option timestep="0.005"/><worldbody>
+  <body name="drone" pos="0 0 1"><freejoint/><geom type="box" size="0.2 0.2 0.04" mass="1.5"/>
+    <geom type="sphere" size="0.05" pos="0.1 0.05 0.05" mass="0.2"/>
+    {}
+  </body>
+  <body name="arm" pos="2 0 1"><joint type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0.4 0 0"
+    size="0.03"/><site name="tip" pos="0.4 0 0" quat="0.9 0 0.3 0.1"/></body>
+  </worldbody>
+  <actuator>{}<motor site="tip" gear="0 0 1 0 0.5 0" ctrlrange="-3 3"/></actuator></mujoco>""".format(
+    "".join(
+        f'<site name="rotor{k}" pos="{x} {y} 0.05" euler="{0.1 * x} {-0.1 * y} 0"/>'
+        for k, (x, y) in enumerate(((0.2, 0.2), (-0.2, 0.2), (-0.2, -0.2), (0.2, -0.2)))
+    ),
+    "".join(
+        f'<motor site="rotor{k}" gear="0 0 1 0 0 {s}" ctrlrange="0 8"/>' for k, s in enumerate((0.02, -0.02, 0.03, -0.01))
+    ),
+)
+
+
+@pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
+def test_thrusters_on_sites_move_the_bodies_as_in_mujoco(tmp_path, route):
+    path = tmp_path / "thrusters.xml"
+    path.write_text(THRUSTERS)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    ctrl = np.array([4.5, 5.0, 4.0, 5.5, 2.0])
+    builder = novaphy.ModelBuilder()
+    if route == "from_mujoco":
+        imported = builder.add_mujoco_model(m)
+        to_qpos, actuators = imported.to_qpos, imported.actuator_map
+    else:
+        builder.add_mjcf(str(path))
+        to_qpos, actuators = None, list(range(5))
+    model = builder.finalize()
+    assert list(model.actuator_body) == [0, 0, 0, 0, 1]
+    state, control = model.state(), model.control()
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.angular_damping = 0
+    for u, a in enumerate(actuators):
+        control.actuator_ctrl[a] = ctrl[u]
+    d.ctrl[:] = ctrl
+    for _ in range(200):
+        pipeline.collide(state, contacts)
+        solver.step(state, state, control, contacts, m.opt.timestep)
+    mujoco.mj_step(m, d, 200)
+    got = to_qpos(np.array(state.joint_q)) if to_qpos else novaphy_qpos(np.array(state.joint_q))
+    assert np.max(np.abs(d.qpos[:3] - [0, 0, 1])) > 0.5 and abs(d.qpos[7]) > 0.5  # they moved
+    np.testing.assert_allclose(got, d.qpos, atol=1e-9)
+
+
+def novaphy_qpos(q):
+    """MuJoCo's qpos of the thrusters' model from NovaPhy's joint_q (a Free joint's quaternion x, y, z, w)"""
+    return np.concatenate([q[:3], [q[6]], q[3:6], q[7:]])
+
+
+# a box lifted by thrust equal to its weight hovers, and one of twice its weight rises at g, in every solver
+@pytest.mark.parametrize("solver", ["SolverFeatherstone", "SolverSemiImplicit", "SolverXPBD"])
+def test_a_site_actuator_pushes_in_every_solver(solver):
+    # a site below the centre, turned a quarter about x: its -y is the body's +z
+    site = novaphy.Transform([0.0, 0.0, -0.3], [-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)])
+    m = two_boxes(lambda b, box, k: b.add_site_actuator(box, site, gear=[0, -(k + 1) * 2.0 * 9.81, 0, 0, 0, 0]))
+    control = m.control()
+    control.actuator_ctrl[:] = 1.0
+    qd = velocities_after_a_second(m, solver, control)
+    np.testing.assert_allclose(qd[0], 0, atol=1e-9)
+    np.testing.assert_allclose(qd[1], [0, 0, 9.81, 0, 0, 0], atol=1e-9)
+
+
+def test_a_bad_site_actuator_is_named():
+    b = novaphy.ModelBuilder()
+    body = b.add_body(novaphy.RigidBody.from_sphere(1.0, 0.1))
+    site = novaphy.Transform([0.0, 0.0, 0.1])
+    with pytest.raises(ValueError, match="actuator 0 \\('t'\\): a site actuator's body 2 out of range \\[0, 1\\)"):
+        b.add_site_actuator(2, site, gear=[0, 0, 1, 0, 0, 0], name="t")
+    with pytest.raises(ValueError, match="actuator 0: a site actuator's force cannot depend on the site's velocity"):
+        b.add_site_actuator(body, site, gear=[0, 0, 1, 0, 0, 0], bias=[0, 0, -1])
+    with pytest.raises(ValueError, match="actuator 0: gear is not finite"):
+        b.add_site_actuator(body, site, gear=[0, 0, np.inf, 0, 0, 0])

@@ -9,7 +9,7 @@
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
 #include "engine/model/group_by_key.h"
-#include "engine/solver/parts/gravity_compensation.h"
+#include "engine/solver/parts/applied_wrenches.h"
 #include "engine/solver/step_arguments.h"
 #include "kernels/joint.h"
 
@@ -34,10 +34,17 @@ MaximalSolver::MaximalSolver(const Model& model, const char* name)
       body_slot_[built_.world_bodies[i]] = i - built_.body_start[w];
   dof_actuator_start_.resize(model.joint_dof_count + 1);
   dof_actuators_.resize(model.actuator_count);
-  std::vector<int> next(model.joint_dof_count + 1);
+  std::vector<int> next(std::max(model.joint_dof_count, model.world_count) + 1);
   group_by_key(
-      model.actuator_count, model.joint_dof_count, [&](int u) { return model.joint_qd_start[model.actuator_joint[u]]; },
+      model.actuator_count, model.joint_dof_count,
+      [&](int u) { return model.actuator_joint[u] < 0 ? -1 : model.joint_qd_start[model.actuator_joint[u]]; },
       dof_actuator_start_.data(), dof_actuators_.data(), next.data());
+  site_actuator_start_.resize(model.world_count + 1);
+  site_actuators_.resize(model.actuator_count);
+  group_by_key(
+      model.actuator_count, model.world_count,
+      [&](int u) { return model.actuator_body[u] < 0 ? -1 : model.body_world[model.actuator_body[u]]; },
+      site_actuator_start_.data(), site_actuators_.data(), next.data());
   contact_start_.resize(model.world_count + 1);
   contact_next_.resize(model.world_count + 1);
   diverged_.assign(model.world_count, 0);
@@ -144,6 +151,15 @@ void MaximalSolver::forces(int w, const State& in, const Control& control, Scala
     if (model_.body_gravcomp[b] != 0) force += gravity_compensation(model_, b);
     m.v += dt * (g + m.inv_mass * force);
     m.w += dt * (m.inv_inertia * (Vec3(f[3], f[4], f[5]) + gyroscopic));
+  }
+  for (int k = site_actuator_start_[w]; k < site_actuator_start_[w + 1]; ++k) {
+    const int u = site_actuators_[k], b = model_.actuator_body[u];
+    BodyMotion& m = bodies[body_slot_[b]];
+    if (m.inv_mass == 0) continue;
+    Scalar wrench[6];
+    site_actuator_wrench(model_, u, control.actuator_ctrl[u], m.frame(model_, b), wrench);
+    m.v += (dt * m.inv_mass) * Vec3(wrench[0], wrench[1], wrench[2]);
+    m.w += dt * (m.inv_inertia * Vec3(wrench[3], wrench[4], wrench[5]));
   }
   for (int i = built_.joint_start[w]; i < built_.joint_start[w + 1]; ++i) {
     const int j = built_.world_joints[i];

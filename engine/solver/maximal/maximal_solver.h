@@ -72,7 +72,8 @@ class MaximalSolver {
   virtual GuardSettings guard_settings() const = 0;
 
   // world w's bodies (their slots' motions) sped up by the forces over dt: gravity (less its compensation), body_f,
-  // the gyroscopic torque, and joint_f of Free and Ball joints (a scalar dof's is its axis's AxisSpring force)
+  // the gyroscopic torque, the actuators on sites, and joint_f of Free and Ball joints (a scalar dof's is its axis's
+  // AxisSpring force)
   void forces(int w, const State& in, const Control& control, Scalar dt, std::vector<BodyMotion>& bodies) const;
   // body b's place among its world's bodies (-1: the world)
   int slot(int b) const { return b >= 0 ? body_slot_[b] : -1; }
@@ -117,6 +118,7 @@ class MaximalSolver {
   std::vector<Scalar> shape_weight_;
   std::uint64_t parameters_read_ = 0;
   std::vector<int> dof_actuator_start_, dof_actuators_;             // the actuators of each dof
+  std::vector<int> site_actuator_start_, site_actuators_;           // the actuators on sites of each world
   std::vector<int> contact_start_, world_contacts_, contact_next_;  // this step's contacts by world (group_by_key)
   std::vector<std::uint8_t> diverged_;
   std::vector<std::string> ignored_;
