@@ -182,6 +182,10 @@ void bind_builder(py::module_& m) {
           },
           py::arg("body"), py::kw_only(), py::arg("xform") = py::none(), py::arg("name") = "",
           "Adds a body and returns its index; xform is its initial pose (free bodies, Free joints).")
+      .def("set_fluid", &ModelBuilder::set_fluid, py::arg("density"), py::arg("viscosity"),
+           py::arg("wind") = Vec3::Zero(),
+           "The medium the bodies move through (MuJoCo's <option density viscosity wind>, its inertia-box fluid "
+           "forces): density kg/m^3 and viscosity Pa s >= 0, wind m/s.")
       .def("set_body_gravcomp", &ModelBuilder::set_body_gravcomp, py::arg("body"), py::arg("gravcomp"),
            "The share of the body's weight a force through its centre of mass carries (MuJoCo's gravcomp: 0 none, "
            "1 it floats).")

@@ -243,6 +243,10 @@ void bind_model(py::module_& m) {
       .def_readonly("timestep", &Model::timestep,
                     "The step the scene was made for, in s (a file's <option timestep>; 0.002 by default).")
       .def_readonly("precision", &Model::precision, "Precision of the solver's batched kernels for this model.")
+      .def_readonly("fluid_density", &Model::fluid_density, "The medium's density, kg/m^3 (ModelBuilder.set_fluid).")
+      .def_readonly("fluid_viscosity", &Model::fluid_viscosity, "The medium's viscosity, Pa s.")
+      .def_property_readonly(
+          "wind", [](const Model& self) { return self.wind; }, "The medium's velocity, m/s (world frame).")
       .def_readonly("body_name", &Model::body_name)
       .def_readonly("shape_name", &Model::shape_name)
       .def_readonly("joint_name", &Model::joint_name)

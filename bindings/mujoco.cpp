@@ -35,6 +35,8 @@ class MjModelFields {
     f_.impratio = opt.attr("impratio").cast<double>();
     f_.density = opt.attr("density").cast<double>();
     f_.viscosity = opt.attr("viscosity").cast<double>();
+    const double* wind = array<double>(opt.attr("wind"), "opt.wind", 1, 3);
+    std::copy_n(wind, 3, f_.wind);
     const int clamp = py::module_::import("mujoco").attr("mjtDisableBit").attr("mjDSBL_CLAMPCTRL").cast<int>();
     f_.clamp_ctrl = !(opt.attr("disableflags").cast<int>() & clamp);
     names_ = attr("names").cast<std::string>();
@@ -49,6 +51,7 @@ class MjModelFields {
     for (auto [count, name] : {std::pair{&f_.nflex, "nflex"}, {&f_.nplugin, "nplugin"}})
       if (py::hasattr(m_, name)) *count = size(name);
     f_.actuator_plugin = newer_field<int>("actuator_plugin", f_.nu);
+    f_.geom_fluid = newer_field<double>("geom_fluid", f_.ngeom, 12);
     f_.name_pluginadr = newer_field<int>("name_pluginadr", f_.nplugin);
   }
   const MujocoFields& fields() const { return f_; }

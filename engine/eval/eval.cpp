@@ -27,10 +27,11 @@ namespace novaphy {
 namespace {
 
 // the applied wrenches: the state's body_f, with what the model applies itself added where it has some (gravity
-// compensation; the site actuators where a control is given) into `applied`
+// compensation, a fluid's forces; the site actuators where a control is given) into `applied`
 const Scalar* wrenches_of(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
                           std::vector<Scalar>& applied) {
-  if (!wrenches.gravity_compensation && (!control || wrenches.site_actuators.empty())) return state.body_f.data();
+  if (!wrenches.gravity_compensation && !wrenches.fluid && (!control || wrenches.site_actuators.empty()))
+    return state.body_f.data();
   applied_wrenches(model, wrenches, state, control, applied);
   return applied.data();
 }

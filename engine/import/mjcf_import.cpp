@@ -106,6 +106,7 @@ class MjcfImporter {
     builder_.set_collision_filter(CollisionFilter::Mujoco);
     builder_.set_friction_rule(FrictionRule::Mujoco);
     builder_.set_impratio(m_.impratio);
+    builder_.set_fluid(m_.density, m_.viscosity, vec3(m_.wind));
     geom_shape_.assign(m_.ngeom, -1);
     for (int g = 0; g < m_.ngeom; ++g) add_geom(g);
     add_exclusions();
@@ -584,7 +585,10 @@ class MjcfImporter {
     if (m_.nflex > 0) warn_motion(std::to_string(m_.nflex) + " flex object(s) (deformables) are not modelled");
     if (m_.nplugin > 0) warn_motion(std::to_string(m_.nplugin) + " engine plugin instance(s) are not modelled");
     if (m_.npair > 0) warn_motion(std::to_string(m_.npair) + " explicit contact pair(s) are not modelled");
-    if (m_.density != 0 || m_.viscosity != 0) warn_motion("fluid forces (density, viscosity) are not modelled");
+    for (int g = 0; g < m_.ngeom && m_.geom_fluid && (m_.density > 0 || m_.viscosity > 0); ++g)
+      if (m_.geom_fluid[12 * g] > 0)
+        warn_motion("geom '" + m_.name(MjKind::Geom, g) +
+                    "': the ellipsoid fluid model (fluidshape) is not modelled, its body feels the inertia-box one");
   }
 
   // a report entry for something left out that changes the motion

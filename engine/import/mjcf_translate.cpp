@@ -184,6 +184,11 @@ class Translator {
         fail(where(path, e), ": MuJoCo 3's attribute '", attribute,
              "' has no translation for MuJoCo 2.2.2's parser (docs/mjcf.md lists those that have)");
     if (std::strcmp(e->Name(), "compiler") == 0 && e->Attribute("autolimits")) has_autolimits_ = true;
+    if (std::strcmp(e->Name(), "compiler") == 0 && e->Attribute("assetdir")) asset_dir(path, e);
+    if (std::strcmp(e->Name(), "global") == 0 && e->Attribute("ellipsoidinertia")) {
+      e->DeleteAttribute("ellipsoidinertia");
+      note(path, e, "ellipsoidinertia (how the viewer draws inertias, no physics) -> dropped");
+    }
     if (std::strcmp(e->Name(), "option") == 0 && e->Attribute("integrator", "implicitfast")) {
       e->SetAttribute("integrator", "implicit");
       note(path, e, "integrator=\"implicitfast\" -> \"implicit\"");
@@ -297,6 +302,15 @@ class Translator {
     }
     compiler->SetAttribute("autolimits", "true");
     note(path, compiler, "autolimits=\"true\" (MuJoCo 3's default)");
+  }
+
+  // MuJoCo 3's assetdir: the meshdir and texturedir of a compiler that does not give its own
+  void asset_dir(const std::string& path, XMLElement* compiler) {
+    const std::string dir = compiler->Attribute("assetdir");
+    compiler->DeleteAttribute("assetdir");
+    for (const char* a : {"meshdir", "texturedir"})
+      if (!compiler->Attribute(a)) compiler->SetAttribute(a, dir.c_str());
+    note(path, compiler, "assetdir=\"" + dir + "\" -> meshdir and texturedir");
   }
 
   void note(const std::string& path, const XMLElement* e, const std::string& what) {

@@ -282,6 +282,7 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.gravity = m->opt.gravity;
   f.timestep = m->opt.timestep, f.impratio = m->opt.impratio, f.density = m->opt.density,
   f.viscosity = m->opt.viscosity;
+  for (int k = 0; k < 3; ++k) f.wind[k] = m->opt.wind[k];
   f.clamp_ctrl = !(m->opt.disableflags & mjDSBL_CLAMPCTRL);
   f.names = m->names;
   f.name_bodyadr = m->name_bodyadr, f.name_jntadr = m->name_jntadr, f.name_geomadr = m->name_geomadr;

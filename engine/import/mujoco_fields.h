@@ -21,7 +21,7 @@ struct MujocoFields {
   int nsite = 0, nsensor = 0;
   // options
   const double *gravity = nullptr;  // [3]
-  double timestep = 0.002, impratio = 1, density = 0, viscosity = 0;
+  double timestep = 0.002, impratio = 1, density = 0, viscosity = 0, wind[3] = {0, 0, 0};
   bool clamp_ctrl = true;  // mjDSBL_CLAMPCTRL not set (its bit differs between versions)
 
   // names: the null-terminated names at each kind's addresses; an empty one reads "#id"
@@ -81,8 +81,10 @@ struct MujocoFields {
   const int *eq_objtype = nullptr;
   const double *body_gravcomp = nullptr, *actuator_damping = nullptr, *actuator_armature = nullptr,
                *tendon_armature = nullptr;
-  int nflex = 0, nplugin = 0;            // deformables and engine plugins (MuJoCo >= 3)
-  const int *actuator_plugin = nullptr;  // the engine plugin instance that computes an actuator's force, or -1
+  int nflex = 0, nplugin = 0;  // deformables and engine plugins (MuJoCo >= 3)
+  const int *actuator_plugin = nullptr;
+  const double *geom_fluid = nullptr;  // [12 per geom]: MuJoCo's ellipsoid fluid model where [0] > 0  // the engine
+                                       // plugin instance that computes an actuator's force, or -1
 
   // the name of object `id` of a kind, or "#id" for an unnamed one (its name address checked first)
   std::string name(MjKind kind, int id) const;

@@ -364,6 +364,8 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   if (other.collision_filter_ == CollisionFilter::Mujoco) collision_filter_ = CollisionFilter::Mujoco;
   if (other.friction_rule_ == FrictionRule::Mujoco) friction_rule_ = FrictionRule::Mujoco;
   if (other.impratio_ != 1) impratio_ = other.impratio_;
+  if (other.fluid_density_ != 0 || other.fluid_viscosity_ != 0 || !other.wind_.isZero())
+    fluid_density_ = other.fluid_density_, fluid_viscosity_ = other.fluid_viscosity_, wind_ = other.wind_;
   for (KeyframeRecord key : other.keyframes_) {
     key.joint_begin += joint0;
     key.joint_end += joint0;
@@ -564,6 +566,9 @@ Model ModelBuilder::finalize() const {
   model.collision_filter = collision_filter_;
   model.friction_rule = friction_rule_;
   model.impratio = impratio_;
+  model.fluid_density = fluid_density_;
+  model.fluid_viscosity = fluid_viscosity_;
+  model.wind = wind_;
   model.exclude_count = static_cast<int>(excluded_.size());
   model.exclude_shape.clear();
   for (const auto& [a, b] : excluded_) model.exclude_shape.insert(model.exclude_shape.end(), {a, b});

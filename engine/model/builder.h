@@ -243,6 +243,9 @@ class ModelBuilder {
   void set_friction_rule(FrictionRule rule) { friction_rule_ = rule; }
   // MuJoCo's impratio for soft contacts (model.impratio)
   void set_impratio(Scalar impratio);
+  // the medium the bodies move through, MuJoCo's <option density viscosity wind> (model.fluid_*: its inertia-box
+  // model, engine/solver/parts/applied_wrenches.h): density (kg/m^3) and viscosity (Pa s) >= 0, the wind (m/s)
+  void set_fluid(Scalar density, Scalar viscosity, const Vec3& wind = Vec3::Zero());
   FrictionRule friction_rule() const { return friction_rule_; }
   CollisionFilter collision_filter() const { return collision_filter_; }
   // shapes a and b never collide (MuJoCo's <exclude>, by shape)
@@ -407,6 +410,8 @@ class ModelBuilder {
   CollisionFilter collision_filter_ = CollisionFilter::GroupAndMask;
   FrictionRule friction_rule_ = FrictionRule::GeometricMean;
   Scalar impratio_ = 1;
+  Scalar fluid_density_ = 0, fluid_viscosity_ = 0;
+  Vec3 wind_ = Vec3::Zero();
   int articulation_count_ = 0;
 };
 

@@ -15,6 +15,13 @@ void ModelBuilder::set_impratio(Scalar impratio) {
   impratio_ = impratio;
 }
 
+void ModelBuilder::set_fluid(Scalar density, Scalar viscosity, const Vec3& wind) {
+  check_nonnegative("set_fluid", "density", density);
+  check_nonnegative("set_fluid", "viscosity", viscosity);
+  check_finite("set_fluid", "wind", wind);
+  fluid_density_ = density, fluid_viscosity_ = viscosity, wind_ = wind;
+}
+
 int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh) {
   const std::string item = label("shape", shape_count(), options.name) + " (" + shape_type_name(type) + ")";
   if (body < -1 || body >= body_count()) fail(item, ": body index ", body, " out of range [-1, ", body_count(), ")");

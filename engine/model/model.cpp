@@ -214,6 +214,8 @@ void Model::set_model_id() {
   mix(h, enums, sizeof(enums));
   mix(h, gravity.data(), sizeof(Scalar) * 3);
   mix(h, &impratio, sizeof(impratio));
+  const Scalar fluid[] = {fluid_density, fluid_viscosity, wind[0], wind[1], wind[2]};
+  mix(h, fluid, sizeof(fluid));
 #define NOVAPHY_MIX_FIELD(T, name, count, width) mix(h, name.data(), name.size() * sizeof(T));
   NOVAPHY_MODEL_FIELDS(NOVAPHY_MIX_FIELD)
 #undef NOVAPHY_MIX_FIELD

@@ -310,6 +310,10 @@ struct Model : ModelCounts {
 #undef NOVAPHY_DECLARE
   Scalar timestep = 0.002;  // (s) the step the scene was made for (MJCF's <option timestep>)
   Scalar impratio = 1;      // MuJoCo's ratio of a soft contact's normal to frictional regularisation
+  // the medium's density (kg/m^3) and viscosity (Pa s) and the wind (m/s, world): MuJoCo's inertia-box fluid forces
+  // where either is > 0 (ModelBuilder::set_fluid)
+  Scalar fluid_density = 0, fluid_viscosity = 0;
+  Vec3 wind = Vec3::Zero();
   std::vector<std::string> body_name;
   std::vector<std::string> joint_name;
   std::vector<std::string> shape_name;

@@ -19,7 +19,6 @@ from mujoco_checks import menagerie_entries, menagerie_path, menagerie_status  #
 # robots on disk that use what NovaPhy does not model yet (the real-robots III issue): each fails as named, strictly
 NOT_YET = {
     "robotiq_2f85": "a fixed tendon over joints in separate subtrees joins articulations not one after another",
-    "skydio_x2": "the compiler's assetdir has no translation for MuJoCo 2.2.2's parser",
 }
 
 

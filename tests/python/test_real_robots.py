@@ -274,3 +274,78 @@ def test_a_bad_site_actuator_is_named():
         b.add_site_actuator(body, site, gear=[0, 0, 1, 0, 0, 0], bias=[0, 0, -1])
     with pytest.raises(ValueError, match="actuator 0: gear is not finite"):
         b.add_site_actuator(body, site, gear=[0, 0, np.inf, 0, 0, 0])
+
+
+# a box thrown spinning through a dense, viscous medium with a wind, and a pendulum swinging in it: MuJoCo's
+# inertia-box fluid forces (viscous and quadratic drag) slow them as in MuJoCo, on both routes
+FLUID = """<mujoco><option timestep="0.002" density="800" viscosity="0.5" wind="1 -0.5 0.2"/><worldbody>
+  <body name="box" pos="0 0 1"><freejoint/><geom type="box" size="0.2 0.1 0.05" mass="2"/>
+    <geom type="sphere" size="0.04" pos="0.15 0.05 0" mass="0.5"/></body>
+  <body name="bob" pos="1 0 1"><joint type="hinge" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0.3 0 -0.3"
+    size="0.04"/></body>
+  </worldbody><keyframe><key qvel="2 -1 3 4 -6 2 5"/></keyframe></mujoco>"""
+
+
+@pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
+def test_fluid_forces_slow_the_bodies_as_in_mujoco(tmp_path, route):
+    path = tmp_path / "fluid.xml"
+    path.write_text(FLUID)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    builder = novaphy.ModelBuilder()
+    if route == "from_mujoco":
+        to_qpos = builder.add_mujoco_model(m).to_qpos
+    else:
+        builder.add_mjcf(str(path))
+        to_qpos = novaphy_qpos
+    model = builder.finalize()
+    assert (model.fluid_density, model.fluid_viscosity, list(model.wind)) == (800, 0.5, [1, -0.5, 0.2])
+    state, control = model.state(keyframe=model.keyframes[0]), model.control()
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.angular_damping = 0
+    for _ in range(250):
+        pipeline.collide(state, contacts)
+        solver.step(state, state, control, contacts, m.opt.timestep)
+    mujoco.mj_step(m, d, 250)
+    got = to_qpos(np.array(state.joint_q))
+    np.testing.assert_allclose(got, d.qpos, atol=1e-9)
+    # the medium matters: without it the box would be far from here
+    m.opt.density = m.opt.viscosity = 0
+    dry = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, dry, 0)
+    mujoco.mj_step(m, dry, 250)
+    assert np.max(np.abs(dry.qpos - d.qpos)) > 0.1
+
+
+# a box thrown through water slows in every solver as in SolverFeatherstone (the maximal solvers integrate a free
+# body much as it does: within 1 % of its velocity after a second), to less than half its speed
+@pytest.mark.parametrize("solver", ["SolverSemiImplicit", "SolverXPBD"])
+def test_fluid_drag_in_every_solver(solver):
+    def thrown():
+        b = novaphy.ModelBuilder(gravity=np.array([0.0, 0.0, 0.0]))
+        b.set_fluid(1000.0, 1e-3)
+        box = b.add_body(novaphy.RigidBody.from_box(2.0, [0.1, 0.2, 0.3]))
+        b.add_shape_box(box, [0.1, 0.2, 0.3], collision_group=0, collision_mask=0)
+        m = b.finalize()
+        state = m.state()
+        state.joint_qd[:] = [1.0, -2.0, 0.5, 3.0, 1.0, -1.0]
+        novaphy.eval_fk(m, state)  # (the maximal solvers start from body_qd)
+        return m, state
+
+    speeds = {}
+    for name in ("SolverFeatherstone", solver):
+        m, state = thrown()
+        pipeline = novaphy.CollisionPipeline(m)
+        contacts = pipeline.contacts()
+        step = getattr(novaphy.solvers, name)(m)
+        step.settings.angular_damping = 0
+        for _ in range(100):
+            pipeline.collide(state, contacts)
+            step.step(state, state, m.control(), contacts, 0.01)
+        speeds[name] = np.array(state.body_qd)[0]
+    np.testing.assert_allclose(speeds[solver], speeds["SolverFeatherstone"], rtol=0.01, atol=0.01)
+    start = np.array(thrown()[1].body_qd)[0]
+    assert np.linalg.norm(speeds[solver][:3]) < 0.5 * np.linalg.norm(start[:3])

@@ -147,10 +147,16 @@ void MaximalSolver::forces(int w, const State& in, const Control& control, Scala
     const int b = built_.world_bodies[first + i];
     const Scalar* f = &in.body_f[6 * static_cast<size_t>(b)];
     const Vec3 gyroscopic = -m.w.cross(m.q * (inertia_body_[b] * (m.q.conjugate() * m.w)));
-    Vec3 force(f[0], f[1], f[2]);
+    Vec3 force(f[0], f[1], f[2]), torque(f[3], f[4], f[5]);
     if (model_.body_gravcomp[b] != 0) force += gravity_compensation(model_, b);
+    if (model_.fluid_density > 0 || model_.fluid_viscosity > 0) {
+      Scalar fluid[6];
+      fluid_wrench(model_, b, m.frame(model_, b), m.v, m.w, fluid);
+      force += Vec3(fluid[0], fluid[1], fluid[2]);
+      torque += Vec3(fluid[3], fluid[4], fluid[5]);
+    }
     m.v += dt * (g + m.inv_mass * force);
-    m.w += dt * (m.inv_inertia * (Vec3(f[3], f[4], f[5]) + gyroscopic));
+    m.w += dt * (m.inv_inertia * (torque + gyroscopic));
   }
   for (int k = site_actuator_start_[w]; k < site_actuator_start_[w + 1]; ++k) {
     const int u = site_actuators_[k], b = model_.actuator_body[u];

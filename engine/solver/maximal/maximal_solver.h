@@ -72,8 +72,8 @@ class MaximalSolver {
   virtual GuardSettings guard_settings() const = 0;
 
   // world w's bodies (their slots' motions) sped up by the forces over dt: gravity (less its compensation), body_f,
-  // the gyroscopic torque, the actuators on sites, and joint_f of Free and Ball joints (a scalar dof's is its axis's
-  // AxisSpring force)
+  // the fluid's, the gyroscopic torque, the actuators on sites, and joint_f of Free and Ball joints (a scalar dof's is
+  // its axis's AxisSpring force)
   void forces(int w, const State& in, const Control& control, Scalar dt, std::vector<BodyMotion>& bodies) const;
   // body b's place among its world's bodies (-1: the world)
   int slot(int b) const { return b >= 0 ? body_slot_[b] : -1; }

@@ -1,16 +1,25 @@
 #include "engine/solver/parts/applied_wrenches.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 
 #include "engine/model/actuator.h"
 #include "engine/model/body_kinematics.h"
 
 namespace novaphy {
 
+namespace {
+
+constexpr Scalar kMinMass = 1e-15;  // (MuJoCo's mjMINVAL: a body lighter than this feels no fluid)
+
+}  // namespace
+
 ModelWrenches ModelWrenches::of(const Model& model) {
   ModelWrenches w;
   w.gravity_compensation =
       std::any_of(model.body_gravcomp.begin(), model.body_gravcomp.end(), [](Scalar x) { return x != 0; });
+  w.fluid = model.fluid_density > 0 || model.fluid_viscosity > 0;
   std::vector<int> link_articulation(model.body_count, -1);
   for (int j = 0; j < model.joint_count; ++j) link_articulation[model.joint_child[j]] = model.joint_articulation[j];
   for (int u = 0; u < model.actuator_count; ++u)
@@ -18,9 +27,13 @@ ModelWrenches ModelWrenches::of(const Model& model) {
       w.site_actuators.push_back(u);
       w.site_articulations.push_back(link_articulation[model.actuator_body[u]]);
     }
-  std::sort(w.site_articulations.begin(), w.site_articulations.end());
-  w.site_articulations.erase(std::unique(w.site_articulations.begin(), w.site_articulations.end()),
-                             w.site_articulations.end());
+  for (int b = 0; b < model.body_count && w.fluid; ++b)
+    if (model.body_mass[b] >= kMinMass && link_articulation[b] >= 0)
+      w.fluid_articulations.push_back(link_articulation[b]);
+  for (std::vector<int>* list : {&w.site_articulations, &w.fluid_articulations}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
   return w;
 }
 
@@ -42,6 +55,41 @@ void site_actuator_wrench(const Model& model, int u, Scalar ctrl, const Transfor
   for (int k = 0; k < 3; ++k) wrench[k] = force[k], wrench[3 + k] = torque[k];
 }
 
+void fluid_wrench(const Model& model, int b, const Transform& body_frame, const Vec3& v, const Vec3& w,
+                  Scalar wrench[6]) {
+  std::fill_n(wrench, 6, Scalar(0));
+  const Scalar mass = model.body_mass[b];
+  if (!(mass >= kMinMass)) return;
+  // the body's principal axes (world frame) and the box of its inertia: side k from the moments about the others
+  const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> inertia(&model.body_inertia[9 * b]);
+  Eigen::SelfAdjointEigenSolver<Mat3> principal;
+  principal.computeDirect(Mat3(inertia));
+  const Vec3 I = principal.eigenvalues();
+  const Mat3 R = body_frame.rotation() * principal.eigenvectors();
+  Vec3 box;
+  for (int k = 0; k < 3; ++k)
+    box[k] = std::sqrt(std::max(Scalar(1e-15), I[(k + 1) % 3] + I[(k + 2) % 3] - I[k]) / mass * 6);
+  // the centre of mass's velocity through the wind and the turning, in the principal frame
+  const Vec3 lin = R.transpose() * (v - model.wind), ang = R.transpose() * w;
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+  const Scalar rho = model.fluid_density, mu = model.fluid_viscosity;
+  if (mu > 0) {  // Stokes drag on the sphere of the box's mean side
+    const Scalar diameter = box.sum() / 3;
+    constexpr Scalar kPi = 3.14159265358979323846;
+    torque -= (kPi * diameter * diameter * diameter * mu) * ang;
+    force -= (3 * kPi * diameter * mu) * lin;
+  }
+  if (rho > 0) {  // quadratic drag on each face and each turning axis
+    for (int k = 0; k < 3; ++k) {
+      const Scalar a = box[(k + 1) % 3], c = box[(k + 2) % 3];
+      force[k] -= 0.5 * rho * a * c * std::abs(lin[k]) * lin[k];
+      torque[k] -= rho * box[k] * (a * a * a * a + c * c * c * c) * std::abs(ang[k]) * ang[k] / 64;
+    }
+  }
+  const Vec3 f = R * force, t = R * torque;
+  for (int k = 0; k < 3; ++k) wrench[k] = f[k], wrench[3 + k] = t[k];
+}
+
 void applied_wrenches(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
                       std::vector<Scalar>& out) {
   out.assign(state.body_f.begin(), state.body_f.end());
@@ -51,11 +99,27 @@ void applied_wrenches(const Model& model, const ModelWrenches& wrenches, const S
         const Vec3 f = gravity_compensation(model, b);
         for (int m = 0; m < 3; ++m) out[6 * static_cast<size_t>(b) + m] += f[m];
       }
-  if (!control || wrenches.site_actuators.empty()) return;
-  // the site actuators' bodies where joint_q puts them: their articulations' forward kinematics
   ArticulationScratch s;
   std::vector<Transform> frame(model.body_count);
+  // the fluid's, on each body at its pose and velocity (its articulation's kinematics)
+  for (int a : wrenches.fluid_articulations) {
+    const ArticulationView art = kinematics(model, state, a, s);
+    for (int i = 0; i < art.link_count(); ++i) {
+      const int b = art.body(i);
+      const Transform& X = s.X_world[i];
+      frame[b] = X;
+      const Vec3 w_link = s.v[i].head<3>();
+      const Vec3 com(model.body_com[3 * b], model.body_com[3 * b + 1], model.body_com[3 * b + 2]);
+      const Vec3 v = X.q * Vec3(s.v[i].tail<3>() + w_link.cross(com)), w = X.q * w_link;
+      Scalar wrench[6];
+      fluid_wrench(model, b, X, v, w, wrench);
+      for (int m = 0; m < 6; ++m) out[6 * static_cast<size_t>(b) + m] += wrench[m];
+    }
+  }
+  if (!control || wrenches.site_actuators.empty()) return;
+  // the site actuators' bodies where joint_q puts them: their articulations' forward kinematics
   for (int a : wrenches.site_articulations) {
+    if (std::binary_search(wrenches.fluid_articulations.begin(), wrenches.fluid_articulations.end(), a)) continue;
     const ArticulationView art = kinematics(model, state, a, s);
     for (int i = 0; i < art.link_count(); ++i) frame[art.body(i)] = s.X_world[i];
   }

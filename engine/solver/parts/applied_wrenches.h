@@ -1,9 +1,10 @@
 // The wrenches a model applies to its bodies itself, beside the state's body_f: gravity compensation (MuJoCo's body
-// gravcomp: a force -gravcomp m g through a body's centre of mass, g its world's gravity) and the actuators on sites
-// (MuJoCo's site transmission: a thruster's force and torque, fixed in its body's frame). Written once here:
-// SolverFeatherstone and the evaluations apply body_f with them added (applied_wrenches, at the state's
-// coordinates), the solvers in maximal coordinates add them body by body (gravity_compensation,
-// site_actuator_wrench).
+// gravcomp: a force -gravcomp m g through a body's centre of mass, g its world's gravity), the actuators on sites
+// (MuJoCo's site transmission: a thruster's force and torque, fixed in its body's frame) and the fluid's forces
+// (MuJoCo's inertia-box model: viscous and quadratic drag on the box of the body's inertia). Written once here:
+// SolverFeatherstone and the evaluations apply body_f with them added (applied_wrenches, at the state's coordinates
+// and velocities), the solvers in maximal coordinates add them body by body (gravity_compensation,
+// site_actuator_wrench, fluid_wrench).
 #pragma once
 
 #include <vector>
@@ -12,14 +13,16 @@
 
 namespace novaphy {
 
-// what the model applies itself: some body's gravity compensated, some actuator on a site
+// what the model applies itself: some body's gravity compensated, some actuator on a site, a fluid
 struct ModelWrenches {
   bool gravity_compensation = false;
-  std::vector<int> site_actuators;      // the actuators on sites
-  std::vector<int> site_articulations;  // the articulations their bodies are links of, ascending, once each
+  bool fluid = false;               // the model's fluid density or viscosity is > 0
+  std::vector<int> site_actuators;  // the actuators on sites
+  // the articulations whose bodies' poses (site actuators) or velocities (a fluid) they need, ascending, once each
+  std::vector<int> site_articulations, fluid_articulations;
 
   static ModelWrenches of(const Model& model);
-  bool any() const { return gravity_compensation || !site_actuators.empty(); }
+  bool any() const { return gravity_compensation || fluid || !site_actuators.empty(); }
 };
 
 // body b's compensating force (world frame, through its centre of mass)
@@ -29,10 +32,15 @@ Vec3 gravity_compensation(const Model& model, int b);
 // its body at the pose `body_frame` (its origin's)
 void site_actuator_wrench(const Model& model, int u, Scalar ctrl, const Transform& body_frame, Scalar wrench[6]);
 
+// the fluid's wrench [force; torque] (world frame, about its centre of mass) on body b at the pose `body_frame`, its
+// centre of mass moving at v and turning at w (world frame); zero for a body of no mass
+void fluid_wrench(const Model& model, int b, const Transform& body_frame, const Vec3& v, const Vec3& w,
+                  Scalar wrench[6]);
+
 // the wrenches body_f ([force at the centre of mass; torque] per body) with what the model applies added, into out
-// (its storage kept from call to call): the compensation, and the site actuators' at the control's commands (none
-// where control is null: inverse dynamics leaves actuators out) with their bodies where the state's joint_q puts
-// them
+// (its storage kept from call to call): the compensation, the fluid's, and the site actuators' at the control's
+// commands (none where control is null: inverse dynamics leaves actuators out), with the bodies where the state's
+// joint_q and joint_qd put them
 void applied_wrenches(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
                       std::vector<Scalar>& out);
 

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -140,6 +141,27 @@ TEST(MjcfTranslate, AJointsActuatorForceRangeAndAServosInheritedRange) {
                        "joint 'swing': actuatorfrcrange with 2 actuators on it has no MuJoCo 2.2.2 equivalent");
   std::filesystem::remove(path);
   std::filesystem::remove(two);
+}
+
+// a compiler's assetdir becomes its meshdir and texturedir (its own meshdir kept), the viewer's ellipsoidinertia
+// is dropped: the translation says so, and the file loads
+TEST(MjcfTranslate, AssetdirAndTheViewersEllipsoidinertia) {
+  const std::string path = test::write_temp_file("three_assetdir.xml", R"(<mujoco>
+  <compiler assetdir="assets" meshdir="meshes"/>
+  <visual><global ellipsoidinertia="true"/></visual>
+  <worldbody><body><joint type="hinge"/><geom type="sphere" size="0.1"/></body></worldbody>
+</mujoco>)");
+  const TranslatedMjcf translated = translate_mjcf(path);
+  const auto said = [&](const std::string& what) {
+    return std::any_of(translated.translations.begin(), translated.translations.end(),
+                       [&](const std::string& t) { return t.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("assetdir=\"assets\" -> meshdir and texturedir"));
+  EXPECT_TRUE(said("ellipsoidinertia (how the viewer draws inertias, no physics) -> dropped"));
+  ModelBuilder builder;
+  builder.add_mjcf(path);
+  EXPECT_EQ(builder.finalize().joint_count, 1);
+  std::filesystem::remove(path);
 }
 
 TEST(MjcfTranslate, AnAttributeWithoutATranslationIsNamedWithItsFileAndLine) {
