@@ -15,23 +15,31 @@ mujoco = pytest.importorskip(
 )
 
 
-def both(xml, tmp_path, steps, route="from_mujoco"):
+def both(xml, tmp_path, steps, route="from_mujoco", ctrl=None):
     """today's MuJoCo and NovaPhy (SolverFeatherstone; the model from today's MuJoCo's compile, or the file through
-    add_mjcf: a model of hinges and slides, whose joint_q is MuJoCo's qpos) step the model `steps` times from qpos0:
-    their final qpos"""
+    add_mjcf) step the model `steps` times from its first keyframe (qpos0 without one), its actuators at `ctrl`:
+    their final qpos, and NovaPhy's model"""
     path = tmp_path / "model.xml"
     path.write_text(xml)
     m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
+    if m.nkey:
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+    if ctrl is not None:
+        d.ctrl[:] = ctrl
     mujoco.mj_step(m, d, steps)
+    # (both routes lay the joints and actuators out alike: today's compile's map serves both)
+    imported = novaphy.ModelBuilder().add_mujoco_model(m)
     builder = novaphy.ModelBuilder()
     if route == "from_mujoco":
-        to_qpos = builder.add_mujoco_model(m).to_qpos
+        builder.add_mujoco_model(m)
     else:
         builder.add_mjcf(str(path))
-        to_qpos = np.asarray
     model = builder.finalize()
-    state, control = model.state(), model.control()
+    state = model.state(keyframe=model.keyframes[0]) if m.nkey else model.state()
+    control = model.control()
+    for u, a in enumerate(imported.actuator_map if ctrl is not None else []):
+        control.actuator_ctrl[a] = ctrl[u]
     pipeline = novaphy.CollisionPipeline(model)
     contacts = pipeline.contacts()
     solver = novaphy.solvers.SolverFeatherstone(model)
@@ -39,7 +47,7 @@ def both(xml, tmp_path, steps, route="from_mujoco"):
     for _ in range(steps):
         pipeline.collide(state, contacts)
         solver.step(state, state, control, contacts, m.opt.timestep)
-    return d.qpos.copy(), to_qpos(np.array(state.joint_q))
+    return d.qpos.copy(), imported.to_qpos(np.array(state.joint_q)), model
 
 
 # a 1 kg box resting on the floor on its own solimp: (2, 1, ...) is Trossen's finger pads' (dmin and dmax clamped to
@@ -49,7 +57,7 @@ def test_a_solimp_outside_mujocos_ranges_is_clamped_as_mujoco_clamps_it(tmp_path
     xml = f"""<mujoco><worldbody><geom type="plane" size="1 1 0.1"/>
       <body pos="0 0 0.1"><freejoint/><geom type="box" size="0.1 0.1 0.1" mass="1" solimp="{solimp}"/></body>
     </worldbody></mujoco>"""
-    expected, got = both(xml, tmp_path, 500)
+    expected, got, _ = both(xml, tmp_path, 500)
     # the box sinks to where its impedance holds its weight: the same depth as MuJoCo's
     assert abs(got[2] - expected[2]) < 1e-6, (got[2], expected[2])
 
@@ -111,7 +119,7 @@ ARMS = """<mujoco><option timestep="0.002"/><worldbody>{}</worldbody></mujoco>""
 
 @pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
 def test_gravity_compensation_holds_the_arms_as_mujoco_does(tmp_path, route):
-    expected, got = both(ARMS, tmp_path, 500, route)
+    expected, got, _ = both(ARMS, tmp_path, 500, route)
     np.testing.assert_allclose(got, expected, atol=1e-12)
     np.testing.assert_allclose(got[:3], 0, atol=1e-12)  # the compensated arm floats where it was put
     assert np.max(np.abs(got[3:])) > 0.1  # the other one sags
@@ -215,40 +223,10 @@ THRUSTERS = """<mujoco><option timestep="0.005"/><worldbody>
 
 @pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
 def test_thrusters_on_sites_move_the_bodies_as_in_mujoco(tmp_path, route):
-    path = tmp_path / "thrusters.xml"
-    path.write_text(THRUSTERS)
-    m = mujoco.MjModel.from_xml_path(str(path))
-    d = mujoco.MjData(m)
-    ctrl = np.array([4.5, 5.0, 4.0, 5.5, 2.0])
-    builder = novaphy.ModelBuilder()
-    if route == "from_mujoco":
-        imported = builder.add_mujoco_model(m)
-        to_qpos, actuators = imported.to_qpos, imported.actuator_map
-    else:
-        builder.add_mjcf(str(path))
-        to_qpos, actuators = None, list(range(5))
-    model = builder.finalize()
+    expected, got, model = both(THRUSTERS, tmp_path, 200, route, ctrl=[4.5, 5.0, 4.0, 5.5, 2.0])
     assert list(model.actuator_body) == [0, 0, 0, 0, 1]
-    state, control = model.state(), model.control()
-    pipeline = novaphy.CollisionPipeline(model)
-    contacts = pipeline.contacts()
-    solver = novaphy.solvers.SolverFeatherstone(model)
-    solver.settings.angular_damping = 0
-    for u, a in enumerate(actuators):
-        control.actuator_ctrl[a] = ctrl[u]
-    d.ctrl[:] = ctrl
-    for _ in range(200):
-        pipeline.collide(state, contacts)
-        solver.step(state, state, control, contacts, m.opt.timestep)
-    mujoco.mj_step(m, d, 200)
-    got = to_qpos(np.array(state.joint_q)) if to_qpos else novaphy_qpos(np.array(state.joint_q))
-    assert np.max(np.abs(d.qpos[:3] - [0, 0, 1])) > 0.5 and abs(d.qpos[7]) > 0.5  # they moved
-    np.testing.assert_allclose(got, d.qpos, atol=1e-9)
-
-
-def novaphy_qpos(q):
-    """MuJoCo's qpos of the thrusters' model from NovaPhy's joint_q (a Free joint's quaternion x, y, z, w)"""
-    return np.concatenate([q[:3], [q[6]], q[3:6], q[7:]])
+    assert np.max(np.abs(expected[:3] - [0, 0, 1])) > 0.5 and abs(expected[7]) > 0.5  # they moved
+    np.testing.assert_allclose(got, expected, atol=1e-9)
 
 
 # a box lifted by thrust equal to its weight hovers, and one of twice its weight rises at g, in every solver
@@ -288,36 +266,16 @@ FLUID = """<mujoco><option timestep="0.002" density="800" viscosity="0.5" wind="
 
 @pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
 def test_fluid_forces_slow_the_bodies_as_in_mujoco(tmp_path, route):
-    path = tmp_path / "fluid.xml"
-    path.write_text(FLUID)
-    m = mujoco.MjModel.from_xml_path(str(path))
-    d = mujoco.MjData(m)
-    mujoco.mj_resetDataKeyframe(m, d, 0)
-    builder = novaphy.ModelBuilder()
-    if route == "from_mujoco":
-        to_qpos = builder.add_mujoco_model(m).to_qpos
-    else:
-        builder.add_mjcf(str(path))
-        to_qpos = novaphy_qpos
-    model = builder.finalize()
+    expected, got, model = both(FLUID, tmp_path, 250, route)
     assert (model.fluid_density, model.fluid_viscosity, list(model.wind)) == (800, 0.5, [1, -0.5, 0.2])
-    state, control = model.state(keyframe=model.keyframes[0]), model.control()
-    pipeline = novaphy.CollisionPipeline(model)
-    contacts = pipeline.contacts()
-    solver = novaphy.solvers.SolverFeatherstone(model)
-    solver.settings.angular_damping = 0
-    for _ in range(250):
-        pipeline.collide(state, contacts)
-        solver.step(state, state, control, contacts, m.opt.timestep)
-    mujoco.mj_step(m, d, 250)
-    got = to_qpos(np.array(state.joint_q))
-    np.testing.assert_allclose(got, d.qpos, atol=1e-9)
+    np.testing.assert_allclose(got, expected, atol=1e-9)
     # the medium matters: without it the box would be far from here
+    m = mujoco.MjModel.from_xml_string(FLUID)
     m.opt.density = m.opt.viscosity = 0
     dry = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, dry, 0)
     mujoco.mj_step(m, dry, 250)
-    assert np.max(np.abs(dry.qpos - d.qpos)) > 0.1
+    assert np.max(np.abs(dry.qpos - expected)) > 0.1
 
 
 # a box thrown through water slows in every solver as in SolverFeatherstone (the maximal solvers integrate a free
