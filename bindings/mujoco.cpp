@@ -37,8 +37,10 @@ class MjModelFields {
     f_.viscosity = opt.attr("viscosity").cast<double>();
     const double* wind = array<double>(opt.attr("wind"), "opt.wind", 1, 3);
     std::copy_n(wind, 3, f_.wind);
-    const int clamp = py::module_::import("mujoco").attr("mjtDisableBit").attr("mjDSBL_CLAMPCTRL").cast<int>();
-    f_.clamp_ctrl = !(opt.attr("disableflags").cast<int>() & clamp);
+    const py::object bits = py::module_::import("mujoco").attr("mjtDisableBit");
+    const int disabled = opt.attr("disableflags").cast<int>();
+    f_.clamp_ctrl = !(disabled & bits.attr("mjDSBL_CLAMPCTRL").cast<int>());
+    f_.filter_parent = !(disabled & bits.attr("mjDSBL_FILTERPARENT").cast<int>());
     names_ = attr("names").cast<std::string>();
     f_.names = names_.c_str();
     f_.nnames = static_cast<int>(names_.size());

@@ -28,7 +28,7 @@ namespace {
 
 // the applied wrenches: the state's body_f, with what the model applies itself added where it has some (gravity
 // compensation, a fluid's forces; the site actuators where a control is given) into `applied`
-const Scalar* wrenches_of(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
+const Scalar* wrenches_of(const Model& model, ModelWrenches& wrenches, const State& state, const Control* control,
                           std::vector<Scalar>& applied) {
   if (!wrenches.gravity_compensation && !wrenches.fluid && (!control || wrenches.site_actuators.empty()))
     return state.body_f.data();
@@ -99,7 +99,8 @@ VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& q
   VecX tau(model.joint_dof_count);
   ArticulationScratch s;
   std::vector<Scalar> applied;
-  const Scalar* body_f = wrenches_of(model, ModelWrenches::of(model), state, nullptr, applied);
+  ModelWrenches wrenches = ModelWrenches::of(model);
+  const Scalar* body_f = wrenches_of(model, wrenches, state, nullptr, applied);
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     articulation_inverse_dynamics(state, art, s, body_f, qdd.data() + art.qd_begin(), tau.data() + art.qd_begin());
@@ -195,7 +196,8 @@ VecX eval_forward_dynamics(const Model& model, const State& state, const Control
   VecX qdd(model.joint_dof_count);
   ArticulationScratch s;
   std::vector<Scalar> applied;
-  const Scalar* body_f = wrenches_of(model, ModelWrenches::of(model), state, &control, applied);
+  ModelWrenches wrenches = ModelWrenches::of(model);
+  const Scalar* body_f = wrenches_of(model, wrenches, state, &control, applied);
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = kinematics(model, state, a, s);
     const int nv = art.dof_count();

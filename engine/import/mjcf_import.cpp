@@ -584,6 +584,8 @@ class MjcfImporter {
                     "': actuatorgravcomp under an actuatorfrcrange (the compensation is not clamped by the range)");
     if (m_.nflex > 0) warn_motion(std::to_string(m_.nflex) + " flex object(s) (deformables) are not modelled");
     if (m_.nplugin > 0) warn_motion(std::to_string(m_.nplugin) + " engine plugin instance(s) are not modelled");
+    if (!m_.filter_parent)
+      warn_motion("the contact filter's parent rule is disabled (<flag filterparent=\"disable\">): NovaPhy keeps it");
     if (m_.npair > 0) warn_motion(std::to_string(m_.npair) + " explicit contact pair(s) are not modelled");
     for (int g = 0; g < m_.ngeom && m_.geom_fluid && (m_.density > 0 || m_.viscosity > 0); ++g)
       if (m_.geom_fluid[12 * g] > 0)

@@ -284,6 +284,7 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.viscosity = m->opt.viscosity;
   for (int k = 0; k < 3; ++k) f.wind[k] = m->opt.wind[k];
   f.clamp_ctrl = !(m->opt.disableflags & mjDSBL_CLAMPCTRL);
+  f.filter_parent = !(m->opt.disableflags & mjDSBL_FILTERPARENT);
   f.names = m->names;
   f.name_bodyadr = m->name_bodyadr, f.name_jntadr = m->name_jntadr, f.name_geomadr = m->name_geomadr;
   f.name_meshadr = m->name_meshadr, f.name_tendonadr = m->name_tendonadr, f.name_actuatoradr = m->name_actuatoradr;

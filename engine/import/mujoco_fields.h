@@ -22,7 +22,8 @@ struct MujocoFields {
   // options
   const double *gravity = nullptr;  // [3]
   double timestep = 0.002, impratio = 1, density = 0, viscosity = 0, wind[3] = {0, 0, 0};
-  bool clamp_ctrl = true;  // mjDSBL_CLAMPCTRL not set (its bit differs between versions)
+  bool clamp_ctrl = true;     // mjDSBL_CLAMPCTRL not set (its bit differs between versions)
+  bool filter_parent = true;  // mjDSBL_FILTERPARENT not set
 
   // names: the null-terminated names at each kind's addresses; an empty one reads "#id"
   const char *names = nullptr;

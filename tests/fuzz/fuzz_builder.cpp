@@ -17,7 +17,7 @@ namespace {
 
 void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
   const int bodies = builder.body_count(), joints = builder.joint_count();
-  switch (data.ConsumeIntegralInRange(0, 9)) {
+  switch (data.ConsumeIntegralInRange(0, 10)) {
     case 0: {
       RigidBody body;
       body.mass = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(0.1, 5) : fuzz::number(data);
@@ -122,6 +122,25 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
       }
       break;
     }
+    case 9: {  // what the model applies itself: gravity compensation, a thruster on a site, a fluid
+      const int body = data.ConsumeIntegralInRange(-1, bodies);
+      switch (data.ConsumeIntegralInRange(0, 2)) {
+        case 0: builder.set_body_gravcomp(body, fuzz::number(data)); break;
+        case 1: {
+          const Transform site{fuzz::vec3(data),
+                               Quat(fuzz::number(data), fuzz::number(data), fuzz::number(data), fuzz::number(data))};
+          ActuatorOptions options;
+          if (data.ConsumeBool()) options.bias = fuzz::vec3(data), options.gear = fuzz::number(data);
+          builder.add_site_actuator(body, site,
+                                    {fuzz::number(data), fuzz::number(data), fuzz::number(data), fuzz::number(data),
+                                     fuzz::number(data), fuzz::number(data)},
+                                    options);
+          break;
+        }
+        default: builder.set_fluid(fuzz::number(data), fuzz::number(data), fuzz::vec3(data)); break;
+      }
+      break;
+    }
     default: builder.add_ground_plane(fuzz::number(data)); break;
   }
 }
@@ -145,6 +164,7 @@ void simulate(FuzzedDataProvider& data, const Model& model) {
   for (Scalar& q : state.joint_qd) q = data.ConsumeFloatingPointInRange<Scalar>(-5, 5);
   Control control = model.control();
   for (Scalar& f : control.joint_f) f = fuzz::number(data);
+  for (Scalar& u : control.actuator_ctrl) u = data.ConsumeBool() ? data.ConsumeFloatingPointInRange<Scalar>(-5, 5) : 0;
   eval_forward_dynamics(model, state, control,
                         data.ConsumeBool() ? ForwardDynamicsMethod::Aba : ForwardDynamicsMethod::Crba);
   if (model.articulation_count == 0) return;

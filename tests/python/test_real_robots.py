@@ -307,3 +307,16 @@ def test_fluid_drag_in_every_solver(solver):
     np.testing.assert_allclose(speeds[solver], speeds["SolverFeatherstone"], rtol=0.01, atol=0.01)
     start = np.array(thrown()[1].body_qd)[0]
     assert np.linalg.norm(speeds[solver][:3]) < 0.5 * np.linalg.norm(start[:3])
+
+
+# MuJoCo's parent filter turned off is reported on both routes: NovaPhy keeps it (a parent and its child never meet)
+def test_a_disabled_parent_filter_is_reported(tmp_path):
+    path = tmp_path / "unfiltered.xml"
+    path.write_text(
+        """<mujoco><option><flag filterparent="disable"/></option><worldbody><body><joint type="hinge"/>
+        <geom size="0.1"/><body><joint type="hinge"/><geom size="0.1"/></body></body></worldbody></mujoco>"""
+    )
+    with pytest.warns(UserWarning, match="parent rule is disabled"):
+        novaphy.ModelBuilder().add_mujoco_model(mujoco.MjModel.from_xml_path(str(path)))
+    with pytest.warns(UserWarning, match="parent rule is disabled"):
+        novaphy.ModelBuilder().add_mjcf(str(path))

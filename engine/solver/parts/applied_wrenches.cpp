@@ -90,7 +90,7 @@ void fluid_wrench(const Model& model, int b, const Transform& body_frame, const 
   for (int k = 0; k < 3; ++k) wrench[k] = f[k], wrench[3 + k] = t[k];
 }
 
-void applied_wrenches(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
+void applied_wrenches(const Model& model, ModelWrenches& wrenches, const State& state, const Control* control,
                       std::vector<Scalar>& out) {
   out.assign(state.body_f.begin(), state.body_f.end());
   if (wrenches.gravity_compensation)
@@ -99,8 +99,9 @@ void applied_wrenches(const Model& model, const ModelWrenches& wrenches, const S
         const Vec3 f = gravity_compensation(model, b);
         for (int m = 0; m < 3; ++m) out[6 * static_cast<size_t>(b) + m] += f[m];
       }
-  ArticulationScratch s;
-  std::vector<Transform> frame(model.body_count);
+  ArticulationScratch& s = wrenches.scratch;
+  std::vector<Transform>& frame = wrenches.frame;
+  frame.resize(model.body_count);
   // the fluid's, on each body at its pose and velocity (its articulation's kinematics)
   for (int a : wrenches.fluid_articulations) {
     const ArticulationView art = kinematics(model, state, a, s);

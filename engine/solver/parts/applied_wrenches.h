@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/model/model.h"
+#include "kernels/articulation.h"
 
 namespace novaphy {
 
@@ -20,6 +21,10 @@ struct ModelWrenches {
   std::vector<int> site_actuators;  // the actuators on sites
   // the articulations whose bodies' poses (site actuators) or velocities (a fluid) they need, ascending, once each
   std::vector<int> site_articulations, fluid_articulations;
+  // applied_wrenches' scratch, kept from call to call (a step allocates nothing): an articulation's kinematics, the
+  // bodies' poses
+  ArticulationScratch scratch;
+  std::vector<Transform> frame;
 
   static ModelWrenches of(const Model& model);
   bool any() const { return gravity_compensation || fluid || !site_actuators.empty(); }
@@ -41,7 +46,7 @@ void fluid_wrench(const Model& model, int b, const Transform& body_frame, const 
 // (its storage kept from call to call): the compensation, the fluid's, and the site actuators' at the control's
 // commands (none where control is null: inverse dynamics leaves actuators out), with the bodies where the state's
 // joint_q and joint_qd put them
-void applied_wrenches(const Model& model, const ModelWrenches& wrenches, const State& state, const Control* control,
+void applied_wrenches(const Model& model, ModelWrenches& wrenches, const State& state, const Control* control,
                       std::vector<Scalar>& out);
 
 }  // namespace novaphy
