@@ -30,8 +30,7 @@ namespace {
 // compensation, a fluid's forces; the site actuators where a control is given) into `applied`
 const Scalar* wrenches_of(const Model& model, ModelWrenches& wrenches, const State& state, const Control* control,
                           std::vector<Scalar>& applied) {
-  if (!wrenches.gravity_compensation && !wrenches.fluid && (!control || wrenches.site_actuators.empty()))
-    return state.body_f.data();
+  if (!wrenches.any(control != nullptr)) return state.body_f.data();
   applied_wrenches(model, wrenches, state, control, applied);
   return applied.data();
 }

@@ -82,10 +82,9 @@ struct MujocoFields {
   const int *eq_objtype = nullptr;
   const double *body_gravcomp = nullptr, *actuator_damping = nullptr, *actuator_armature = nullptr,
                *tendon_armature = nullptr;
-  int nflex = 0, nplugin = 0;  // deformables and engine plugins (MuJoCo >= 3)
-  const int *actuator_plugin = nullptr;
-  const double *geom_fluid = nullptr;  // [12 per geom]: MuJoCo's ellipsoid fluid model where [0] > 0  // the engine
-                                       // plugin instance that computes an actuator's force, or -1
+  int nflex = 0, nplugin = 0;            // deformables and engine plugins (MuJoCo >= 3)
+  const int *actuator_plugin = nullptr;  // the engine plugin instance that computes an actuator's force, or -1
+  const double *geom_fluid = nullptr;    // [12 per geom]: MuJoCo's ellipsoid fluid model where [0] > 0
 
   // the name of object `id` of a kind, or "#id" for an unnamed one (its name address checked first)
   std::string name(MjKind kind, int id) const;

@@ -309,6 +309,16 @@ def test_fluid_drag_in_every_solver(solver):
     assert np.linalg.norm(speeds[solver][:3]) < 0.5 * np.linalg.norm(start[:3])
 
 
+def test_a_bad_fluid_is_named():
+    b = novaphy.ModelBuilder()
+    with pytest.raises(ValueError, match="set_fluid: density must be finite and >= 0, got -1"):
+        b.set_fluid(-1.0, 0.0)
+    with pytest.raises(ValueError, match="set_fluid: viscosity must be finite and >= 0, got nan"):
+        b.set_fluid(1.0, float("nan"))
+    with pytest.raises(ValueError, match="set_fluid: wind\\[1\\] is not finite: inf"):
+        b.set_fluid(1.0, 0.0, wind=[0.0, np.inf, 0.0])
+
+
 # MuJoCo's parent filter turned off is reported on both routes: NovaPhy keeps it (a parent and its child never meet)
 def test_a_disabled_parent_filter_is_reported(tmp_path):
     path = tmp_path / "unfiltered.xml"

@@ -149,7 +149,7 @@ void MaximalSolver::forces(int w, const State& in, const Control& control, Scala
     const Vec3 gyroscopic = -m.w.cross(m.q * (inertia_body_[b] * (m.q.conjugate() * m.w)));
     Vec3 force(f[0], f[1], f[2]), torque(f[3], f[4], f[5]);
     if (model_.body_gravcomp[b] != 0) force += gravity_compensation(model_, b);
-    if (model_.fluid_density > 0 || model_.fluid_viscosity > 0) {
+    if (has_fluid(model_)) {
       Scalar fluid[6];
       fluid_wrench(model_, b, m.frame(model_, b), m.v, m.w, fluid);
       force += Vec3(fluid[0], fluid[1], fluid[2]);

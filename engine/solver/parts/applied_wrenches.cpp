@@ -19,7 +19,7 @@ ModelWrenches ModelWrenches::of(const Model& model) {
   ModelWrenches w;
   w.gravity_compensation =
       std::any_of(model.body_gravcomp.begin(), model.body_gravcomp.end(), [](Scalar x) { return x != 0; });
-  w.fluid = model.fluid_density > 0 || model.fluid_viscosity > 0;
+  w.fluid = has_fluid(model);
   std::vector<int> link_articulation(model.body_count, -1);
   for (int j = 0; j < model.joint_count; ++j) link_articulation[model.joint_child[j]] = model.joint_articulation[j];
   for (int u = 0; u < model.actuator_count; ++u)

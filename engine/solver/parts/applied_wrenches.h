@@ -27,8 +27,14 @@ struct ModelWrenches {
   std::vector<Transform> frame;
 
   static ModelWrenches of(const Model& model);
-  bool any() const { return gravity_compensation || fluid || !site_actuators.empty(); }
+  // something to apply (`actuated`: with the actuators' commands; inverse dynamics has none)
+  bool any(bool actuated = true) const {
+    return gravity_compensation || fluid || (actuated && !site_actuators.empty());
+  }
 };
+
+// the model's bodies move through a fluid: its density or viscosity is > 0
+inline bool has_fluid(const Model& model) { return model.fluid_density > 0 || model.fluid_viscosity > 0; }
 
 // body b's compensating force (world frame, through its centre of mass)
 Vec3 gravity_compensation(const Model& model, int b);

@@ -25,6 +25,15 @@ std::set<std::pair<int, int>> colliding_pairs(const Model& model, const ShapeFil
   return pairs;
 }
 
+// the model of the MJCF `text` (written to a file `name` and imported), gravity -z
+Model model_of_mjcf(const std::string& name, const std::string& text) {
+  const std::string path = test::write_temp_file(name, text);
+  ModelBuilder builder(Vec3(0, 0, -9.81));
+  builder.add_mjcf(path);
+  std::filesystem::remove(path);
+  return builder.finalize();
+}
+
 // a chain a - b - c of revolute joints, two shapes on a: shapes of one body, a parent and its child never collide;
 // a and its grandchild c do, unless self_collision is off
 TEST(ShapeFilter, ParentAndChildNeverCollideGrandchildUnlessSelfCollisionIsOff) {
@@ -47,7 +56,7 @@ TEST(ShapeFilter, ParentAndChildNeverCollideGrandchildUnlessSelfCollisionIsOff) 
 // a MuJoCo body of two joints is a chain with a massless link between it and its parent: the parent is still its
 // parent
 TEST(ShapeFilter, ParentThroughMasslessLinks) {
-  const std::string path = test::write_temp_file("two_joints.xml", R"(
+  const Model model = model_of_mjcf("two_joints.xml", R"(
 <mujoco>
   <worldbody>
     <body name="a"><freejoint/><geom type="sphere" size="0.1"/>
@@ -58,10 +67,6 @@ TEST(ShapeFilter, ParentThroughMasslessLinks) {
     </body>
   </worldbody>
 </mujoco>)");
-  ModelBuilder builder(Vec3(0, 0, -9.81));
-  builder.add_mjcf(path);
-  std::filesystem::remove(path);
-  const Model model = builder.finalize();
   ASSERT_EQ(model.shape_count, 3);
   ASSERT_GT(model.body_count, 3);  // (the massless link)
   EXPECT_EQ(colliding_pairs(model, ShapeFilter(model, true)), (std::set<std::pair<int, int>>{{0, 2}}));
@@ -71,7 +76,7 @@ TEST(ShapeFilter, ParentThroughMasslessLinks) {
 // meets no world shape; a tip welded to b never meets b nor b's parent a; c, whose parent is the tip, counts b as
 // its parent (Allegro's fingertips: without the rule c met b)
 TEST(ShapeFilter, WeldedBodiesCountAsTheBodyTheyAreWeldedTo) {
-  const std::string path = test::write_temp_file("welded.xml", R"(
+  const Model model = model_of_mjcf("welded.xml", R"(
 <mujoco>
   <worldbody>
     <geom type="plane" size="1 1 0.1"/>
@@ -85,10 +90,6 @@ TEST(ShapeFilter, WeldedBodiesCountAsTheBodyTheyAreWeldedTo) {
     </body>
   </worldbody>
 </mujoco>)");
-  ModelBuilder builder(Vec3(0, 0, -9.81));
-  builder.add_mjcf(path);
-  std::filesystem::remove(path);
-  const Model model = builder.finalize();
   ASSERT_EQ(model.shape_count, 6);  // plane, stand, a, b, tip, c
   EXPECT_EQ(colliding_pairs(model, ShapeFilter(model, true)),
             (std::set<std::pair<int, int>>{{0, 2}, {0, 3}, {0, 4}, {0, 5}, {1, 2}, {1, 3}, {1, 4}, {1, 5}, {2, 5}}));
