@@ -67,6 +67,13 @@ def configurations(dt):
     out = []
     for scale in (1, 2):
         out.append(("featherstone", f"dt/{scale}", dt / scale, lambda m: S.SolverFeatherstone(m)))
+
+    def hard_rows(m):  # (an imported model's limits, dry friction and equalities as hard rows)
+        solver = S.SolverFeatherstone(m)
+        solver.settings.soft_constraints = False
+        return solver
+
+    out.append(("featherstone", "dt/1, hard rows", dt, hard_rows))
     for scale in (1, 2):
         for sweeps in (10, 20, 50):
             out.append(("semi_implicit", f"dt/{scale}, {sweeps} sweeps", dt / scale,

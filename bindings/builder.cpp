@@ -154,7 +154,14 @@ void bind_builder(py::module_& m) {
       .def_readwrite("q_ref", &JointDofConfig::q_ref)
       .def_readwrite("q0", &JointDofConfig::q0, "Initial coordinate (Revolute, Prismatic).")
       .def_readwrite("target_ke", &JointDofConfig::target_ke)
-      .def_readwrite("target_kd", &JointDofConfig::target_kd);
+      .def_readwrite("target_kd", &JointDofConfig::target_kd)
+      .def_readwrite("limit_solref", &JointDofConfig::limit_solref,
+                     "Softness of its limits' rows (MuJoCo's solreflimit): (0, 0) hard rows, else (time constant, "
+                     "damping ratio) or (-stiffness, -damping).")
+      .def_readwrite("limit_solimp", &JointDofConfig::limit_solimp, "MuJoCo's solimplimit.")
+      .def_readwrite("friction_solref", &JointDofConfig::friction_solref,
+                     "Softness of its dry friction's row (MuJoCo's solreffriction), as limit_solref.")
+      .def_readwrite("friction_solimp", &JointDofConfig::friction_solimp, "MuJoCo's solimpfriction.");
 
   auto builder = py::class_<ModelBuilder>(m, "ModelBuilder", "Builds a Model; every call checks its arguments.");
   builder
@@ -231,15 +238,20 @@ void bind_builder(py::module_& m) {
       .def(
           "add_tendon",
           [](ModelBuilder& self, const std::vector<int>& joints, const std::vector<Scalar>& coefs, Scalar stiffness,
-             Scalar damping, Scalar rest_length, Scalar limit_lower, Scalar limit_upper, const std::string& name) {
-            return self.add_tendon(joints, coefs, {stiffness, damping, rest_length, limit_lower, limit_upper, name});
+             Scalar damping, Scalar rest_length, Scalar limit_lower, Scalar limit_upper, const std::string& name,
+             const std::array<Scalar, 2>& limit_solref, const std::array<Scalar, 5>& limit_solimp) {
+            return self.add_tendon(
+                joints, coefs,
+                {stiffness, damping, rest_length, limit_lower, limit_upper, name, limit_solref, limit_solimp});
           },
           py::arg("joints"), py::arg("coefs"), py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
           py::arg("rest_length") = NAN, py::arg("limit_lower") = -INFINITY, py::arg("limit_upper") = INFINITY,
-          py::arg("name") = "",
+          py::arg("name") = "", py::arg("limit_solref") = std::array<Scalar, 2>{0, 0},
+          py::arg("limit_solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2},
           "Fixed tendon: length = sum coefs[i] * q(joints[i]) over Revolute/Prismatic joints, with a spring "
           "(rest_length NaN: its length at the initial coordinates) and damper, taken explicitly, and limits kept by "
-          "rows of the step. finalize() joins its joints' articulations into one where they have a fixed base and "
+          "rows of the step (soft as MuJoCo's where limit_solref is not (0, 0): JointDofConfig.limit_solref). "
+          "finalize() joins its joints' articulations into one where they have a fixed base and "
           "follow one another (a gripper's fingers on a static palm); a floating one or one given by "
           "add_articulation is an error.")
       .def(
@@ -282,6 +294,10 @@ void bind_builder(py::module_& m) {
            py::arg("poly"), py::arg("name") = "",
            "Equality (MuJoCo's joint): q1 - q1_0 = poly[0] + poly[1] x + ... + poly[4] x^4, x = q2 - q2_0, for "
            "Revolute/Prismatic joints (joint2 -1: x = 0).")
+      .def("set_equality_softness", &ModelBuilder::set_equality_softness, py::arg("equality"), py::arg("solref"),
+           py::arg("solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2},
+           "Makes an equality's rows soft as MuJoCo's solref and solimp (JointDofConfig.limit_solref says how; "
+           "hard rows until this is called).")
       .def_property_readonly("equality_count", &ModelBuilder::equality_count)
       .def(
           "add_sensor",

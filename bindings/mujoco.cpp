@@ -145,6 +145,11 @@ class MjModelFields {
     f_.dof_armature = field<double>("dof_armature", f_.nv);
     f_.dof_damping = field<double>("dof_damping", f_.nv);
     f_.dof_frictionloss = field<double>("dof_frictionloss", f_.nv);
+    f_.jnt_solref = field<double>("jnt_solref", nj, mjNREF);
+    f_.jnt_solimp = field<double>("jnt_solimp", nj, mjNIMP);
+    f_.jnt_margin = field<double>("jnt_margin", nj);
+    f_.dof_solref = field<double>("dof_solref", f_.nv, mjNREF);
+    f_.dof_solimp = field<double>("dof_solimp", f_.nv, mjNIMP);
     f_.key_qpos = field<double>("key_qpos", f_.nkey, f_.nq);
     f_.key_qvel = field<double>("key_qvel", f_.nkey, f_.nv);
     f_.key_ctrl = field<double>("key_ctrl", f_.nkey, f_.nu);
@@ -198,6 +203,9 @@ class MjModelFields {
     f_.tendon_stiffness = field<double>("tendon_stiffness", nt);
     f_.tendon_damping = field<double>("tendon_damping", nt);
     f_.tendon_frictionloss = field<double>("tendon_frictionloss", nt);
+    f_.tendon_solref_lim = field<double>("tendon_solref_lim", nt, mjNREF);
+    f_.tendon_solimp_lim = field<double>("tendon_solimp_lim", nt, mjNIMP);
+    f_.tendon_margin = field<double>("tendon_margin", nt);
     f_.tendon_lengthspring = field_of_width<double>("tendon_lengthspring", nt, {1, 2}, &f_.tendon_lengthspring_width);
     f_.tendon_armature = newer_field<double>("tendon_armature", nt);
     f_.nwrap = size("nwrap");
@@ -228,6 +236,8 @@ class MjModelFields {
     f_.eq_objtype = newer_field<int>("eq_objtype", ne);
     f_.eq_active = field<MjByte>(py::hasattr(m_, "eq_active0") ? "eq_active0" : "eq_active", ne);
     f_.eq_data = field_of_width<double>("eq_data", ne, {mjNEQDATA, mjNEQDATA + 1}, &f_.eq_data_width);
+    f_.eq_solref = field<double>("eq_solref", ne, mjNREF);
+    f_.eq_solimp = field<double>("eq_solimp", ne, mjNIMP);
   }
 
   // sensor types and object types by name in MuJoCo 2.2.2's numbering (the user's MuJoCo numbers them otherwise)

@@ -52,6 +52,24 @@ inline M both(const M& a, const M& b) {
     return a & b;
 }
 
+// a or b, lane by lane
+template <typename M>
+inline M either(const M& a, const M& b) {
+  if constexpr (std::is_same_v<M, bool>)
+    return a || b;
+  else
+    return a | b;
+}
+
+// a and not b, lane by lane
+template <typename M>
+inline M but_not(const M& a, const M& b) {
+  if constexpr (std::is_same_v<M, bool>)
+    return a && !b;
+  else
+    return a & ~b;
+}
+
 // |x|; a NaN stays a NaN
 template <typename V>
 inline V magnitude(const V& x) {

@@ -186,7 +186,7 @@ class MjcfImporter {
   }
 
   // joint j's name, axis, armature, damping and (hinge and slide) limits
-  JointOptions joint_options(int j, const std::string& joint_name) const {
+  JointOptions joint_options(int j, const std::string& joint_name) {
     const int da = m_.jnt_dofadr[j];
     JointOptions options;
     options.name = joint_name;
@@ -195,9 +195,14 @@ class MjcfImporter {
     dof.armature = m_.dof_armature[da];
     dof.damping = m_.dof_damping[da];
     dof.frictionloss = m_.dof_frictionloss[da];
+    dof.friction_solref = solref(m_.dof_solref + mjNREF * da, "joint '" + joint_name + "' solreffriction");
+    std::copy_n(m_.dof_solimp + mjNIMP * da, mjNIMP, dof.friction_solimp.begin());
     if (m_.jnt_limited[j] && (m_.jnt_type[j] == mjJNT_HINGE || m_.jnt_type[j] == mjJNT_SLIDE)) {
       dof.limit_lower = m_.jnt_range[2 * j];
       dof.limit_upper = m_.jnt_range[2 * j + 1];
+      dof.limit_solref = solref(m_.jnt_solref + mjNREF * j, "joint '" + joint_name + "' solreflimit");
+      std::copy_n(m_.jnt_solimp + mjNIMP * j, mjNIMP, dof.limit_solimp.begin());
+      if (m_.jnt_margin[j] != 0) warn_motion("joint '" + joint_name + "': a limit's margin is not modelled");
     }
     return options;
   }
@@ -265,7 +270,7 @@ class MjcfImporter {
     options.priority = m_.geom_priority[g];
     options.condim = m_.geom_condim[g];
     options.name = m_.name(MjKind::Geom, g);
-    std::copy_n(m_.geom_solref + mjNREF * g, 2, options.solref.begin());
+    options.solref = solref(m_.geom_solref + mjNREF * g, "geom '" + m_.name(MjKind::Geom, g) + "' solref");
     std::copy_n(m_.geom_solimp + mjNIMP * g, 5, options.solimp.begin());
     options.solmix = m_.geom_solmix[g];
     options.margin = m_.geom_margin[g];
@@ -343,6 +348,9 @@ class MjcfImporter {
     if (m_.tendon_limited[t]) {
       options.limit_lower = m_.tendon_range[2 * t];
       options.limit_upper = m_.tendon_range[2 * t + 1];
+      options.limit_solref = solref(m_.tendon_solref_lim + mjNREF * t, "tendon '" + name + "' solreflimit");
+      std::copy_n(m_.tendon_solimp_lim + mjNIMP * t, mjNIMP, options.limit_solimp.begin());
+      if (m_.tendon_margin[t] != 0) warn_motion("tendon '" + name + "': a limit's margin is not modelled");
     }
     options.name = name;
     tendon_index_[t] = builder_.add_tendon(joints, coefs, options);
@@ -473,18 +481,38 @@ class MjcfImporter {
           std::swap(anchor[0], anchor[1]);
         }
         if (body[0] < 0) return;  // two static bodies: nothing moves
-        builder_.add_connect(body[0], body[1], anchor[0], name, anchor[1]);
+        soften_equality(e, builder_.add_connect(body[0], body[1], anchor[0], name, anchor[1]));
         break;
       }
       case mjEQ_JOINT: {
         std::array<Scalar, 5> poly;
         std::copy_n(data, 5, poly.begin());
-        builder_.add_joint_coupling(joint_index_[id1], id2 < 0 ? -1 : joint_index_[id2], poly, name);
+        soften_equality(e,
+                        builder_.add_joint_coupling(joint_index_[id1], id2 < 0 ? -1 : joint_index_[id2], poly, name));
         break;
       }
       case mjEQ_WELD: add_weld(e, name); break;
       default: warn_motion("equality constraint '" + name + "' (tendon or distance) is not modelled");
     }
+  }
+
+  // MuJoCo equality e's softness on the builder's equality `added`
+  void soften_equality(int e, int added) {
+    std::array<Scalar, mjNIMP> solimp;
+    std::copy_n(m_.eq_solimp + mjNIMP * e, mjNIMP, solimp.begin());
+    builder_.set_equality_softness(
+        added, solref(m_.eq_solref + mjNREF * e, "equality constraint '" + m_.name(MjKind::Equality, e) + "' solref"),
+        solimp);
+  }
+
+  // a solref as MuJoCo steps it: one that mixes its two formats (one number > 0, the other not) is MuJoCo's default
+  // (0.02, 1), which MuJoCo puts in its place with a warning each step
+  std::array<Scalar, 2> solref(const double* x, const std::string& who) {
+    if ((x[0] > 0) == (x[1] > 0)) return {x[0], x[1]};
+    out_.warnings.push_back(
+        who + " (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) +
+        ") mixes MuJoCo's two formats: MuJoCo's default (0.02, 1) in its place, as MuJoCo steps it");
+    return {0.02, 1};
   }
 
   // a weld: MuJoCo's data hold body2's anchor (its frame), that anchor in body1's frame and body2's orientation
@@ -495,6 +523,8 @@ class MjcfImporter {
       warn_motion("equality constraint '" + name + "': a weld of torquescale 0 is not modelled");
       return;
     }
+    if (data[10] != 1 && (m_.eq_solref[mjNREF * e] != 0 || m_.eq_solref[mjNREF * e + 1] != 0))
+      warn_motion("equality constraint '" + name + "': a soft weld's torquescale other than 1 is not modelled (1)");
     const int id1 = m_.eq_obj1id[e], id2 = m_.eq_obj2id[e] < 0 ? 0 : m_.eq_obj2id[e];
     Transform relative;
     relative.q = quat_wxyz(data + 6).normalized();
@@ -507,7 +537,7 @@ class MjcfImporter {
     }
     const int body1 = is_static(id1) ? -1 : out_.body_map[id1], body2 = is_static(id2) ? -1 : out_.body_map[id2];
     if (body1 < 0 && body2 < 0) return;  // two static bodies: nothing moves
-    builder_.add_weld(body1, body2, name, anchor, relative);
+    soften_equality(e, builder_.add_weld(body1, body2, name, anchor, relative));
   }
 
   // sensor i as the builder's sensor of its type, on its object's NovaPhy body (or joint, tendon), its frame the

@@ -297,6 +297,10 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.jnt_limited = m->jnt_limited, f.jnt_pos = m->jnt_pos, f.jnt_axis = m->jnt_axis;
   f.jnt_stiffness = m->jnt_stiffness, f.jnt_range = m->jnt_range;
   f.dof_armature = m->dof_armature, f.dof_damping = m->dof_damping, f.dof_frictionloss = m->dof_frictionloss;
+  f.jnt_solref = m->jnt_solref, f.jnt_solimp = m->jnt_solimp, f.jnt_margin = m->jnt_margin;
+  f.dof_solref = m->dof_solref, f.dof_solimp = m->dof_solimp;
+  f.tendon_solref_lim = m->tendon_solref_lim, f.tendon_solimp_lim = m->tendon_solimp_lim;
+  f.tendon_margin = m->tendon_margin, f.eq_solref = m->eq_solref, f.eq_solimp = m->eq_solimp;
   f.geom_type = m->geom_type, f.geom_contype = m->geom_contype, f.geom_conaffinity = m->geom_conaffinity;
   f.geom_condim = m->geom_condim, f.geom_bodyid = m->geom_bodyid, f.geom_dataid = m->geom_dataid;
   f.geom_priority = m->geom_priority, f.geom_solmix = m->geom_solmix, f.geom_solref = m->geom_solref;

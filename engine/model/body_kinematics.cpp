@@ -1,10 +1,12 @@
 #include "engine/model/body_kinematics.h"
 
 #include <algorithm>
+#include <numeric>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
+#include "kernels/aba.h"
 #include "kernels/fk.h"
 #include "kernels/osim.h"
 
@@ -65,9 +67,69 @@ void bodies_from_joints(const Model& model, State& state) {
   for (int a = 0; a < model.articulation_count; ++a) store_body_state(kinematics(model, state, a, s), s, state);
 }
 
-void set_body_invweight0(Model& model) {
-  // inputs: the model at joint_q0; outputs: body_invweight0 (0 for a static body)
+namespace {
+
+// whether a soft row weighs a dof or a tendon by its invweight0: a dof's limit or dry friction, a tendon's limit,
+// a joint coupling (whose weight is its joints' dofs')
+bool weighs_joints(const Model& model) {
+  const auto is_soft = [](const Scalar* solref) { return solref[0] != 0 || solref[1] != 0; };  // (soft_row.h)
+  for (int k = 0; k < model.joint_dof_count; ++k)
+    if (is_soft(&model.joint_limit_solref[2 * k]) || is_soft(&model.joint_friction_solref[2 * k])) return true;
+  for (int t = 0; t < model.tendon_count; ++t)
+    if (is_soft(&model.tendon_limit_solref[2 * t])) return true;
+  for (int e = 0; e < model.equality_count; ++e)
+    if (model.equality_type[e] == static_cast<int>(EqualityType::JointCoupling) &&
+        is_soft(&model.equality_solref[2 * e]))
+      return true;
+  return false;
+}
+
+// art's dofs' invweight0, with s holding its articulated-body factor at joint_q0: M^-1's diagonal, one O(n) solve a
+// dof (MuJoCo averages a Ball's three and a Free joint's translations and rotations)
+void dof_invweight0(Model& model, const ArticulationView& art, ArticulationScratch& s) {
+  const int n = art.dof_count();
+  VecX x(n);
+  Scalar* weight = model.joint_invweight0.data() + art.qd_begin();
+  for (int k = 0; k < n; ++k) {
+    x.setZero();
+    x[k] = 1;
+    aba_solve(art, s, x.data());
+    weight[k] = x[k];
+  }
+  auto average = [&](int from, int count) {
+    const Scalar mean = std::accumulate(weight + from, weight + from + count, Scalar(0)) / count;
+    std::fill_n(weight + from, count, mean);
+  };
+  for (int i = 0; i < art.link_count(); ++i) {
+    if (art.type(i) == JointType::Ball) average(art.qd_start(i), 3);
+    if (art.type(i) == JointType::Free) average(art.qd_start(i), 3), average(art.qd_start(i) + 3, 3);
+  }
+}
+
+// the invweight0 J M^-1 J^T of art's tendons (those over its dofs), with s as dof_invweight0's
+void tendon_invweight0(Model& model, const ArticulationView& art, ArticulationScratch& s) {
+  const int begin = art.qd_begin(), n = art.dof_count();
+  VecX J(n), x(n);
+  for (int t = 0; t < model.tendon_count; ++t) {
+    const int first = model.tendon_start[t], end = model.tendon_start[t + 1];
+    if (first == end || model.tendon_dof[first] < begin || model.tendon_dof[first] >= begin + n) continue;
+    J.setZero();
+    for (int e = first; e < end; ++e) J[model.tendon_dof[e] - begin] += model.tendon_coef[e];
+    x = J;
+    aba_solve(art, s, x.data());
+    model.tendon_invweight0[t] = J.dot(x);
+  }
+}
+
+}  // namespace
+
+void set_invweight0(Model& model) {
+  // inputs: the model at joint_q0; outputs: body_invweight0 (0 for a static body), joint_invweight0 and
+  // tendon_invweight0 where a soft row weighs them (else 0)
   model.body_invweight0.assign(2 * static_cast<size_t>(model.body_count), 0);
+  model.joint_invweight0.assign(model.joint_dof_count, 0);
+  model.tendon_invweight0.assign(model.tendon_count, 0);
+  const bool joints = weighs_joints(model);
   ArticulationScratch s;
   std::vector<Mat6> Omega;
   std::unordered_map<std::string, int> computed;  // an articulation's defining data -> the first that has it
@@ -75,18 +137,23 @@ void set_body_invweight0(Model& model) {
   for (int a = 0; a < model.articulation_count; ++a) {
     const ArticulationView art = model.articulation(a);
     if (art.dof_count() == 0) continue;  // (welded to the world: weightless, as MuJoCo's static bodies)
-    // a replica of one already computed: the same weights, link by link
+    // a replica of one already computed: the same weights, link by link and dof by dof (its tendons computed anew)
     invweight0_key(model, art, key);
     const auto [first, inserted] = computed.try_emplace(key, a);
     if (!inserted) {
       const ArticulationView same = model.articulation(first->second);
       for (int i = 0; i < art.link_count(); ++i)
         std::copy_n(&model.body_invweight0[2 * same.body(i)], 2, &model.body_invweight0[2 * art.body(i)]);
-      continue;
+      std::copy_n(&model.joint_invweight0[same.qd_begin()], art.dof_count(), &model.joint_invweight0[art.qd_begin()]);
+      if (!joints || model.tendon_count == 0) continue;
     }
     s.resize(art);
     forward_kinematics(art, model.joint_q0.data() + art.q_begin(), s);
-    if (osim_inverse(art, s, Omega) >= 0) continue;
+    if (joints && aba_factor(art, nullptr, s) < 0) {
+      if (inserted) dof_invweight0(model, art, s);
+      tendon_invweight0(model, art, s);
+    }
+    if (!inserted || osim_inverse(art, s, Omega) >= 0) continue;
     for (int i = 0; i < art.link_count(); ++i) {
       // the COM's velocity v + w x c = v - [c]x w: C = [-[c]x, 1] maps the link's [w; v] to it
       Eigen::Matrix<Scalar, 3, 6> C;

@@ -154,6 +154,10 @@ void check_dof(const std::string& item, const JointDofConfig& dof) {
   check_nonnegative(item, "target_kd", dof.target_kd);
   check_finite(item, "q_ref", dof.q_ref);
   check_finite(item, "q0", dof.q0);
+  check_solref(item, "limit_solref", dof.limit_solref);
+  check_solimp(item, "limit_solimp", dof.limit_solimp);
+  check_solref(item, "friction_solref", dof.friction_solref);
+  check_solimp(item, "friction_solimp", dof.friction_solimp);
 }
 
 }  // namespace
@@ -479,6 +483,10 @@ void ModelBuilder::lay_out_joint_dofs(const JointRecord& joint, int q, int qd, M
     model.joint_limit_upper[qd + k] = dof.limit_upper;
     model.joint_target_ke[qd + k] = dof.target_ke;
     model.joint_target_kd[qd + k] = dof.target_kd;
+    std::copy_n(dof.limit_solref.begin(), 2, &model.joint_limit_solref[2 * (qd + k)]);
+    std::copy_n(dof.limit_solimp.begin(), 5, &model.joint_limit_solimp[5 * (qd + k)]);
+    std::copy_n(dof.friction_solref.begin(), 2, &model.joint_friction_solref[2 * (qd + k)]);
+    std::copy_n(dof.friction_solimp.begin(), 5, &model.joint_friction_solimp[5 * (qd + k)]);
   }
   const JointDofConfig& dof = joint.options.dof;
   Scalar* q0 = model.joint_q0.data() + q;  // past the end for a joint without coordinates
@@ -575,7 +583,7 @@ Model ModelBuilder::finalize() const {
   lay_out_equalities(model);
   lay_out_sensors(model);
   model.check_sizes();
-  set_body_invweight0(model);
+  set_invweight0(model);
   model.set_model_id();
   model.index_parameters();
   return model;

@@ -37,6 +37,13 @@ struct JointDofConfig {
   Scalar q0 = 0;         // initial coordinate, Revolute and Prismatic joints (model.joint_q0)
   Scalar target_ke = 0;  // PD drive gains (Control.joint_target_ke/kd start here)
   Scalar target_kd = 0;
+  // the softness of its limits' rows and of its dry friction's row, MuJoCo's solreflimit / solimplimit and
+  // solreffriction / solimpfriction (model.h, engine/solver/parts/soft_row.h): solref (0, 0) a hard row (the
+  // solver's erp and slop), else (time constant > 0, damping ratio > 0) or (-stiffness < 0, -damping <= 0)
+  std::array<Scalar, 2> limit_solref = {0, 0};
+  std::array<Scalar, 5> limit_solimp = {0.9, 0.95, 0.001, 0.5, 2};  // dmin, dmax, width, midpoint, power
+  std::array<Scalar, 2> friction_solref = {0, 0};
+  std::array<Scalar, 5> friction_solimp = {0.9, 0.95, 0.001, 0.5, 2};
 };
 
 // shapes collide when (group_a & mask_b) != 0 and (group_b & mask_a) != 0
@@ -85,6 +92,9 @@ struct TendonOptions {
   Scalar rest_length = std::numeric_limits<Scalar>::quiet_NaN();  // NaN: its length at the initial coordinates
   Scalar limit_lower = -std::numeric_limits<Scalar>::infinity(), limit_upper = std::numeric_limits<Scalar>::infinity();
   std::string name;
+  // its limits' softness, as a dof's (JointDofConfig::limit_solref, limit_solimp)
+  std::array<Scalar, 2> limit_solref = {0, 0};
+  std::array<Scalar, 5> limit_solimp = {0.9, 0.95, 0.001, 0.5, 2};
 };
 
 // a sensor's options (add_sensor): its frame on its body, Touch's zone, a cutoff and a name
@@ -229,6 +239,9 @@ class ModelBuilder {
   // coordinates (joint2 -1: joint1 stays at a0 from its own); Revolute or Prismatic joints (MuJoCo's joint
   // equality)
   int add_joint_coupling(int joint1, int joint2, const std::array<Scalar, 5>& poly, const std::string& name = "");
+  // equality e's rows soft as MuJoCo's equality solref and solimp (JointDofConfig::limit_solref says how; an
+  // equality's rows are hard until this is called)
+  void set_equality_softness(int e, const std::array<Scalar, 2>& solref, const std::array<Scalar, 5>& solimp);
 
   // a sensor (model.h's SensorType) of `object`: a joint (JointPos, JointVel: Revolute or Prismatic; BallQuat,
   // BallAngVel: Ball), a tendon (TendonPos, TendonVel) or a body, -1 the world (every other type); its values are
@@ -389,6 +402,8 @@ class ModelBuilder {
     int object[2];  // bodies or joints
     Scalar data[10];
     std::string name;
+    std::array<Scalar, 2> solref = {0, 0};
+    std::array<Scalar, 5> solimp = {0.9, 0.95, 0.001, 0.5, 2};
   };
   std::vector<EqualityRecord> equalities_;
   struct SensorRecord {

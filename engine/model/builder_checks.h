@@ -116,18 +116,27 @@ inline void check_actuator(const std::string& item, const ActuatorOptions& optio
   check_range(item, "force range", options.force_lower, options.force_upper);
 }
 
-// a shape's solref, solimp, solmix, margin and gap as MuJoCo takes them (ShapeOptions)
-inline void check_softness(const std::string& item, const ShapeOptions& o) {
-  const Scalar t = o.solref[0], r = o.solref[1];
+// a solref and a solimp as MuJoCo takes them: solref (0, 0) for a hard row, and any finite solimp (MuJoCo accepts
+// them and clamps each use: impedance, engine/solver/parts/soft_row.h); `what` names them ("limit_solref")
+inline void check_solref(const std::string& item, const char* what, const std::array<Scalar, 2>& solref) {
+  const Scalar t = solref[0], r = solref[1];
   if (!((t == 0 && r == 0) || (t > 0 && r > 0 && std::isfinite(t) && std::isfinite(r)) ||
         (t < 0 && r <= 0 && std::isfinite(t) && std::isfinite(r))))
-    fail(item, ": solref must be (time constant > 0, damping ratio > 0), (-stiffness < 0, -damping <= 0) or (0, 0) ",
-         "for a rigid contact, got (", t, ", ", r, ")");
-  // any finite solimp: MuJoCo accepts them and clamps each use (contact_impedance, contact_softness.h)
-  const auto& i = o.solimp;
+    fail(item, ": ", what,
+         " must be (time constant > 0, damping ratio > 0), (-stiffness < 0, -damping <= 0) or (0, 0) for a hard row, "
+         "got (",
+         t, ", ", r, ")");
+}
+inline void check_solimp(const std::string& item, const char* what, const std::array<Scalar, 5>& i) {
   if (!std::all_of(i.begin(), i.end(), [](Scalar x) { return std::isfinite(x); }))
-    fail(item, ": solimp must be five finite numbers (dmin, dmax, width, midpoint, power), got (", i[0], ", ", i[1],
+    fail(item, ": ", what, " must be five finite numbers (dmin, dmax, width, midpoint, power), got (", i[0], ", ", i[1],
          ", ", i[2], ", ", i[3], ", ", i[4], ")");
+}
+
+// a shape's solref, solimp, solmix, margin and gap as MuJoCo takes them (ShapeOptions)
+inline void check_softness(const std::string& item, const ShapeOptions& o) {
+  check_solref(item, "solref", o.solref);
+  check_solimp(item, "solimp", o.solimp);
   check_nonnegative(item, "solmix", o.solmix);
   check_nonnegative(item, "margin", o.margin);
   check_nonnegative(item, "gap", o.gap);

@@ -22,6 +22,8 @@ int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<S
   check_nonnegative(item, "damping", options.damping);
   if (std::isinf(options.rest_length)) fail(item, ": rest_length is not finite: ", options.rest_length);
   check_range(item, "limit range", options.limit_lower, options.limit_upper);
+  check_solref(item, "limit_solref", options.limit_solref);
+  check_solimp(item, "limit_solimp", options.limit_solimp);
   tendons_.push_back({joints, coefs, options});
   return tendon_count() - 1;
 }
@@ -130,6 +132,9 @@ void ModelBuilder::lay_out_tendons(Model& model) const {
     model.tendon_rest_length.push_back(std::isnan(o.rest_length) ? length : o.rest_length);
     model.tendon_limit_lower.push_back(o.limit_lower);
     model.tendon_limit_upper.push_back(o.limit_upper);
+    model.tendon_limit_solref.insert(model.tendon_limit_solref.end(), o.limit_solref.begin(), o.limit_solref.end());
+    model.tendon_limit_solimp.insert(model.tendon_limit_solimp.end(), o.limit_solimp.begin(), o.limit_solimp.end());
+    model.tendon_invweight0.push_back(0);  // (set_invweight0)
     model.tendon_name.push_back(o.name);
   }
   model.tendon_count = tendon_count();
@@ -186,6 +191,17 @@ int ModelBuilder::add_joint_coupling(int joint1, int joint2, const std::array<Sc
   return equality_count() - 1;
 }
 
+void ModelBuilder::set_equality_softness(int e, const std::array<Scalar, 2>& solref,
+                                         const std::array<Scalar, 5>& solimp) {
+  if (e < 0 || e >= equality_count())
+    fail("set_equality_softness: equality ", e, " out of range [0, ", equality_count(), ")");
+  const std::string item = label("equality", e, equalities_[e].name);
+  check_solref(item, "solref", solref);
+  check_solimp(item, "solimp", solimp);
+  equalities_[e].solref = solref;
+  equalities_[e].solimp = solimp;
+}
+
 void ModelBuilder::lay_out_equalities(Model& model) const {
   const State initial = equalities_.empty() ? State{} : model.state();
   for (const EqualityRecord& record : equalities_) {
@@ -210,6 +226,8 @@ void ModelBuilder::lay_out_equalities(Model& model) const {
       Eigen::Map<Eigen::Vector4d>(e.data + 6) = relative.q.coeffs();
     }
     model.equality_data.insert(model.equality_data.end(), e.data, e.data + 10);
+    model.equality_solref.insert(model.equality_solref.end(), e.solref.begin(), e.solref.end());
+    model.equality_solimp.insert(model.equality_solimp.end(), e.solimp.begin(), e.solimp.end());
     model.equality_name.push_back(e.name);
   }
   model.equality_count = equality_count();

@@ -106,6 +106,11 @@ const char* shape_type_name(ShapeType type);
 // midpoint, power), shape_solmix (the weight of a shape's solref and solimp in a pair of equal priority),
 // shape_margin (a contact is active from this distance) and shape_gap (less this). body_invweight0 is
 // MuJoCo's: the mean of the diagonal of J M^-1 J^T at joint_q0 for the body's COM, translation then rotation.
+// The rows of a dof's limits (joint_limit_solref, _solimp), its dry friction (joint_friction_), a tendon's limits
+// (tendon_limit_) and an equality constraint (equality_) are soft as MuJoCo's (engine/solver/parts/soft_row.h)
+// where their solref is not (0, 0), hard rows where it is; joint_invweight0 (M^-1's diagonal at joint_q0, averaged
+// over a Ball's dofs and over a Free joint's translations and its rotations) and tendon_invweight0 (J M^-1 J^T)
+// weigh them, MuJoCo's dof_invweight0 and tendon_invweight0, computed where a soft row needs them (else 0).
 // A mesh m is a convex hull (kernels/hull.h): its vertices mesh_vertex[mesh_vertex_start[m] ..
 // mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the vertices' mean), its faces
 // [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
@@ -146,6 +151,11 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, joint_limit_upper, joint_dof_count, 1)         \
   X(Scalar, joint_target_ke, joint_dof_count, 1)           \
   X(Scalar, joint_target_kd, joint_dof_count, 1)           \
+  X(Scalar, joint_limit_solref, joint_dof_count, 2)        \
+  X(Scalar, joint_limit_solimp, joint_dof_count, 5)        \
+  X(Scalar, joint_friction_solref, joint_dof_count, 2)     \
+  X(Scalar, joint_friction_solimp, joint_dof_count, 5)     \
+  X(Scalar, joint_invweight0, joint_dof_count, 1)          \
   X(int, articulation_start, articulation_count + 1, 1)    \
   X(int, shape_type, shape_count, 1)                       \
   X(int, shape_body, shape_count, 1)                       \
@@ -182,9 +192,14 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, tendon_rest_length, tendon_count, 1)           \
   X(Scalar, tendon_limit_lower, tendon_count, 1)           \
   X(Scalar, tendon_limit_upper, tendon_count, 1)           \
+  X(Scalar, tendon_limit_solref, tendon_count, 2)          \
+  X(Scalar, tendon_limit_solimp, tendon_count, 5)          \
+  X(Scalar, tendon_invweight0, tendon_count, 1)            \
   X(int, equality_type, equality_count, 1)                 \
   X(int, equality_object, equality_count, 2)               \
   X(Scalar, equality_data, equality_count, 10)             \
+  X(Scalar, equality_solref, equality_count, 2)            \
+  X(Scalar, equality_solimp, equality_count, 5)            \
   X(int, actuator_joint, actuator_count, 1)                \
   X(int, actuator_tendon, actuator_count, 1)               \
   X(int, actuator_body, actuator_count, 1)                 \

@@ -33,6 +33,10 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
     "contact's rows always start from all of theirs.")                                                                \
   X(Scalar, restitution_threshold, 0.2, 0, 1e6, "m/s", "Approach speed below which contacts do not bounce.")          \
   X(bool, use_warmstarting, true, 0, 0, "", "Rows start from a share of the last step's impulses.")                   \
+  X(bool, soft_constraints, true, 0, 0, "",                                                                           \
+    "Rows of joint and tendon limits, dry friction and equality constraints whose solref is not (0, 0) (an imported " \
+    "model's: MuJoCo's) are soft as MuJoCo's; off: every one of them a hard row (erp, linear_slop). Contacts keep "   \
+    "their shapes' softness.")                                                                                        \
   X(Scalar, angular_damping, 0.05, 0, kUnbounded, "1/s",                                                              \
     "Rotational dof velocities are scaled by (1 - angular_damping dt) each step.")                                    \
   X(int, update_mass_matrix_interval, 1, 1, kIntUnbounded, "", "Recompute and refactor H every N steps.")             \

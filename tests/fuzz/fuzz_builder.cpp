@@ -36,6 +36,13 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
         options.dof.limit_lower = fuzz::number(data), options.dof.limit_upper = fuzz::number(data);
       if (data.ConsumeBool()) options.dof.damping = fuzz::number(data), options.dof.stiffness = fuzz::number(data);
       if (data.ConsumeBool()) options.dof.target_ke = fuzz::number(data), options.dof.target_kd = fuzz::number(data);
+      if (data.ConsumeBool()) {  // soft limits and dry friction, in range or not
+        options.dof.frictionloss = fuzz::number(data);
+        options.dof.limit_solref = {fuzz::number(data), fuzz::number(data)};
+        options.dof.friction_solref = {fuzz::number(data), fuzz::number(data)};
+        options.dof.limit_solimp = {fuzz::number(data), fuzz::number(data), fuzz::number(data), fuzz::number(data),
+                                    fuzz::number(data)};
+      }
       const auto type = static_cast<JointType>(data.ConsumeIntegralInRange(0, 4));
       builder.add_joint(type, data.ConsumeIntegralInRange(-2, bodies), data.ConsumeIntegralInRange(-1, bodies),
                         options);
@@ -91,6 +98,7 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
       TendonOptions options;
       if (data.ConsumeBool()) options.stiffness = fuzz::number(data), options.damping = fuzz::number(data);
       if (data.ConsumeBool()) options.limit_lower = fuzz::number(data), options.limit_upper = fuzz::number(data);
+      if (data.ConsumeBool()) options.limit_solref = {fuzz::number(data), fuzz::number(data)};
       const int tendon = builder.add_tendon(list, coefs, options);
       if (data.ConsumeBool()) builder.add_tendon_actuator(tendon);
       break;

@@ -1,6 +1,7 @@
 """Checks of a compiled mujoco.MjModel against NovaPhy's import of it, shared by the tests of today's MuJoCo
 and tools/menagerie_report.py (imports mujoco only when called)."""
 
+import os
 import warnings
 
 import numpy as np
@@ -21,6 +22,30 @@ def by_file(path, worlds, precision):
     batch.precision = precision
     batch.replicate(robot, worlds)
     return batch.finalize()
+
+
+def shared_robot(name, file):
+    """the path of a robot's scene among the Menagerie robots on disk (MENAGERIE_ROOT: ../shared/robots by default
+    in the ctest run), else the test is skipped"""
+    import pytest
+
+    root = os.environ.get("MENAGERIE_ROOT", "")
+    path = os.path.join(root, name, file)
+    if not root or not os.path.isfile(path):
+        pytest.skip(f"{name} is not on disk (MENAGERIE_ROOT)")
+    return path
+
+
+def by_route(m, path, route):
+    """NovaPhy's import of the compiled model m (route "from_mujoco") or of its file `path` through add_mjcf, and
+    the map of today's compile (both routes lay the joints and actuators out alike: it serves both)"""
+    imported = novaphy.ModelBuilder().add_mujoco_model(m)
+    builder = novaphy.ModelBuilder()
+    if route == "from_mujoco":
+        builder.add_mujoco_model(m)
+    else:
+        builder.add_mjcf(str(path))
+    return imported, builder.finalize()
 
 
 def start_from_first_keyframe(model):

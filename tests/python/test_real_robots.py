@@ -3,12 +3,11 @@ written here or a shared Menagerie robot: solimp values outside MuJoCo's ranges 
 them), the contact filter's weld rule, gravity compensation (gravcomp), actuators on sites (thrusters), engine
 plugin actuators (refused)."""
 
-import os
-
 import numpy as np
 import pytest
 
 import novaphy
+from mujoco_checks import by_route, shared_robot
 
 mujoco = pytest.importorskip(
     "mujoco", reason="PyPI's mujoco is not installed for this interpreter (tools/setup.sh installs it in build/venv)"
@@ -28,14 +27,7 @@ def both(xml, tmp_path, steps, route="from_mujoco", ctrl=None):
     if ctrl is not None:
         d.ctrl[:] = ctrl
     mujoco.mj_step(m, d, steps)
-    # (both routes lay the joints and actuators out alike: today's compile's map serves both)
-    imported = novaphy.ModelBuilder().add_mujoco_model(m)
-    builder = novaphy.ModelBuilder()
-    if route == "from_mujoco":
-        builder.add_mujoco_model(m)
-    else:
-        builder.add_mjcf(str(path))
-    model = builder.finalize()
+    imported, model = by_route(m, path, route)
     state = model.state(keyframe=model.keyframes[0]) if m.nkey else model.state()
     control = model.control()
     for u, a in enumerate(imported.actuator_map if ctrl is not None else []):
@@ -60,16 +52,6 @@ def test_a_solimp_outside_mujocos_ranges_is_clamped_as_mujoco_clamps_it(tmp_path
     expected, got, _ = both(xml, tmp_path, 500)
     # the box sinks to where its impedance holds its weight: the same depth as MuJoCo's
     assert abs(got[2] - expected[2]) < 1e-6, (got[2], expected[2])
-
-
-def shared_robot(name, file):
-    """the path of a robot's scene among the Menagerie robots on disk (MENAGERIE_ROOT: ../shared/robots by default
-    in the ctest run), else the test is skipped"""
-    root = os.environ.get("MENAGERIE_ROOT", "")
-    path = os.path.join(root, name, file)
-    if not root or not os.path.isfile(path):
-        pytest.skip(f"{name} is not on disk (MENAGERIE_ROOT)")
-    return path
 
 
 def contact_bodies(model, state, names):

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/solver/blocks/blocks.h"
+#include "engine/solver/parts/soft_row.h"
 #include "kernels/batch.h"
 #include "kernels/batch/lane_math.h"
 #include "kernels/batch/pgs.h"
@@ -47,6 +48,11 @@ struct BatchGroup {
   std::vector<V> limits;        // per block: [limited][2] lower and upper limit
   std::vector<int> frictional;  // dofs with dry friction (frictionloss > 0) in some world
   std::vector<V> frictionloss;  // per block: [frictional]
+  // per block [limited][lane] and [frictional][lane]: the rows' softness (soft_row.h), whether some is soft, and per
+  // block [limited] and [frictional] the lanes whose row is
+  std::vector<Softness> limit_softness, friction_softness;
+  bool soft_limits = false, soft_friction = false;
+  std::vector<IntLanes<T>> limit_soft, friction_soft;
   // where its blocks' kept limit impulses start in the step's limit_impulse: per block [limited][2][lane]
   int impulse_base = 0;
   bool enabled = true;
@@ -98,7 +104,7 @@ struct RowCounts {
   X(V, J, (n.rows * n.dofs), "[row][dof] its Jacobian")                                      \
   X(V, z, (n.rows * n.dofs), "[row][dof] M^-1 J^T")                                          \
   X(V, target, n.rows, "[row] the velocity J qd it drives towards")                          \
-  X(V, cfm, n.rows, "[row] its own constraint force mixing (a soft contact's)")              \
+  X(V, cfm, n.rows, "[row] its own constraint force mixing (a soft row's)")                  \
   X(V, mu, n.rows, "[row] a friction row's coefficient")                                     \
   X(V, inv_mass, n.rows, "[row] 1 / (J M^-1 J^T + cfm)")                                     \
   X(V, lambda, n.rows, "[row] its impulse")                                                  \

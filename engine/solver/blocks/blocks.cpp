@@ -241,7 +241,9 @@ class Batches final : public ArticulationBatches {
     for (const BatchGroup<T>& G : groups_)
       n += (G.params.size() + G.H.size() + G.S.size() + G.origin.size() + G.limits.size() + G.frictionloss.size()) *
                sizeof(V) +
-           (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int) + G.contiguous.size();
+           (G.arts.size() + G.q_off.size() + G.qd_off.size() + G.body.size()) * sizeof(int) + G.contiguous.size() +
+           (G.limit_softness.size() + G.friction_softness.size()) * sizeof(Softness) +
+           (G.limit_soft.size() + G.friction_soft.size()) * sizeof(IntLanes<T>);
     for (const ThreadScratch<T>& s : scratch_) {
       n += (s.S.size() + s.H.size()) * sizeof(V) + s.factor.size() * sizeof(Scalar) + s.rows.bytes();
       for (const BatchWork<T>& w : s.work) n += w.bytes();
@@ -386,6 +388,29 @@ class Batches final : public ArticulationBatches {
           G.limits[(b * nl + m) * 2][l] = static_cast<T>(model.joint_limit_lower[g]);
           G.limits[(b * nl + m) * 2 + 1][l] = static_cast<T>(model.joint_limit_upper[g]);
         }
+    G.soft_limits = dof_softness(G, model, G.limited, model.joint_limit_solref, model.joint_limit_solimp,
+                                 G.limit_softness, G.limit_soft);
+  }
+
+  // the softness (soft_row.h) of each block's `dofs` of the group, per lane, from a solref and solimp per dof, and
+  // the lanes whose row is soft; returns whether some is
+  bool dof_softness(const BatchGroup<T>& G, const Model& model, const std::vector<int>& dofs,
+                    const std::vector<Scalar>& solref, const std::vector<Scalar>& solimp, std::vector<Softness>& out,
+                    std::vector<IntLanes<T>>& soft) const {
+    const int n = static_cast<int>(dofs.size());
+    out.assign(static_cast<size_t>(G.blocks) * n * W, Softness{});
+    soft.assign(static_cast<size_t>(G.blocks) * n, IntLanes<T>{});
+    bool any = false;
+    for (int b = 0; b < G.blocks; ++b)
+      for (int m = 0; m < n; ++m)
+        for (int l = 0; l < W; ++l) {
+          const int g = art_[G.arts[b * W + l]].qd_begin() + dofs[m];
+          const Softness s = softness_of(&solref[2 * g], &solimp[5 * g], model.joint_invweight0[g]);
+          out[(static_cast<size_t>(b) * n + m) * W + l] = s;
+          soft[static_cast<size_t>(b) * n + m][l] = s.soft() ? -1 : 0;
+          any |= s.soft();
+        }
+    return any;
   }
 
   // the group's dofs with dry friction and its blocks' frictionloss
@@ -403,6 +428,8 @@ class Batches final : public ArticulationBatches {
         for (int l = 0; l < W; ++l)
           G.frictionloss[b * nf + m][l] =
               static_cast<T>(model.joint_frictionloss[art_[G.arts[b * W + l]].qd_begin() + G.frictional[m]]);
+    G.soft_friction = dof_softness(G, model, G.frictional, model.joint_friction_solref, model.joint_friction_solimp,
+                                   G.friction_softness, G.friction_soft);
   }
 
   // a scratch per thread, sized for the largest group: every limit row and four contacts a world

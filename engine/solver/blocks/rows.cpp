@@ -51,7 +51,19 @@ void solve_rows(const BatchTopology<T>& topo, const Lanes<T>* H, int first, RowW
   batch_solve_many(topo, H, end, R.z_row(first), R.rows - first, topo.dof_count);
 }
 
-// the rows of the limited dofs in dof order, J = +-e_k, in the lanes `mine` whose joint would cross a limit
+// row r soft in the lanes `soft` (its cfm and target), from each lane's softness
+template <typename T, typename Soften>
+void soften_lanes(const IntLanes<T>& soft, const Softness* softness, int r, RowWork<T>& R, Soften&& soften) {
+  for (int l = 0; l < kLanes<T>; ++l) {
+    if (!soft[l]) continue;
+    const SoftRow row = soften(l, softness[l]);
+    R.target[r][l] = static_cast<T>(row.target);
+    R.cfm[r][l] = static_cast<T>(row.cfm);
+  }
+}
+
+// the rows of the limited dofs in dof order, J = +-e_k, in the lanes `mine` whose joint would cross a limit; soft
+// ones read R.qd_in
 template <typename T>
 void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, const BatchWork<T>& w,
                     const IntLanes<T>& mine, RowWork<T>& R) {
@@ -63,21 +75,27 @@ void add_limit_rows(const BatchGroup<T>& G, int b, const StepContext& step, cons
   for (int m = 0; m < nl; ++m) {
     const int k = G.limited[m];
     const V<T> q = w.q[topo.coord_of_dof[k]];
+    const Softness* softness = &G.limit_softness[(static_cast<size_t>(b) * nl + m) * kLanes<T>];
+    const IntLanes<T> soft =
+        G.soft_limits && step.settings.soft_constraints ? G.limit_soft[static_cast<size_t>(b) * nl + m] : IntLanes<T>{};
     for (int side = 0; side < 2; ++side) {
       const V<T> gap = LimitRow::gap(q, limit[2 * m + side], side);
-      const IntLanes<T> on = mine & LimitRow::on(limit[2 * m + side], gap, w.qd[k], side, dt);
+      const IntLanes<T> on = mine & LimitRow::on(limit[2 * m + side], gap, w.qd[k], side, dt, soft);
       R.limit_row[2 * m + side] = -1;
       if (!any_lane<T>(on)) continue;
       const V<T> warm = LimitRow::warm(lanes_from_doubles<T>(kept + (2 * m + side) * kLanes<T>), R.warm_share);
       const int r = add_row(R, LimitRow::kKind, on, LimitRow::target(gap, step.settings, dt), warm);
       R.limit_row[2 * m + side] = r;
       unit_row(topo.dof_count, k, T(LimitRow::sign(side)), on, r, R);
+      soften_lanes(on & soft, softness, r, R, [&](int l, const Softness& s) {
+        return LimitRow::soft(gap[l], LimitRow::sign(side) * R.qd_in[k][l], s, step.dt);
+      });
     }
   }
 }
 
 // a row per dof with dry friction, J = e_k, in the lanes `mine` whose world has it: its velocity driven to
-// zero with at most frictionloss dt of impulse either way
+// zero with at most frictionloss dt of impulse either way; soft ones read R.qd_in
 template <typename T>
 void add_friction_rows(const BatchGroup<T>& G, int b, const StepContext& step, const IntLanes<T>& mine, RowWork<T>& R) {
   const int nf = static_cast<int>(G.frictional.size());
@@ -94,6 +112,10 @@ void add_friction_rows(const BatchGroup<T>& G, int b, const StepContext& step, c
     R.bound[r] = FrictionLossRow::bound(loss[m], dt);
     R.friction_row[m] = r;
     unit_row(G.topo.dof_count, k, T(1), on, r, R);
+    if (G.soft_friction && step.settings.soft_constraints)
+      soften_lanes(on & G.friction_soft[static_cast<size_t>(b) * nf + m],
+                   &G.friction_softness[(static_cast<size_t>(b) * nf + m) * kLanes<T>], r, R,
+                   [&](int l, const Softness& s) { return FrictionLossRow::soft(R.qd_in[k][l], s, step.dt); });
   }
 }
 
@@ -314,11 +336,12 @@ void block_rows(const BatchGroup<T>& G, int b, const BlockKinematics<T>& kin, co
   R.resize(2 * nl + nf + step.lists.dims * slots, nv, slots);
   R.rows = 0;
   R.warm_share = warm_share<V<T>>(converged, step.settings);
+  const bool soft = (G.soft_limits || G.soft_friction) && step.settings.soft_constraints;
+  if (slots > 0 || soft) gather_lanes<T>(qd_off, step.in->joint_qd.data(), nv, R.qd_in.data());
   add_limit_rows(G, b, step, w, mine, R);
   add_friction_rows(G, b, step, mine, R);
   solve_rows(G.topo, kin.H, 0, R);
   if (phases) phases->limits += seconds_since(&mark);
-  if (slots > 0) gather_lanes<T>(qd_off, step.in->joint_qd.data(), nv, R.qd_in.data());
   const int contact_rows = R.rows;
   for (int t = 0; t < slots; ++t) add_contact_rows(G, b, t, listed, kin, step, R);
   solve_rows(G.topo, kin.H, contact_rows, R);

@@ -24,8 +24,9 @@ IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& 
   tendon_row_.assign(2 * static_cast<size_t>(model.tendon_count), -1);
 }
 
-void IslandRows::begin(const std::vector<StepRoute*>& route) {
+void IslandRows::begin(const std::vector<StepRoute*>& route, const StepContext& step) {
   route_ = &route;
+  soft_ = step.settings.soft_constraints;
   row_count_ = 0;
   pool_size_ = 0;
 }
@@ -99,9 +100,13 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
         limit_row_[2 * g + side] = -1;
         const Scalar limit = side == 0 ? model_.joint_limit_lower[g] : model_.joint_limit_upper[g];
         const Scalar gap = LimitRow::gap(q, limit, side);
-        if (!LimitRow::on(limit, gap, step.qd[g], side, dt)) continue;
+        const Softness soft = softness_of(&model_.joint_limit_solref[2 * g], &model_.joint_limit_solimp[5 * g],
+                                          model_.joint_invweight0[g]);
+        const bool softened = soft_ && soft.soft();
+        if (!LimitRow::on(limit, gap, step.qd[g], side, dt, softened)) continue;
         const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.settings, dt));
         row_jacobian(r, a)[g - art_[a].qd_begin()] = LimitRow::sign(side);
+        if (softened) soften(r, LimitRow::soft(gap, LimitRow::sign(side) * step.in->joint_qd[g], soft, dt));
         rows_[r].lambda = LimitRow::warm(step.limit_impulse[limit_cell_[2 * m + side]], warm_share_of(r, step));
         limit_row_[2 * g + side] = r;
       }
@@ -117,6 +122,9 @@ void IslandRows::add_friction_rows(const StepContext& step, const std::vector<in
       const int r = begin_row(a, -1, FrictionLossRow::kKind, 0);
       row_jacobian(r, a)[g - art_[a].qd_begin()] = 1;
       rows_[r].bound = FrictionLossRow::bound(loss, step.dt);
+      const Softness soft = softness_of(&model_.joint_friction_solref[2 * g], &model_.joint_friction_solimp[5 * g],
+                                        model_.joint_invweight0[g]);
+      if (soft_ && soft.soft()) soften(r, FrictionLossRow::soft(step.in->joint_qd[g], soft, step.dt));
       rows_[r].lambda = FrictionLossRow::warm(step.friction_impulse[g], warm_share_of(r, step));
       friction_row_[g] = r;
     }
@@ -158,6 +166,11 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
   }
 }
 
+void IslandRows::soften(int r, const SoftRow& soft) {
+  rows_[r].target = soft.target;
+  rows_[r].cfm = soft.cfm;
+}
+
 void IslandRows::add_constraint_rows(const StepContext& step) {
   for (int e = 0; e < model_.equality_count; ++e) {
     if (static_cast<EqualityType>(model_.equality_type[e]) == EqualityType::JointCoupling)
@@ -179,11 +192,19 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
   BodyEquality::of(model_, e).errors(body_pose(*step.in, b1), body_pose(*step.in, b2), &mid, &error[0],
                                      weld ? &error[1] : nullptr);
   equality_row_[e] = row_count_;
+  const bool soft = soft_ && is_soft(&model_.equality_solref[2 * e]);
+  // a soft weld's rotation rows read MuJoCo's error (EqualityRow::soft_turn), its impedance MuJoCo's whole error
+  const Vec3 turn = soft && weld ? EqualityRow::soft_turn(error[1]) : error[1];
+  const Scalar whole = std::sqrt(error[0].squaredNorm() + turn.squaredNorm() / 4);
   for (int k = 0; k < EqualityRow::count(type); ++k) {
     const int r = add_row(b1, b2, k < 3 ? &mid : nullptr, Vec3::Unit(k % 3), EqualityRow::kKind);
     rows_[r].bound = EqualityRow::bound();
     rows_[r].target = EqualityRow::target(error[k / 3][k % 3], step.settings, step.dt);
     rows_[r].lambda = EqualityRow::warm(step.equality_impulse[6 * e + k], warm_share_of(r, step));
+    if (soft)
+      soften(r, EqualityRow::soft(k < 3 ? error[0][k] : turn[k - 3], whole,
+                                  row_velocity(rows_[r], J_, step.in->joint_qd.data()),
+                                  EqualityRow::softness(model_, e, k >= 3), step.dt));
   }
 }
 
@@ -202,6 +223,9 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
   rows_[r].bound = EqualityRow::bound();
   rows_[r].lambda = EqualityRow::warm(step.equality_impulse[6 * e], warm_share_of(r, step));
+  if (soft_ && is_soft(&model_.equality_solref[2 * e]))
+    soften(r, EqualityRow::soft(error, std::abs(error), row_velocity(rows_[r], J_, step.in->joint_qd.data()),
+                                EqualityRow::softness(model_, e, false), step.dt));
   equality_row_[e] = r;
 }
 
@@ -214,12 +238,18 @@ void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
     tendon_row_[2 * t + side] = -1;
     const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
     const Scalar gap = LimitRow::gap(length, limit, side);
-    if (!LimitRow::on(limit, gap, velocity, side, step.dt)) continue;
+    const Softness soft = softness_of(&model_.tendon_limit_solref[2 * t], &model_.tendon_limit_solimp[5 * t],
+                                      model_.tendon_invweight0[t]);
+    const bool softened = soft_ && soft.soft();
+    if (!LimitRow::on(limit, gap, velocity, side, step.dt, softened)) continue;
     const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.settings, step.dt));
     Scalar* J = row_jacobian(r, a);
     for (int e = first; e < model_.tendon_start[t + 1]; ++e)
       J[model_.tendon_dof[e] - art_[a].qd_begin()] += LimitRow::sign(side) * model_.tendon_coef[e];
     rows_[r].lambda = LimitRow::warm(step.tendon_impulse[2 * t + side], warm_share_of(r, step));
+    if (softened)
+      soften(r, LimitRow::soft(gap, LimitRow::sign(side) * tendon_velocity(model_, t, step.in->joint_qd.data()), soft,
+                               step.dt));
     tendon_row_[2 * t + side] = r;
   }
 }

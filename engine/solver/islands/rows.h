@@ -8,6 +8,7 @@
 
 #include <vector>
 
+#include "engine/solver/parts/soft_row.h"
 #include "engine/solver/route.h"
 #include "kernels/pgs.h"
 
@@ -22,7 +23,7 @@ class IslandRows {
              const std::vector<int>& limit_cell);
 
   // this step's rows afresh; route[a]: the route stepping articulation a
-  void begin(const std::vector<StepRoute*>& route);
+  void begin(const std::vector<StepRoute*>& route, const StepContext& step);
   // the limit rows and then the friction-loss rows of `articulations`, then the rows of `contacts`
   void add_limit_rows(const StepContext& step, const std::vector<int>& articulations);
   void add_friction_rows(const StepContext& step, const std::vector<int>& articulations);
@@ -45,6 +46,8 @@ class IslandRows {
   // the share of the last step's impulses row r (not a contact's: ContactRows::warm_share) starts from: warm_share
   // over the articulations it acts on (all of them converged, or not)
   Scalar warm_share_of(int row, const StepContext& step) const;
+  // row r soft (its cfm and target; soft_row.h)
+  void soften(int r, const SoftRow& soft);
   // M^-1 J^T and the effective mass, once J is filled in
   void finish_row(int row, Scalar cfm);
   void group_islands();
@@ -56,6 +59,7 @@ class IslandRows {
   const std::vector<int>& limited_start_;
   const std::vector<int>& limit_cell_;
   const std::vector<StepRoute*>* route_ = nullptr;
+  bool soft_ = true;  // this step's settings.soft_constraints
   std::vector<PgsRow> rows_;
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;  // the rows' pools

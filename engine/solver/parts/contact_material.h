@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "engine/model/model.h"
+#include "engine/solver/parts/soft_row.h"
 
 namespace novaphy {
 
@@ -96,18 +97,12 @@ inline ContactPair contact_pair(FrictionRule rule, const ContactMaterial& a, con
   for (int k = 0; k < 2; ++k)
     solref[k] = (ra[0] > 0 && rb[0] > 0) || pa != pb ? mix * ra[k] + (1 - mix) * rb[k] : std::min(ra[k], rb[k]);
   for (int k = 0; k < 5; ++k) pair.solimp[k] = mix * a.solimp[k] + (1 - mix) * b.solimp[k];
-  if (solref[0] == 0 && solref[1] == 0) return pair;
+  if (!is_soft(solref)) return pair;
   pair.soft = true;
   pair.active_margin = std::max(a.margin, b.margin) - std::max(a.gap, b.gap);
-  const Scalar dmax = std::clamp(pair.solimp[1], Scalar(1e-4), Scalar(0.9999));
-  if (solref[0] > 0) {
-    const Scalar tc = std::max(solref[0], 2 * dt);  // (MuJoCo's refsafe)
-    pair.stiffness = 1 / std::max(Scalar(1e-15), dmax * dmax * tc * tc * solref[1] * solref[1]);
-    pair.damping = 2 / std::max(Scalar(1e-15), dmax * tc);
-  } else {
-    pair.stiffness = -solref[0] / std::max(Scalar(1e-15), dmax * dmax);
-    pair.damping = -solref[1] / std::max(Scalar(1e-15), dmax);
-  }
+  const SoftReference k = soft_reference(solref, pair.solimp, dt);
+  pair.stiffness = k.stiffness;
+  pair.damping = k.damping;
   return pair;
 }
 

@@ -1,37 +1,19 @@
-// A contact's softness: MuJoCo's soft constraint (solref, solimp) over one step of the rows' sweeps. MuJoCo's rows
-// satisfy J a + R f = aref with aref = -B v - K imp (pos - margin); times dt, with the impulse p = f dt, the
-// step's J qd_out + R p = v + dt aref, v = J qd_in: a row of cfm R and target v + dt aref. A contact whose
-// deciding solref is (0, 0) is rigid (ContactRows::rigid_normal_target, contact_rows.h). Where a contact's softness is
-// computed: contact_pair (contact_material.h) takes the deciding solref and solimp from the two shapes as MuJoCo
-// combines geoms, and K and B from that solref at the step's dt, once per pair of materials; contact_softness here
-// the rest, per contact and step, from its depth.
+// A contact's softness: MuJoCo's soft constraint (solref, solimp; soft_row.h) over the lanes of a contact's rows,
+// with pos - margin in place of pos. A contact whose deciding solref is (0, 0) is rigid
+// (ContactRows::rigid_normal_target, contact_rows.h). Where a contact's softness is computed: contact_pair
+// (contact_material.h) takes the deciding solref and solimp from the two shapes as MuJoCo combines geoms, and K and B
+// from that solref at the step's dt, once per pair of materials; contact_softness here the rest, per contact and
+// step, from its depth.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
 #include "engine/solver/parts/contact_material.h"
+#include "engine/solver/parts/soft_row.h"
 #include "kernels/number.h"
 
 namespace novaphy {
-
-// MuJoCo's impedance at a distance x past the active margin, from solimp (dmin, dmax, width, midpoint, power),
-// each clamped as MuJoCo clamps them where it reads them: dmin, dmax and midpoint into [1e-4, 0.9999], width to
-// >= 0, power to >= 1 (the builder takes any finite solimp, as MuJoCo's compiler does)
-inline Scalar contact_impedance(const Scalar* solimp, Scalar x) {
-  constexpr Scalar kMin = 1e-4, kMax = 0.9999;  // (MuJoCo's mjMINIMP, mjMAXIMP)
-  const Scalar dmin = std::clamp(solimp[0], kMin, kMax), dmax = std::clamp(solimp[1], kMin, kMax);
-  const Scalar width = solimp[2], mid = std::clamp(solimp[3], kMin, kMax), power = std::max(Scalar(1), solimp[4]);
-  if (dmin == dmax || width <= 1e-15) return 0.5 * (dmin + dmax);
-  const Scalar u = std::abs(x) / width;
-  if (u >= 1) return dmax;
-  // MuJoCo's u^p / mid^(p-1) below the midpoint and 1 - (1-u)^p / (1-mid)^(p-1) above, written as ratios <= 1
-  // raised to p so that no power underflows to 0 / 0 (power 2, MuJoCo's default, without std::pow: this runs per
-  // contact and step)
-  const auto raise = [power](Scalar x) { return power == 2 ? x * x : std::pow(x, power); };
-  const Scalar y = power == 1 ? u : u <= mid ? mid * raise(u / mid) : 1 - (1 - mid) * raise((1 - u) / (1 - mid));
-  return dmin + y * (dmax - dmin);
-}
 
 // a contact's softness over the number type (kernels/number.h): whether it is soft, the normal row's cfm R (0 while
 // the contact is inactive, farther than margin - gap), the friction rows' (R / impratio), MuJoCo's B, and K imp
@@ -55,7 +37,7 @@ inline ContactSoftness<Scalar> contact_softness(const ContactPair& pair, Scalar 
   s.active_margin = pair.active_margin;
   const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
   if (x >= 0) return s;
-  const Scalar imp = contact_impedance(pair.solimp, x);
+  const Scalar imp = impedance(pair.solimp, x);
   s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (weight_a + weight_b));
   s.cfm_friction = s.cfm_normal / impratio;
   s.damping = pair.damping;

@@ -1,12 +1,14 @@
 // The rows of an equality constraint (model.h: Connect, Weld, JointCoupling): bilateral rows (Bounded, no bound) that
-// drive the constraint's error to zero, a share erp of it each step. The constraint's data read as named records
-// (the model keeps them as equality_data[10 e ..]).
+// drive the constraint's error to zero, a share erp of it each step, or soft as MuJoCo's (soft_row.h) by its
+// solref. The constraint's data read as named records (the model keeps them as equality_data[10 e ..]).
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <limits>
 
 #include "engine/model/model.h"
+#include "engine/solver/parts/soft_row.h"
 #include "engine/solver/parts/warm_start.h"
 #include "kernels/pgs.h"
 
@@ -21,6 +23,33 @@ struct EqualityRow : KeptImpulseRow {
     return -static_cast<Element<V>>(p.erp) * error / dt;
   }
   static Scalar bound() { return std::numeric_limits<Scalar>::infinity(); }
+  // a soft row's cfm and target: its error along the row, the constraint's whole error (the norm over its rows,
+  // where MuJoCo reads the impedance), the row's velocity at the step's start
+  static SoftRow soft(Scalar error, Scalar whole, Scalar v, const Softness& s, Scalar dt) {
+    return soft_row(s.solref, s.solimp, s.weight, whole, error, v, dt);
+  }
+  // equality e's softness; its rows' weights (MuJoCo's): the two bodies' translational invweight0 for a Connect's
+  // or Weld's position rows, their rotational one for a Weld's rotation rows, the two joints' dofs' for a coupling.
+  // MuJoCo's weld rotation rows are half of these rows (half the relative angular velocity, the error's quaternion
+  // part, soft_turn): such a row of ours with four times MuJoCo's cfm moves the bodies as MuJoCo's
+  static Softness softness(const Model& model, int e, bool rotation) {
+    const int o1 = model.equality_object[2 * e], o2 = model.equality_object[2 * e + 1];
+    Scalar weight = 0;
+    if (static_cast<EqualityType>(model.equality_type[e]) == EqualityType::JointCoupling) {
+      for (const int j : {o1, o2})
+        if (j >= 0) weight += model.joint_invweight0[model.joint_qd_start[j]];
+    } else {
+      for (const int b : {o1, o2})
+        if (b >= 0) weight += model.body_invweight0[2 * b + (rotation ? 1 : 0)] * (rotation ? 4 : 1);
+    }
+    return softness_of(&model.equality_solref[2 * e], &model.equality_solimp[5 * e], weight);
+  }
+  // a soft weld's rotation error as its rows read it, from the rotation vector `turn` (errors()): twice MuJoCo's,
+  // the quaternion's vector part sin(angle / 2) axis
+  static Vec3 soft_turn(const Vec3& turn) {
+    const Scalar angle = turn.norm();
+    return angle > 0 ? Vec3(2 * std::sin(angle / 2) / angle * turn) : turn;
+  }
   // its rows: a Weld's 6 (3 for the anchors' gap, 3 for the rotation), a Connect's 3, a JointCoupling's 1
   static int count(EqualityType type) { return type == EqualityType::Weld ? 6 : type == EqualityType::Connect ? 3 : 1; }
 };

@@ -9,6 +9,7 @@
 //   friction_loss_row.h  a dof's dry friction (FrictionLossRow)
 //   equality_rows.h      Connect, Weld, JointCoupling (EqualityRow, BodyEquality, JointCoupling)
 //   contact_rows.h       a contact's normal, sliding, torsional and rolling rows (ContactRows, ContactInput)
+//   soft_row.h           MuJoCo's soft row (solref, solimp) that a limit, dry friction or equality row may be
 //   contact_softness.h   where a contact's softness is computed (MuJoCo's solref, solimp: contact_softness)
 //   contact_material.h   what a contact takes from its two shapes (friction, restitution, solref, solimp)
 //   row_jacobian.h       a row's Jacobian entries for a point riding on a link

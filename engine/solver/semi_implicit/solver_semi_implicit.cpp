@@ -158,7 +158,8 @@ void SolverSemiImplicit::constraint_rows(int w, const StepInput& step, Scalar sh
       for (int side = 0; side < 2; ++side) {
         const Scalar limit = side == 0 ? lower : upper;
         const Scalar gap = LimitRow::gap(x, limit, side);
-        const bool on = compliance > 0 ? std::isfinite(limit) && gap < 0 : LimitRow::on(limit, gap, x_dot, side, dt);
+        const bool on =
+            compliance > 0 ? std::isfinite(limit) && gap < 0 : LimitRow::on(limit, gap, x_dot, side, dt, false);
         if (!on) continue;
         BodyRow r = along;
         const Scalar sign = LimitRow::sign(side);

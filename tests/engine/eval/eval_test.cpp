@@ -1,6 +1,6 @@
 // ForwardDynamics (engine/eval/eval.h): the step's batched kernels made once for a model, evaluated again and
 // again, against the reference kernels' CRBA + Cholesky (eval_forward_dynamics) on MuJoCo's humanoid; and
-// set_body_invweight0's sharing of weights between replicas.
+// set_invweight0's sharing of weights between replicas.
 #include "engine/eval/eval.h"
 
 #include <gtest/gtest.h>
@@ -69,11 +69,12 @@ TEST(ForwardDynamics, ChecksItsArguments) {
 }
 
 // a branching robot: a Free or hinged base, a Ball shoulder carrying two hinged arms, armature on every dof, the
-// second arm of mass `tip`
-ModelBuilder branching_robot(bool floating, Scalar tip) {
+// second arm of mass `tip`; its dofs' limits of solref `limit_solref`
+ModelBuilder branching_robot(bool floating, Scalar tip, const std::array<Scalar, 2>& limit_solref = {0, 0}) {
   ModelBuilder builder;
   JointOptions options;
   options.dof.armature = 0.02;
+  options.dof.limit_solref = limit_solref;
   options.dof.axis = Vec3(0, 0.6, 0.8);
   const int base = builder.add_body(RigidBody::from_box(3, Vec3(0.2, 0.1, 0.1)), Transform::identity(), "base");
   floating ? builder.add_joint_free(-1, base, options) : builder.add_joint_revolute(-1, base, options);
@@ -114,6 +115,39 @@ TEST(BodyInvweight0, ReplicasGetTheirOriginalsWeightsAndOthersTheirOwn) {
     }
     EXPECT_NE(other.body_invweight0[n - 2], lone.body_invweight0[n - 2]);  // (the second arm's translation weight)
     EXPECT_GT(lone.body_invweight0[n - 2], 0);
+  }
+}
+
+// where a soft row weighs them: a dof's invweight0 is M^-1's diagonal at joint_q0 (averaged over a Ball's dofs and a
+// Free joint's rotations and translations, as MuJoCo's dof_invweight0), a tendon's J M^-1 J^T; a replica gets its
+// original's; without a soft row they are 0
+TEST(JointInvweight0, IsTheInverseMassMatrixsDiagonalAndATendonsJMinvJt) {
+  for (const bool floating : {false, true}) {
+    ModelBuilder robot = branching_robot(floating, 0.3, {0.02, 1});
+    const int arms[2] = {robot.joint_count() - 2, robot.joint_count() - 1};
+    robot.add_tendon({arms[0], arms[1]}, {1.0, -0.5});
+    ModelBuilder scene;
+    scene.replicate(robot, 2, Vec3(2, 0, 0));
+    const Model model = scene.finalize();
+    const MatX Minv = eval_mass_matrix(model, model.state()).inverse();
+    const int n = model.joint_dof_count / 2;
+    VecX expected = Minv.diagonal().head(n);
+    const int ball = floating ? 6 : 1;  // (the Free joint's dofs: its rotations, then its translations)
+    auto average = [&](int from) { expected.segment(from, 3).setConstant(expected.segment(from, 3).mean()); };
+    if (floating) average(0), average(3);
+    average(ball);
+    for (int k = 0; k < n; ++k) {
+      EXPECT_NEAR(model.joint_invweight0[k], expected[k], 1e-12 * expected[k]) << "dof " << k;
+      EXPECT_EQ(model.joint_invweight0[n + k], model.joint_invweight0[k]) << "replica's dof " << k;
+    }
+    VecX J = VecX::Zero(2 * n);
+    J[n - 2] = 1, J[n - 1] = -0.5;
+    EXPECT_NEAR(model.tendon_invweight0[0], J.dot(Minv * J), 1e-12 * J.dot(Minv * J));
+    J.head(n).swap(J.tail(n));
+    EXPECT_NEAR(model.tendon_invweight0[1], J.dot(Minv * J), 1e-12 * J.dot(Minv * J));
+    const Model hard = branching_robot(floating, 0.3).finalize();
+    EXPECT_TRUE(
+        std::all_of(hard.joint_invweight0.begin(), hard.joint_invweight0.end(), [](Scalar w) { return w == 0; }));
   }
 }
 

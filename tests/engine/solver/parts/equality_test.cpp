@@ -125,8 +125,9 @@ TEST(Equalities, ACassieLikeLoopOnAFreeBaseStaysClosed) {
   std::filesystem::remove(path);
 }
 
-// a pendulum driven by a motor, a free box welded to its end (MuJoCo's weld made nearly hard) and a second box
-// welded to the world in the air
+// a pendulum driven by a motor, a free box welded to its end and a second box welded to the world in the air at its
+// centre (MuJoCo's welds made nearly hard: at its default solref, a weld to the world sags and swings, as NovaPhy's,
+// tests/python/test_soft_constraints.py)
 constexpr const char* kWeldedPendulum = R"(
 <mujoco model="welded pendulum">
   <option gravity="0 0 -9.81" timestep="0.002"/>
@@ -141,7 +142,7 @@ constexpr const char* kWeldedPendulum = R"(
   </worldbody>
   <equality>
     <weld name="grip" body1="arm" body2="box" anchor="0.02 0 0" solref="0.004 1" solimp="0.99 0.999 0.001"/>
-    <weld name="hook" body1="hung"/>
+    <weld name="hook" body1="hung" anchor="1 0 2" solref="0.004 1" solimp="0.99 0.999 0.001"/>
   </equality>
   <actuator><motor name="drive" joint="swing"/></actuator>
 </mujoco>)";

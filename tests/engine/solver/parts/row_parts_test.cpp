@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -47,11 +48,15 @@ TYPED_TEST(RowParts, LimitRowIsOnWhereTheCoordinateWouldCrossAndPushesOutBeyondT
   // within the step
   EXPECT_EQ(LimitRow::gap<T>(T(0.25), T(0.2), 0), T(0.25) - T(0.2));
   EXPECT_EQ(LimitRow::gap<T>(T(0.25), T(0.3), 1), -(T(0.25) - T(0.3)));
-  EXPECT_FALSE(LimitRow::on<T>(T(0), T(0.02), T(-1), 0, dt));
-  EXPECT_TRUE(LimitRow::on<T>(T(0), T(0.005), T(-1), 0, dt));
-  EXPECT_TRUE(LimitRow::on<T>(T(1), T(0.005), T(1), 1, dt));  // the upper side, approached from below
-  EXPECT_FALSE(LimitRow::on<T>(T(1), T(0.005), T(-1), 1, dt));
-  EXPECT_FALSE(LimitRow::on<T>(inf, -inf, T(-1), 0, dt));
+  EXPECT_FALSE(LimitRow::on<T>(T(0), T(0.02), T(-1), 0, dt, false));
+  EXPECT_TRUE(LimitRow::on<T>(T(0), T(0.005), T(-1), 0, dt, false));
+  EXPECT_TRUE(LimitRow::on<T>(T(1), T(0.005), T(1), 1, dt, false));  // the upper side, approached from below
+  EXPECT_FALSE(LimitRow::on<T>(T(1), T(0.005), T(-1), 1, dt, false));
+  EXPECT_FALSE(LimitRow::on<T>(inf, -inf, T(-1), 0, dt, false));
+  // a soft row (MuJoCo's rule): on where the coordinate is past the limit, moving in or out, not before
+  EXPECT_TRUE(LimitRow::on<T>(T(0), T(-0.001), T(1), 0, dt, true));
+  EXPECT_FALSE(LimitRow::on<T>(T(0), T(0.005), T(-1), 0, dt, true));
+  EXPECT_FALSE(LimitRow::on<T>(inf, -inf, T(-1), 0, dt, true));
   // closing the gap in one step; beyond it, erp of the depth past the slop per step
   EXPECT_NEAR(LimitRow::target<T>(T(0.005), p, dt), T(-0.5), 1e-5);
   EXPECT_NEAR(LimitRow::target<T>(T(-0.011), p, dt), T(0.2 * 0.01 / 0.01), 1e-5);
@@ -62,12 +67,50 @@ TYPED_TEST(RowParts, LimitRowIsOnWhereTheCoordinateWouldCrossAndPushesOutBeyondT
   auto velocity = [](int l) { return 0.55 - 0.35 * (l % 3); };  // (no lane at gap + dt v = 0)
   auto limit = [](int l) { return l == kLanes<T> - 1 ? std::numeric_limits<Scalar>::infinity() : 0.0; };
   const Lanes<T> g = lanes_of<T>(gap), v = lanes_of<T>(velocity), dts = splat<Lanes<T>>(dt);
-  const IntLanes<T> on = LimitRow::on(lanes_of<T>(limit), g, v, 0, dts);
+  IntLanes<T> soft{};  // (soft in every third lane)
+  for (int l = 0; l < kLanes<T>; ++l) soft[l] = l % 3 == 1 ? -1 : 0;
+  const IntLanes<T> on = LimitRow::on(lanes_of<T>(limit), g, v, 0, dts, soft);
   const Lanes<T> target = LimitRow::target(g, p, dts);
   for (int l = 0; l < kLanes<T>; ++l) {
-    EXPECT_EQ(on[l] != 0, LimitRow::on<T>(T(limit(l)), T(gap(l)), T(velocity(l)), 0, dt)) << "lane " << l;
+    EXPECT_EQ(on[l] != 0, LimitRow::on<T>(T(limit(l)), T(gap(l)), T(velocity(l)), 0, dt, l % 3 == 1)) << "lane " << l;
     expect_lane<T>(target, l, LimitRow::target<T>(T(gap(l)), p, dt), "target");
   }
+}
+
+// MuJoCo's soft row over one step for a one-dof row of inverse mass A with no other force: the impulse the row's
+// cfm and target give, p = (target - v) / (A + cfm), is MuJoCo's f dt with f = aref / (A + R), aref = -B v - K imp pos
+TEST(RowParts, SoftRowsAreMujocosSoftConstraintOverOneStep) {
+  const Scalar solref[2] = {0.02, 1}, solimp[5] = {0.9, 0.95, 0.001, 0.5, 2}, dt = 0.002, weight = 4, A = 5;
+  // K and B: 1 / (dmax^2 tc^2 dampratio^2) and 2 / (dmax tc), the time constant at least 2 dt (refsafe)
+  const SoftReference k = soft_reference(solref, solimp, dt);
+  EXPECT_NEAR(k.stiffness, 1 / (0.95 * 0.95 * 0.02 * 0.02), 1e-9);
+  EXPECT_NEAR(k.damping, 2 / (0.95 * 0.02), 1e-12);
+  const Scalar fast[2] = {0.001, 1};
+  EXPECT_NEAR(soft_reference(fast, solimp, dt).damping, 2 / (0.95 * 2 * dt), 1e-9);
+  const Scalar direct[2] = {-1000, -20};
+  EXPECT_NEAR(soft_reference(direct, solimp, dt).stiffness, 1000 / (0.95 * 0.95), 1e-9);
+  EXPECT_NEAR(soft_reference(direct, solimp, dt).damping, 20 / 0.95, 1e-12);
+  // a limit 0.26 past (imp at dmax), moving out at 0.3
+  Softness s = softness_of(solref, solimp, weight);
+  const Scalar gap = -0.26, v = 0.3;
+  const SoftRow row = LimitRow::soft(gap, v, s, dt);
+  const Scalar R = (1 - 0.95) / 0.95 * weight, aref = -k.damping * v - k.stiffness * 0.95 * gap;
+  EXPECT_NEAR(row.cfm, R, 1e-15);
+  EXPECT_NEAR((row.target - v) / (A + row.cfm), aref / (A + R) * dt, 1e-12);
+  // dry friction: no stiffness, the impedance at 0 (dmin)
+  const SoftRow friction = FrictionLossRow::soft(v, s, dt);
+  EXPECT_NEAR(friction.cfm, (1 - 0.9) / 0.9 * weight, 1e-15);
+  EXPECT_NEAR(friction.target, v - dt * k.damping * v, 1e-15);
+  // an equality: its impedance at its whole error, its stiffness on the row's part of it
+  s.solimp[2] = 0.1;  // (a width the error falls within)
+  const SoftRow equality = EqualityRow::soft(0.03, 0.05, v, s, dt);
+  const Scalar imp = impedance(s.solimp, 0.05);
+  EXPECT_GT(imp, 0.9);
+  EXPECT_LT(imp, 0.95);
+  EXPECT_NEAR(equality.cfm, (1 - imp) / imp * weight, 1e-15);
+  EXPECT_NEAR(equality.target, v - dt * (k.damping * v + k.stiffness * imp * 0.03), 1e-12);
+  EXPECT_FALSE(is_soft(std::array<Scalar, 2>{0, 0}.data()));
+  EXPECT_TRUE(is_soft(direct));
 }
 
 TYPED_TEST(RowParts, FrictionLossRowIsBoundedByTheLossOverTheStep) {

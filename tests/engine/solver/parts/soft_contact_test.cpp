@@ -62,26 +62,26 @@ TEST(SoftContacts, FreeBodiesWeighTheirInverseInertiaWeldedOnesNothing) {
 // MuJoCo's impedance: dmin at the surface, dmax from `width` in, the midpoint and power shaping between
 TEST(SoftContacts, ImpedanceFollowsSolimp) {
   const Scalar solimp[5] = {0.2, 0.9, 0.01, 0.4, 3};
-  EXPECT_NEAR(contact_impedance(solimp, 0), 0.2, 1e-15);
-  EXPECT_NEAR(contact_impedance(solimp, -0.02), 0.9, 1e-15);
+  EXPECT_NEAR(impedance(solimp, 0), 0.2, 1e-15);
+  EXPECT_NEAR(impedance(solimp, -0.02), 0.9, 1e-15);
   const Scalar u = 0.3;  // below the midpoint: y = u^p / mid^(p-1)
-  EXPECT_NEAR(contact_impedance(solimp, -u * 0.01), 0.2 + 0.7 * std::pow(u, 3) / std::pow(0.4, 2), 1e-15);
+  EXPECT_NEAR(impedance(solimp, -u * 0.01), 0.2 + 0.7 * std::pow(u, 3) / std::pow(0.4, 2), 1e-15);
   const Scalar w = 0.7;  // above: y = 1 - (1-u)^p / (1-mid)^(p-1)
-  EXPECT_NEAR(contact_impedance(solimp, -w * 0.01), 0.2 + 0.7 * (1 - std::pow(0.3, 3) / std::pow(0.6, 2)), 1e-15);
+  EXPECT_NEAR(impedance(solimp, -w * 0.01), 0.2 + 0.7 * (1 - std::pow(0.3, 3) / std::pow(0.6, 2)), 1e-15);
   const Scalar flat[5] = {0.95, 0.95, 0.001, 0.5, 2};
-  EXPECT_EQ(contact_impedance(flat, -0.0005), 0.95);
+  EXPECT_EQ(impedance(flat, -0.0005), 0.95);
   // outside MuJoCo's ranges, clamped as MuJoCo clamps: dmin and dmax into [1e-4, 0.9999] (here both 0.9999, flat),
   // the midpoint likewise, the power to >= 1 (linear), the width to >= 0 (flat)
   const Scalar above[5] = {2, 1, 0.01, 0.5, 2};
-  EXPECT_EQ(contact_impedance(above, -0.005), 0.9999);
+  EXPECT_EQ(impedance(above, -0.005), 0.9999);
   const Scalar linear[5] = {0.2, 0.9, 0.01, 1.5, 0.5};
-  EXPECT_NEAR(contact_impedance(linear, -0.003), 0.2 + 0.7 * 0.3, 1e-15);
+  EXPECT_NEAR(impedance(linear, -0.003), 0.2 + 0.7 * 0.3, 1e-15);
   const Scalar no_width[5] = {0.2, 0.9, -0.01, 0.5, 2};
-  EXPECT_NEAR(contact_impedance(no_width, -0.003), 0.55, 1e-15);
+  EXPECT_NEAR(impedance(no_width, -0.003), 0.55, 1e-15);
   // a power so high that mid^(p-1) underflows: a step from dmin to dmax at the midpoint, never 0 / 0
   const Scalar steep[5] = {0.2, 0.9, 0.01, 0.5, 1e300};
-  EXPECT_EQ(contact_impedance(steep, -0.003), 0.2);
-  EXPECT_DOUBLE_EQ(contact_impedance(steep, -0.007), 0.9);
+  EXPECT_EQ(impedance(steep, -0.003), 0.2);
+  EXPECT_DOUBLE_EQ(impedance(steep, -0.007), 0.9);
 }
 
 // the bodies' heights after 2 s from the MJCF at `path`, NovaPhy's; each within 0.2 mm of MuJoCo's
@@ -283,7 +283,7 @@ TEST(SoftContacts, BadSolrefAndSolimpNameTheShape) {
   options.solref = {0.02, -1};
   EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(body, 0.1, options),
                        "shape 0 ('foot') (Sphere): solref must be (time constant > 0, damping ratio > 0), "
-                       "(-stiffness < 0, -damping <= 0) or (0, 0) for a rigid contact, got (0.02, -1)");
+                       "(-stiffness < 0, -damping <= 0) or (0, 0) for a hard row, got (0.02, -1)");
   options.solref = {0.02, 1};
   options.solimp = {0.5, std::numeric_limits<Scalar>::infinity(), 0.001, 0.5, 2};
   EXPECT_NOVAPHY_ERROR(builder.add_shape_sphere(body, 0.1, options),
