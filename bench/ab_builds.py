@@ -3,7 +3,8 @@ and float64, on one thread (pinned to CPU 0) and two, a build's run and the othe
 after, before in each round so that a slow spell of the machine lands on both, every case in each round. Each run
 is a fresh process that replicates the robot, settles it 50 steps and times `steps` steps `reps` times (its
 median); a round's ratio is the before build's time over the after build's (above 1: after is faster), the table
-their median over the rounds.
+their median over the rounds. --before-settings NAME=VALUE,... sets the before side's solver settings: one build
+given twice measures a setting's cost (soft_constraints=False: hard rows against MuJoCo's soft ones).
     build/venv/bin/python bench/ab_builds.py BEFORE/build/python AFTER/build/python [--rounds 5] > table.md"""
 import argparse
 import json
@@ -23,6 +24,9 @@ import json, statistics, sys, time
 from replicated import replicated
 scene, precision, threads, worlds, steps, reps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
 model, state, control, solver, pipeline, contacts = replicated(scene, precision, threads, worlds)
+for setting in filter(None, sys.argv[7].split(",")):
+    name, value = setting.split("=")
+    setattr(solver.settings, name, type(getattr(solver.settings, name))(eval(value)))
 dt = 0.002
 for _ in range(50):
     pipeline.collide(state, contacts)
@@ -40,12 +44,12 @@ print(json.dumps(statistics.median(times)))
 """
 
 
-def run(build, scene, precision, threads, args):
+def run(build, scene, precision, threads, args, settings=""):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([build, os.path.dirname(os.path.abspath(__file__))]),
                OMP_WAIT_POLICY="passive")
     pin = ["taskset", "-c", "0"] if threads == 1 else []
     command = pin + [sys.executable, "-c", RUN, SCENES[scene], precision, str(threads), str(args.worlds),
-                     str(args.steps), str(args.reps)]
+                     str(args.steps), str(args.reps), settings]
     done = subprocess.run(command, env=env, capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"{build} {scene} {precision} {threads} threads failed:\n{done.stderr}")
@@ -63,6 +67,7 @@ def main():
     parser.add_argument("--scenes", default=",".join(SCENES), help="comma-separated: go1, quadruped, humanoid")
     parser.add_argument("--precisions", default="Float32,Float64")
     parser.add_argument("--threads", default="1,2")
+    parser.add_argument("--before-settings", default="", help="NAME=VALUE,... for the before side's solver")
     args = parser.parse_args()
     cases = [(scene, precision, threads) for scene in args.scenes.split(",")
              for precision in args.precisions.split(",") for threads in map(int, args.threads.split(","))]
@@ -73,10 +78,10 @@ def main():
     after = {case: [] for case in cases}
     for r in range(args.rounds):
         for case in cases:
-            b1 = run(args.before, *case, args)
+            b1 = run(args.before, *case, args, args.before_settings)
             a1 = run(args.after, *case, args)
             a2 = run(args.after, *case, args)
-            b2 = run(args.before, *case, args)
+            b2 = run(args.before, *case, args, args.before_settings)
             before[case] += [b1, b2]
             after[case] += [a1, a2]
             ratios[case].append((b1 + b2) / (a1 + a2))

@@ -1,9 +1,11 @@
 #include "engine/import/mjcf_import.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <optional>
 
 #include "engine/import/mjcf_translate.h"
@@ -100,7 +102,7 @@ class MjcfImporter {
     const int joint0 = builder_.joint_count();
     builder_.take_gravity(vec3(m_.gravity), "the file's");
     builder_.take_timestep(m_.timestep);
-    for (int b = 1; b < m_.nbody; ++b) add_body(b);
+    for (const int b : body_order()) add_body(b);
     for (int b = 1; b < m_.nbody && m_.body_gravcomp; ++b)
       if (m_.body_gravcomp[b] != 0 && !is_static(b)) builder_.set_body_gravcomp(out_.body_map[b], m_.body_gravcomp[b]);
     builder_.set_collision_filter(CollisionFilter::Mujoco);
@@ -125,6 +127,45 @@ class MjcfImporter {
 
  private:
   bool is_static(int b) const { return b == 0 || out_.body_map[b] < 0; }
+
+  // MuJoCo's bodies in the order they are added: those welded to the world, then each articulation's subtree in
+  // MuJoCo's order, the articulations a fixed tendon joins one after another (a gripper's fingers under a static palm,
+  // Robotiq's `split`), so that the builder joins them into one articulation of contiguous joints. Without such a
+  // tendon the moving bodies keep MuJoCo's order
+  std::vector<int> body_order() const {
+    const int n = m_.nbody;
+    std::vector<int> root(n, -1);  // a moving body's articulation: its ancestor with joints under a static body
+    for (int b = 1; b < n; ++b) {
+      const int p = m_.body_parentid[b];
+      root[b] = root[p] >= 0 ? root[p] : m_.body_jntnum[b] > 0 ? b : -1;
+    }
+    std::vector<int> joint_body(m_.njnt), group(n);
+    for (int b = 1; b < n; ++b)
+      for (int k = 0; k < m_.body_jntnum[b]; ++k) joint_body[m_.body_jntadr[b] + k] = b;
+    std::iota(group.begin(), group.end(), 0);
+    auto find = [&](int r) {
+      while (group[r] != r) r = group[r] = group[group[r]];
+      return r;
+    };
+    for (int t = 0; t < m_.ntendon; ++t)
+      for (int w = m_.tendon_adr[t] + 1; w < m_.tendon_adr[t] + m_.tendon_num[t]; ++w) {
+        if (m_.wrap_type[w] != mjWRAP_JOINT || m_.wrap_type[w - 1] != mjWRAP_JOINT) continue;
+        const int x = find(root[joint_body[m_.wrap_objid[w - 1]]]), y = find(root[joint_body[m_.wrap_objid[w]]]);
+        group[std::max(x, y)] = std::min(x, y);
+      }
+    std::vector<std::vector<int>> subtree(n), roots(n);  // a root's bodies; a group's roots (at its first)
+    std::vector<int> order;
+    for (int b = 1; b < n; ++b) {
+      if (root[b] < 0)
+        order.push_back(b);
+      else
+        subtree[root[b]].push_back(b);
+      if (root[b] == b) roots[find(b)].push_back(b);
+    }
+    for (int g = 1; g < n; ++g)
+      for (const int r : roots[g]) order.insert(order.end(), subtree[r].begin(), subtree[r].end());
+    return order;
+  }
 
   void add_body(int b) {
     const int p = m_.body_parentid[b];
@@ -154,6 +195,8 @@ class MjcfImporter {
       const std::string link_name = last ? name : name + "/" + joint_name;
       const int child = builder_.add_body_checked(link, body_xform, link_name, true);
       joint_index_[j] = builder_.add_joint(type, parent, child, options);
+      out_.joints[j].q = next_q_, out_.joints[j].qd = next_qd_;
+      next_q_ += joint_coord_count(type), next_qd_ += joint_dof_count(type);
       parent = child;
     }
     out_.body_map[b] = parent;
@@ -628,6 +671,7 @@ class MjcfImporter {
 
   ModelBuilder& builder_;
   const MujocoFields& m_;
+  int next_q_ = 0, next_qd_ = 0;  // the next joint's first coordinate and dof (MujocoJoint::q, qd)
   ImportOptions options_;
   MujocoImport out_;
   std::vector<Transform> static_pose_;  // world pose of bodies welded to the world
@@ -684,31 +728,31 @@ std::vector<std::string> ModelBuilder::add_mjcf(const std::string& path, const I
 }
 
 void MujocoImport::to_joint_q(const mjtNum* qpos, Scalar* joint_q) const {
-  Scalar* q = joint_q + q_begin;
   for (const MujocoJoint& j : joints) {
-    const int a = j.qposadr;
+    const mjtNum* x = qpos + j.qposadr;
+    Scalar* q = joint_q + q_begin + j.q;
     switch (j.type) {
       case mjJNT_HINGE:
-      case mjJNT_SLIDE: q[a] = qpos[a]; break;
-      case mjJNT_BALL: q[a] = qpos[a + 1], q[a + 1] = qpos[a + 2], q[a + 2] = qpos[a + 3], q[a + 3] = qpos[a]; break;
-      case mjJNT_FREE: pose(qpos + a, qpos + a + 3).to_array(q + a); break;
+      case mjJNT_SLIDE: q[0] = x[0]; break;
+      case mjJNT_BALL: q[0] = x[1], q[1] = x[2], q[2] = x[3], q[3] = x[0]; break;
+      case mjJNT_FREE: pose(x, x + 3).to_array(q); break;
     }
   }
 }
 
 void MujocoImport::to_qpos(const Scalar* joint_q, mjtNum* qpos) const {
-  const Scalar* q = joint_q + q_begin;
   for (const MujocoJoint& j : joints) {
-    const int a = j.qposadr;
+    mjtNum* x = qpos + j.qposadr;
+    const Scalar* q = joint_q + q_begin + j.q;
     switch (j.type) {
       case mjJNT_HINGE:
-      case mjJNT_SLIDE: qpos[a] = q[a]; break;
+      case mjJNT_SLIDE: x[0] = q[0]; break;
       case mjJNT_BALL:  // NovaPhy [x y z w], MuJoCo [w x y z]; Free: position, then the same
       case mjJNT_FREE: {
         const int p = j.type == mjJNT_FREE ? 3 : 0;
-        std::copy_n(q + a, p, qpos + a);
-        qpos[a + p] = q[a + p + 3];
-        std::copy_n(q + a + p, 3, qpos + a + p + 1);
+        std::copy_n(q, p, x);
+        x[p] = q[p + 3];
+        std::copy_n(q + p, 3, x + p + 1);
         break;
       }
     }
@@ -720,20 +764,23 @@ void MujocoImport::to_joint_qd(const mjtNum* qpos, const mjtNum* qvel, Scalar* j
 }
 
 void MujocoImport::to_qvel(const mjtNum* qpos, const Scalar* joint_qd, mjtNum* qvel) const {
-  // the map's inverse is its transpose: each free joint's block is orthogonal
+  // the map's inverse is its transpose: a permutation, each free joint's block orthogonal
   Eigen::Map<VecX>(qvel, nv) = velocity_map(qpos).transpose() * Eigen::Map<const VecX>(joint_qd + qd_begin, nv);
 }
 
 MatX MujocoImport::velocity_map(const mjtNum* qpos) const {
-  MatX T = MatX::Identity(nv, nv);
+  // NovaPhy's dof j.qd + k is MuJoCo's j.dofadr + k, but a Free joint's
+  MatX T = MatX::Zero(nv, nv);
   for (const MujocoJoint& j : joints) {
-    if (j.type != mjJNT_FREE) continue;
-    const int d = j.dofadr;
+    const int d = j.dofadr, e = j.qd;
+    if (j.type != mjJNT_FREE) {
+      for (int k = 0; k < (j.type == mjJNT_BALL ? 3 : 1); ++k) T(e + k, d + k) = 1;
+      continue;
+    }
     const Mat3 R = quat_wxyz(qpos + j.qposadr + 3).normalized().toRotationMatrix();
     // [w_world; v] = [0 R; I 0] [v; w_body]
-    T.block(d, d, 6, 6).setZero();
-    T.block(d, d + 3, 3, 3) = R;
-    T.block(d + 3, d, 3, 3).setIdentity();
+    T.block(e, d + 3, 3, 3) = R;
+    T.block(e + 3, d, 3, 3).setIdentity();
   }
   return T;
 }

@@ -23,6 +23,7 @@ namespace novaphy {
 
 struct MujocoJoint {
   int type = 0, qposadr = 0, dofadr = 0;  // MuJoCo's jnt_type, jnt_qposadr, jnt_dofadr
+  int q = 0, qd = 0;  // its first NovaPhy coordinate and dof, from q_begin / qd_begin (the order the import added it)
 };
 
 // what an import made, and the maps between the MuJoCo model's state and NovaPhy's (qpos and qvel of the

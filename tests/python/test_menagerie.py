@@ -16,19 +16,7 @@ mujoco_menagerie = pytest.importorskip(
 from mujoco_checks import menagerie_entries, menagerie_path, menagerie_status  # noqa: E402
 
 
-# robots on disk that use what NovaPhy does not model yet (the real-robots III issue): each fails as named, strictly
-NOT_YET = {
-    "robotiq_2f85": "a fixed tendon over joints in separate subtrees joins articulations not one after another",
-}
-
-
-def entries():
-    for name, entry in menagerie_entries():
-        marks = [pytest.mark.xfail(strict=True, reason=NOT_YET[name])] if name in NOT_YET else []
-        yield pytest.param(name, entry, marks=marks, id=f"{name}-{entry}")
-
-
-@pytest.mark.parametrize("name, entry", entries())
+@pytest.mark.parametrize("name, entry", menagerie_entries())
 def test_menagerie_robot(name, entry):
     path = menagerie_path(name)
     if path is None:

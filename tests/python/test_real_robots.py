@@ -312,3 +312,61 @@ def test_a_disabled_parent_filter_is_reported(tmp_path):
         novaphy.ModelBuilder().add_mujoco_model(mujoco.MjModel.from_xml_path(str(path)))
     with pytest.warns(UserWarning, match="parent rule is disabled"):
         novaphy.ModelBuilder().add_mjcf(str(path))
+
+
+# a static palm with three fingers, a fixed tendon and a joint equality joining the first and the third (the second
+# between them in MuJoCo's order, as Robotiq's `split` joins its drivers), and a free ball: the import adds the joined
+# fingers one after the other, its state maps following
+SPLIT = """<mujoco><compiler angle="radian"/>
+  <default><geom type="capsule" size="0.01" mass="0.1" contype="0" conaffinity="0"/></default>
+  <worldbody><body name="palm"><geom type="box" size="0.05 0.05 0.01"/>
+      <body name="a" pos="0.03 0 0"><joint name="ja" axis="0 1 0"/><geom fromto="0 0 0 0 0 -0.1"/></body>
+      <body name="b" pos="0 0.03 0"><joint name="jb" axis="1 0 0"/><geom fromto="0 0 0 0 0 -0.1"/></body>
+      <body name="c" pos="-0.03 0 0"><joint name="jc" axis="0 1 0"/><geom fromto="0 0 0 0 0 -0.1"/></body></body>
+    <body name="ball" pos="0 0 -0.3"><freejoint/><geom type="sphere" size="0.02"/></body></worldbody>
+  <tendon><fixed name="split" limited="true" range="-0.05 0.05"><joint joint="ja" coef="0.5"/>
+    <joint joint="jc" coef="0.5"/></fixed></tendon>
+  <equality><joint joint1="ja" joint2="jc" polycoef="0 -1 0 0 0"/></equality>
+  <keyframe><key qpos="0.3 0.2 -0.1 0.1 0 -0.3 0.8 0.6 0 0" qvel="0 1 0.5 0.5 0.1 0 1 0 0"/></keyframe></mujoco>"""
+
+
+@pytest.mark.parametrize("route", ["from_mujoco", "add_mjcf"])
+def test_a_tendon_over_fingers_not_one_after_another_joins_them(tmp_path, route):
+    path = tmp_path / "split.xml"
+    path.write_text(SPLIT)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    imported, model = by_route(m, path, route)
+    assert model.articulation_count == 3  # (a and c one articulation; b; the ball)
+    state = model.state(keyframe=model.keyframes[0])
+    assert np.allclose(imported.to_qpos(np.array(state.joint_q)), d.qpos, rtol=0, atol=1e-15)
+    assert np.allclose(imported.to_qvel(d.qpos, np.array(state.joint_qd)), d.qvel, rtol=0, atol=1e-15)
+    expected, got, _ = both(SPLIT, tmp_path, 200, route)
+    assert np.max(np.abs(got - expected)) < 1e-6, np.max(np.abs(got - expected))
+
+
+def test_robotiqs_fingers_move_as_mujocos():
+    m = mujoco.MjModel.from_xml_path(shared_robot("robotiq_2f85", "scene.xml"))
+    with pytest.warns(UserWarning) as caught:
+        builder = novaphy.ModelBuilder()
+        imported = builder.add_mujoco_model(m)
+    # what it leaves out: the spatial tendon its scene hangs the object on, nothing else
+    assert [str(w.message) for w in caught] == [
+        "novaphy: tendon '#1' is spatial or spans a ball or free joint (fixed tendons over hinges and slides only): "
+        "not modelled (affects motion)"
+    ]
+    model = builder.finalize()
+    d = mujoco.MjData(m)
+    state, control = model.state(), model.control()
+    pipeline = novaphy.CollisionPipeline(model)
+    contacts = pipeline.contacts()
+    solver = novaphy.solvers.SolverFeatherstone(model)
+    solver.settings.angular_damping = 0
+    for _ in range(500):
+        pipeline.collide(state, contacts)
+        solver.step(state, state, control, contacts, m.opt.timestep)
+    mujoco.mj_step(m, d, 500)
+    fingers = [m.jnt_qposadr[j] for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
+    assert len(fingers) == 8
+    assert np.max(np.abs(imported.to_qpos(np.array(state.joint_q))[fingers] - d.qpos[fingers])) < 1e-4
