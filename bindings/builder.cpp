@@ -239,18 +239,22 @@ void bind_builder(py::module_& m) {
           "add_tendon",
           [](ModelBuilder& self, const std::vector<int>& joints, const std::vector<Scalar>& coefs, Scalar stiffness,
              Scalar damping, Scalar rest_length, Scalar limit_lower, Scalar limit_upper, const std::string& name,
-             const std::array<Scalar, 2>& limit_solref, const std::array<Scalar, 5>& limit_solimp) {
-            return self.add_tendon(
-                joints, coefs,
-                {stiffness, damping, rest_length, limit_lower, limit_upper, name, limit_solref, limit_solimp});
+             const std::array<Scalar, 2>& limit_solref, const std::array<Scalar, 5>& limit_solimp, Scalar frictionloss,
+             const std::array<Scalar, 2>& friction_solref, const std::array<Scalar, 5>& friction_solimp) {
+            return self.add_tendon(joints, coefs,
+                                   {stiffness, damping, rest_length, limit_lower, limit_upper, name, limit_solref,
+                                    limit_solimp, frictionloss, friction_solref, friction_solimp});
           },
           py::arg("joints"), py::arg("coefs"), py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
           py::arg("rest_length") = NAN, py::arg("limit_lower") = -INFINITY, py::arg("limit_upper") = INFINITY,
           py::arg("name") = "", py::arg("limit_solref") = std::array<Scalar, 2>{0, 0},
-          py::arg("limit_solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2},
+          py::arg("limit_solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2}, py::arg("frictionloss") = 0.0,
+          py::arg("friction_solref") = std::array<Scalar, 2>{0, 0},
+          py::arg("friction_solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2},
           "Fixed tendon: length = sum coefs[i] * q(joints[i]) over Revolute/Prismatic joints, with a spring "
           "(rest_length NaN: its length at the initial coordinates) and damper, taken explicitly, and limits kept by "
-          "rows of the step (soft as MuJoCo's where limit_solref is not (0, 0): JointDofConfig.limit_solref). "
+          "rows of the step (soft as MuJoCo's where limit_solref is not (0, 0): JointDofConfig.limit_solref), and its "
+          "dry friction (frictionloss, soft by friction_solref). "
           "finalize() joins its joints' articulations into one where they have a fixed base and "
           "follow one another (a gripper's fingers on a static palm); a floating one or one given by "
           "add_articulation is an error.")

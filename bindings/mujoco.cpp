@@ -205,6 +205,8 @@ class MjModelFields {
     f_.tendon_frictionloss = field<double>("tendon_frictionloss", nt);
     f_.tendon_solref_lim = field<double>("tendon_solref_lim", nt, mjNREF);
     f_.tendon_solimp_lim = field<double>("tendon_solimp_lim", nt, mjNIMP);
+    f_.tendon_solref_fri = field<double>("tendon_solref_fri", nt, mjNREF);
+    f_.tendon_solimp_fri = field<double>("tendon_solimp_fri", nt, mjNIMP);
     f_.tendon_margin = field<double>("tendon_margin", nt);
     f_.tendon_lengthspring = field_of_width<double>("tendon_lengthspring", nt, {1, 2}, &f_.tendon_lengthspring_width);
     f_.tendon_armature = newer_field<double>("tendon_armature", nt);

@@ -378,7 +378,6 @@ class MjcfImporter {
       joints.push_back(joint_index_[j]);
       coefs.push_back(m_.wrap_prm[w]);
     }
-    if (m_.tendon_frictionloss[t] != 0) warn_motion("tendon '" + name + "': frictionloss is not modelled");
     TendonOptions options;
     options.stiffness = m_.tendon_stiffness[t];
     options.damping = m_.tendon_damping[t];
@@ -395,6 +394,9 @@ class MjcfImporter {
       std::copy_n(m_.tendon_solimp_lim + mjNIMP * t, mjNIMP, options.limit_solimp.begin());
       if (m_.tendon_margin[t] != 0) warn_motion("tendon '" + name + "': a limit's margin is not modelled");
     }
+    options.frictionloss = m_.tendon_frictionloss[t];
+    options.friction_solref = solref(m_.tendon_solref_fri + mjNREF * t, "tendon '" + name + "' solreffriction");
+    std::copy_n(m_.tendon_solimp_fri + mjNIMP * t, mjNIMP, options.friction_solimp.begin());
     options.name = name;
     tendon_index_[t] = builder_.add_tendon(joints, coefs, options);
   }

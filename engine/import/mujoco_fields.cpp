@@ -300,6 +300,7 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.jnt_solref = m->jnt_solref, f.jnt_solimp = m->jnt_solimp, f.jnt_margin = m->jnt_margin;
   f.dof_solref = m->dof_solref, f.dof_solimp = m->dof_solimp;
   f.tendon_solref_lim = m->tendon_solref_lim, f.tendon_solimp_lim = m->tendon_solimp_lim;
+  f.tendon_solref_fri = m->tendon_solref_fri, f.tendon_solimp_fri = m->tendon_solimp_fri;
   f.tendon_margin = m->tendon_margin, f.eq_solref = m->eq_solref, f.eq_solimp = m->eq_solimp;
   f.geom_type = m->geom_type, f.geom_contype = m->geom_contype, f.geom_conaffinity = m->geom_conaffinity;
   f.geom_condim = m->geom_condim, f.geom_bodyid = m->geom_bodyid, f.geom_dataid = m->geom_dataid;

@@ -39,11 +39,12 @@ struct MujocoFields {
   const MjByte *jnt_limited = nullptr;
   const double *jnt_pos = nullptr, *jnt_axis = nullptr, *jnt_stiffness = nullptr, *jnt_range = nullptr;
   const double *dof_armature = nullptr, *dof_damping = nullptr, *dof_frictionloss = nullptr;
-  // the softness of a joint's limits, a dof's dry friction, a tendon's limits, an equality: [mjNREF], [mjNIMP] each;
-  // a limit's margin
+  // the softness of a joint's limits, a dof's dry friction, a tendon's limits and dry friction, an equality:
+  // [mjNREF], [mjNIMP] each; a limit's margin
   const double *jnt_solref = nullptr, *jnt_solimp = nullptr, *jnt_margin = nullptr, *dof_solref = nullptr,
                *dof_solimp = nullptr, *tendon_solref_lim = nullptr, *tendon_solimp_lim = nullptr,
-               *tendon_margin = nullptr, *eq_solref = nullptr, *eq_solimp = nullptr;
+               *tendon_solref_fri = nullptr, *tendon_solimp_fri = nullptr, *tendon_margin = nullptr,
+               *eq_solref = nullptr, *eq_solimp = nullptr;
   const int *geom_type = nullptr, *geom_contype = nullptr, *geom_conaffinity = nullptr, *geom_condim = nullptr,
             *geom_bodyid = nullptr, *geom_dataid = nullptr, *geom_priority = nullptr;
   const double *geom_solmix = nullptr, *geom_solref = nullptr, *geom_solimp = nullptr, *geom_size = nullptr,

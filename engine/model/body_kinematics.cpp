@@ -69,14 +69,14 @@ void bodies_from_joints(const Model& model, State& state) {
 
 namespace {
 
-// whether a soft row weighs a dof or a tendon by its invweight0: a dof's limit or dry friction, a tendon's limit,
+// whether a soft row weighs a dof or a tendon by its invweight0: a dof's or a tendon's limit or dry friction,
 // a joint coupling (whose weight is its joints' dofs')
 bool weighs_joints(const Model& model) {
   const auto is_soft = [](const Scalar* solref) { return solref[0] != 0 || solref[1] != 0; };  // (soft_row.h)
   for (int k = 0; k < model.joint_dof_count; ++k)
     if (is_soft(&model.joint_limit_solref[2 * k]) || is_soft(&model.joint_friction_solref[2 * k])) return true;
   for (int t = 0; t < model.tendon_count; ++t)
-    if (is_soft(&model.tendon_limit_solref[2 * t])) return true;
+    if (is_soft(&model.tendon_limit_solref[2 * t]) || is_soft(&model.tendon_friction_solref[2 * t])) return true;
   for (int e = 0; e < model.equality_count; ++e)
     if (model.equality_type[e] == static_cast<int>(EqualityType::JointCoupling) &&
         is_soft(&model.equality_solref[2 * e]))

@@ -86,7 +86,7 @@ struct ActuatorOptions {
   }
 };
 
-// a fixed tendon's parameters (add_tendon): a spring and damper along it, and its range
+// a fixed tendon's parameters (add_tendon): a spring and damper along it, its range and its dry friction
 struct TendonOptions {
   Scalar stiffness = 0, damping = 0;
   Scalar rest_length = std::numeric_limits<Scalar>::quiet_NaN();  // NaN: its length at the initial coordinates
@@ -95,6 +95,10 @@ struct TendonOptions {
   // its limits' softness, as a dof's (JointDofConfig::limit_solref, limit_solimp)
   std::array<Scalar, 2> limit_solref = {0, 0};
   std::array<Scalar, 5> limit_solimp = {0.9, 0.95, 0.001, 0.5, 2};
+  // dry friction along it: its force at most this either way, a row of the step soft as a dof's (friction_solref)
+  Scalar frictionloss = 0;
+  std::array<Scalar, 2> friction_solref = {0, 0};
+  std::array<Scalar, 5> friction_solimp = {0.9, 0.95, 0.001, 0.5, 2};
 };
 
 // a sensor's options (add_sensor): its frame on its body, Touch's zone, a cutoff and a name

@@ -24,6 +24,9 @@ int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<S
   check_range(item, "limit range", options.limit_lower, options.limit_upper);
   check_solref(item, "limit_solref", options.limit_solref);
   check_solimp(item, "limit_solimp", options.limit_solimp);
+  check_nonnegative(item, "frictionloss", options.frictionloss);
+  check_solref(item, "friction_solref", options.friction_solref);
+  check_solimp(item, "friction_solimp", options.friction_solimp);
   tendons_.push_back({joints, coefs, options});
   return tendon_count() - 1;
 }
@@ -134,6 +137,11 @@ void ModelBuilder::lay_out_tendons(Model& model) const {
     model.tendon_limit_upper.push_back(o.limit_upper);
     model.tendon_limit_solref.insert(model.tendon_limit_solref.end(), o.limit_solref.begin(), o.limit_solref.end());
     model.tendon_limit_solimp.insert(model.tendon_limit_solimp.end(), o.limit_solimp.begin(), o.limit_solimp.end());
+    model.tendon_frictionloss.push_back(o.frictionloss);
+    model.tendon_friction_solref.insert(model.tendon_friction_solref.end(), o.friction_solref.begin(),
+                                        o.friction_solref.end());
+    model.tendon_friction_solimp.insert(model.tendon_friction_solimp.end(), o.friction_solimp.begin(),
+                                        o.friction_solimp.end());
     model.tendon_invweight0.push_back(0);  // (set_invweight0)
     model.tendon_name.push_back(o.name);
   }

@@ -107,15 +107,15 @@ const char* shape_type_name(ShapeType type);
 // shape_margin (a contact is active from this distance) and shape_gap (less this). body_invweight0 is
 // MuJoCo's: the mean of the diagonal of J M^-1 J^T at joint_q0 for the body's COM, translation then rotation.
 // The rows of a dof's limits (joint_limit_solref, _solimp), its dry friction (joint_friction_), a tendon's limits
-// (tendon_limit_) and an equality constraint (equality_) are soft as MuJoCo's (engine/solver/parts/soft_row.h)
-// where their solref is not (0, 0), hard rows where it is; joint_invweight0 (M^-1's diagonal at joint_q0, averaged
-// over a Ball's dofs and over a Free joint's translations and its rotations) and tendon_invweight0 (J M^-1 J^T)
-// weigh them, MuJoCo's dof_invweight0 and tendon_invweight0, computed where a soft row needs them (else 0).
-// A mesh m is a convex hull (kernels/hull.h): its vertices mesh_vertex[mesh_vertex_start[m] ..
-// mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the vertices' mean), its faces
-// [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal, offset) and its
-// corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the mesh,
-// counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types. world_gravity: each
+// (tendon_limit_) and dry friction (tendon_frictionloss, tendon_friction_) and an equality constraint (equality_) are
+// soft as MuJoCo's (engine/solver/parts/soft_row.h) where their solref is not (0, 0), hard rows where it is;
+// joint_invweight0 (M^-1's diagonal at joint_q0, averaged over a Ball's dofs and over a Free joint's translations and
+// its rotations) and tendon_invweight0 (J M^-1 J^T) weigh them, MuJoCo's dof_invweight0 and tendon_invweight0, computed
+// where a soft row needs them (else 0). A mesh m is a convex hull (kernels/hull.h): its vertices
+// mesh_vertex[mesh_vertex_start[m] .. mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the
+// vertices' mean), its faces [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal,
+// offset) and its corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the
+// mesh, counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types. world_gravity: each
 // world's gravity (the builder's gravity in every world at finalize). body_gravcomp: the share of a body's weight
 // carried by a force through its centre of mass, MuJoCo's gravcomp (engine/solver/parts/gravity_compensation.h; 0:
 // none, 1: it floats).
@@ -194,6 +194,9 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, tendon_limit_upper, tendon_count, 1)           \
   X(Scalar, tendon_limit_solref, tendon_count, 2)          \
   X(Scalar, tendon_limit_solimp, tendon_count, 5)          \
+  X(Scalar, tendon_frictionloss, tendon_count, 1)          \
+  X(Scalar, tendon_friction_solref, tendon_count, 2)       \
+  X(Scalar, tendon_friction_solimp, tendon_count, 5)       \
   X(Scalar, tendon_invweight0, tendon_count, 1)            \
   X(int, equality_type, equality_count, 1)                 \
   X(int, equality_object, equality_count, 2)               \

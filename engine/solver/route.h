@@ -87,7 +87,7 @@ struct StepContext {
   Scalar* limit_impulse = nullptr;        // [limit cell] warm starts of limit rows
   Scalar* friction_impulse = nullptr;     // [dof] warm starts of friction-loss rows
   Scalar* equality_impulse = nullptr;     // [equality][6] warm starts of equality rows
-  Scalar* tendon_impulse = nullptr;       // [tendon][2] warm starts of tendon-limit rows
+  Scalar* tendon_impulse = nullptr;       // [tendon][3] warm starts of tendon-limit rows (two sides), dry friction
   std::uint8_t* pgs_converged = nullptr;  // [articulation] 1: its last sweeps converged (warm_share)
   std::uint8_t* diverged = nullptr;       // [articulation]
   int* factor_failure = nullptr;          // [articulation] dof whose pivot failed, else -1

@@ -25,7 +25,8 @@ struct SolverCounts {
   X(Scalar, limit_impulse, n.limit_cells, "the last step's limit impulses, the warm starts of limit rows")          \
   X(Scalar, friction_impulse, n.dofs, "the last step's friction-loss impulses, the warm starts of their rows")      \
   X(Scalar, equality_impulse, 6 * n.equalities, "the last step's equality impulses, the warm starts of their rows") \
-  X(Scalar, tendon_impulse, 2 * n.tendons, "the last step's tendon-limit impulses, the warm starts of their rows")  \
+  X(Scalar, tendon_impulse, 3 * n.tendons,                                                                          \
+    "the last step's tendon-limit and dry-friction impulses, their rows' warm starts")                              \
   X(std::uint8_t, pgs_converged, n.articulations, "1 where the last sweeps over its rows stopped at the tolerance") \
   X(std::uint8_t, diverged, n.articulations, "1 where the last step's divergence guard fired")                      \
   X(std::uint8_t, flagged, n.articulations, "1 where an input or a contact too deep diverged it before its step")   \

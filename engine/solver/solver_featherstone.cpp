@@ -226,7 +226,7 @@ void SolverFeatherstone::forget_reset_worlds(const State& in) {
   for (int e = 0; e < model_.equality_count; ++e)
     if (reset(built_.equality_articulation[e])) std::fill_n(data_.equality_impulse.begin() + 6 * e, 6, Scalar(0));
   for (int t = 0; t < model_.tendon_count; ++t)
-    if (reset(built_.tendon_articulation[t])) std::fill_n(data_.tendon_impulse.begin() + 2 * t, 2, Scalar(0));
+    if (reset(built_.tendon_articulation[t])) std::fill_n(data_.tendon_impulse.begin() + 3 * t, 3, Scalar(0));
   factor_kept_ = false;
 }
 

@@ -234,7 +234,9 @@ void SolverModel::mark_constrained(const Model& model) {
     if (model.tendon_start[t] == model.tendon_start[t + 1]) continue;  // (no joints: no rows)
     const int a = index.dof_articulation[model.tendon_dof[model.tendon_start[t]]];
     tendon_articulation[t] = a;
-    if (std::isfinite(model.tendon_limit_lower[t]) || std::isfinite(model.tendon_limit_upper[t])) constrained[a] = 1;
+    if (std::isfinite(model.tendon_limit_lower[t]) || std::isfinite(model.tendon_limit_upper[t]) ||
+        model.tendon_frictionloss[t] > 0)
+      constrained[a] = 1;
   }
 }
 

@@ -50,8 +50,8 @@ struct SolverModel {
   std::vector<Scalar> shape_weight;
   std::vector<ContactMaterial> contact_materials;
   int contact_dims = 3;  // the rows of a contact of the most, by the shapes' condim (ContactLists::dims)
-  // per articulation: 1 where an equality constraint or a tendon limit acts on it (its rows are always the
-  // islands')
+  // per articulation: 1 where an equality constraint, a tendon limit or a tendon's dry friction acts on it (its rows
+  // are always the islands')
   std::vector<std::uint8_t> constrained;
   // per equality and tendon the articulation whose world it is in (the first it acts on that moves, -1: none)
   std::vector<int> equality_articulation, tendon_articulation;

@@ -268,3 +268,32 @@ def test_a_soft_weld_to_the_world_swings_as_mujocos(tmp_path, monkeypatch):
     assert np.max(np.abs(got[:50, :3] - expected[:50, :3])) < 1e-5  # the first 0.1 s, to 10 µm
     assert np.max(np.abs(got[:, :3] - expected[:, :3])) < 0.03  # 1 s: down 1.5 m, as MuJoCo's to 3 cm
     assert expected[-1, 2] < 1
+
+
+# the two rods of COUPLING spun apart (2 rad/s) against a fixed tendon's dry friction over them: the friction slows
+# their relative motion, softly as MuJoCo's
+TENDON_FRICTION = COUPLING.replace('<key qpos="0.1 0"/>', '<key qpos="0 0" qvel="2 0"/>')
+
+
+@pytest.mark.parametrize("route, batch", ROUTES)
+@pytest.mark.parametrize("soft", ["", 'solreffriction="0.05 1" solimpfriction="0.5 0.8 0.01"'])
+def test_a_tendons_dry_friction_slows_it_as_mujocos(tmp_path, route, batch, soft):
+    element = f'<tendon><fixed name="t" frictionloss="0.002" {soft}><joint joint="j1" coef="1"/><joint joint="j2" coef="-1"/></fixed></tendon>'
+    expected, got = trajectories(TENDON_FRICTION.format(element=element), tmp_path, 200, route, batch=batch)
+    assert np.max(np.abs(got - expected)) < 1e-6, np.max(np.abs(got - expected))
+    no_friction, _ = trajectories(TENDON_FRICTION.format(element=""), tmp_path, 200, route, batch=batch)
+    assert np.max(np.abs(no_friction - expected)) > 0.01  # (the friction changes the motion)
+
+
+@pytest.mark.parametrize(
+    "keywords, message",
+    [({"frictionloss": -1.0}, "frictionloss must be finite and >= 0"), ({"friction_solref": [1, -1]}, "friction_solref")],
+)
+def test_a_bad_tendon_friction_is_refused_naming_the_tendon(keywords, message):
+    b = novaphy.ModelBuilder()
+    joints = []
+    for _ in range(2):
+        body = b.add_body(novaphy.RigidBody.from_box(1.0, [0.1, 0.1, 0.1]))
+        joints.append(b.add_joint_revolute(-1, body, axis=[0, 0, 1]))
+    with pytest.raises(ValueError, match=f"tendon 0 \\('t'\\): {message}"):
+        b.add_tendon(joints, [1.0, -1.0], name="t", **keywords)

@@ -21,7 +21,7 @@ IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& 
   limit_row_.assign(2 * static_cast<size_t>(model.joint_dof_count), -1);
   friction_row_.assign(model.joint_dof_count, -1);
   equality_row_.assign(model.equality_count, -1);
-  tendon_row_.assign(2 * static_cast<size_t>(model.tendon_count), -1);
+  tendon_row_.assign(3 * static_cast<size_t>(model.tendon_count), -1);
 }
 
 void IslandRows::begin(const std::vector<StepRoute*>& route, const StepContext& step) {
@@ -178,7 +178,7 @@ void IslandRows::add_constraint_rows(const StepContext& step) {
     else
       add_body_rows(step, e);
   }
-  for (int t = 0; t < model_.tendon_count; ++t) add_tendon_limit_rows(step, t);
+  for (int t = 0; t < model_.tendon_count; ++t) add_tendon_rows(step, t);
 }
 
 void IslandRows::add_body_rows(const StepContext& step, int e) {
@@ -229,29 +229,42 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   equality_row_[e] = r;
 }
 
-void IslandRows::add_tendon_limit_rows(const StepContext& step, int t) {
-  // as a joint's limit rows, over the tendon's length and velocity
+void IslandRows::add_tendon_rows(const StepContext& step, int t) {
+  // as a joint's limit rows and dry friction, over the tendon's length and velocity: J its coefficients
   const Scalar length = tendon_length(model_, t, step.in->joint_q.data());
   const Scalar velocity = tendon_velocity(model_, t, step.qd);
+  const Scalar start_velocity = tendon_velocity(model_, t, step.in->joint_qd.data());  // (the step's start)
   const int first = model_.tendon_start[t], a = index_.dof_articulation[model_.tendon_dof[first]];
+  auto tendon_row = [&](RowKind kind, Scalar target, Scalar sign) {
+    const int r = begin_row(a, -1, kind, target);
+    Scalar* J = row_jacobian(r, a);
+    for (int e = first; e < model_.tendon_start[t + 1]; ++e)
+      J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
+    return r;
+  };
   for (int side = 0; side < 2; ++side) {
-    tendon_row_[2 * t + side] = -1;
+    tendon_row_[3 * t + side] = -1;
     const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
     const Scalar gap = LimitRow::gap(length, limit, side);
     const Softness soft = softness_of(&model_.tendon_limit_solref[2 * t], &model_.tendon_limit_solimp[5 * t],
                                       model_.tendon_invweight0[t]);
     const bool softened = soft_ && soft.soft();
     if (!LimitRow::on(limit, gap, velocity, side, step.dt, softened)) continue;
-    const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.settings, step.dt));
-    Scalar* J = row_jacobian(r, a);
-    for (int e = first; e < model_.tendon_start[t + 1]; ++e)
-      J[model_.tendon_dof[e] - art_[a].qd_begin()] += LimitRow::sign(side) * model_.tendon_coef[e];
-    rows_[r].lambda = LimitRow::warm(step.tendon_impulse[2 * t + side], warm_share_of(r, step));
-    if (softened)
-      soften(r, LimitRow::soft(gap, LimitRow::sign(side) * tendon_velocity(model_, t, step.in->joint_qd.data()), soft,
-                               step.dt));
-    tendon_row_[2 * t + side] = r;
+    const int r = tendon_row(LimitRow::kKind, LimitRow::target(gap, step.settings, step.dt), LimitRow::sign(side));
+    rows_[r].lambda = LimitRow::warm(step.tendon_impulse[3 * t + side], warm_share_of(r, step));
+    if (softened) soften(r, LimitRow::soft(gap, LimitRow::sign(side) * start_velocity, soft, step.dt));
+    tendon_row_[3 * t + side] = r;
   }
+  tendon_row_[3 * t + 2] = -1;
+  const Scalar loss = model_.tendon_frictionloss[t];
+  if (!FrictionLossRow::on(loss)) return;
+  const int r = tendon_row(FrictionLossRow::kKind, 0, 1);
+  rows_[r].bound = FrictionLossRow::bound(loss, step.dt);
+  rows_[r].lambda = FrictionLossRow::warm(step.tendon_impulse[3 * t + 2], warm_share_of(r, step));
+  const Softness soft = softness_of(&model_.tendon_friction_solref[2 * t], &model_.tendon_friction_solimp[5 * t],
+                                    model_.tendon_invweight0[t]);
+  if (soft_ && soft.soft()) soften(r, FrictionLossRow::soft(start_velocity, soft, step.dt));
+  tendon_row_[3 * t + 2] = r;
 }
 
 void IslandRows::keep_constraint_impulses(const StepContext& step) const {
@@ -259,9 +272,9 @@ void IslandRows::keep_constraint_impulses(const StepContext& step) const {
     for (int k = 0; k < EqualityRow::count(static_cast<EqualityType>(model_.equality_type[e])); ++k)
       step.equality_impulse[6 * e + k] = EqualityRow::keep(rows_[equality_row_[e] + k].lambda, true);
   }
-  for (int t = 0; t < 2 * model_.tendon_count; ++t) {
+  for (int t = 0; t < 3 * model_.tendon_count; ++t) {
     const int r = tendon_row_[t];
-    step.tendon_impulse[t] = LimitRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
+    step.tendon_impulse[t] = KeptImpulseRow::keep(r < 0 ? 0 : rows_[r].lambda, r >= 0);
   }
 }
 

@@ -1,7 +1,7 @@
 // The rows the blocks do not solve: those of the dense route's articulations, and every row of an
 // articulation a contact joins to another moving one this step. A row acts on the dofs of one or two
 // articulations through J and M^-1 J^T, each side's from the route that steps it; the contact and limit
-// rows are the parts of engine/solver/parts/rows.h, as are the rows of equality constraints and tendon limits,
+// rows are the parts of engine/solver/parts/rows.h, as are the rows of equality constraints and tendons,
 // which the islands build for either route. Articulations joined by rows form islands, each swept by
 // kernels/pgs on one thread, the islands in parallel (the same bits as one sweep over all rows).
 #pragma once
@@ -69,11 +69,12 @@ class IslandRows {
   std::vector<int> contact_row_;   // [contact] the first row of each contact added
   std::vector<int> contact_dims_;  // [contact] its rows: 3, or 4 or 6 with the torsional and rolling ones
   std::vector<int> equality_row_;  // [equality] its first row, -1
-  std::vector<int> tendon_row_;    // [tendon][2] the row of each active limit, -1
-  // the rows of equality e (connect or weld, joint coupling), of a tendon's limit, and their impulses kept
+  std::vector<int> tendon_row_;    // [tendon][3] the row of each active limit and of its dry friction, -1
+  // the rows of equality e (connect or weld, joint coupling), of a tendon's limits and dry friction, and their
+  // impulses kept
   void add_body_rows(const StepContext& step, int e);
   void add_coupling_row(const StepContext& step, int e);
-  void add_tendon_limit_rows(const StepContext& step, int t);
+  void add_tendon_rows(const StepContext& step, int t);
   void keep_constraint_impulses(const StepContext& step) const;
   // islands (articulations joined by rows, named by their lowest articulation): island i's rows are
   // island_rows_[island_start_[i] .. island_start_[i + 1])
