@@ -20,7 +20,7 @@ ArticulationView kinematics(const Model& model, const State& state, int a, Artic
 // state.body_q and state.body_qd from state.joint_q and state.joint_qd, unchecked (eval_fk checks them first)
 void bodies_from_joints(const Model& model, State& state);
 
-// model.body_invweight0, and joint_invweight0 and tendon_invweight0 where a soft row needs them (model.h), MuJoCo's,
+// model.body_invweight0, and joint_invweight0 and tendon_invweight0 when some soft row needs them (model.h), MuJoCo's,
 // from joint_q0: the builder's last step
 void set_invweight0(Model& model);
 

@@ -111,7 +111,7 @@ const char* shape_type_name(ShapeType type);
 // soft as MuJoCo's (engine/solver/parts/soft_row.h) where their solref is not (0, 0), hard rows where it is;
 // joint_invweight0 (M^-1's diagonal at joint_q0, averaged over a Ball's dofs and over a Free joint's translations and
 // its rotations) and tendon_invweight0 (J M^-1 J^T) weigh them, MuJoCo's dof_invweight0 and tendon_invweight0, computed
-// where a soft row needs them (else 0). A mesh m is a convex hull (kernels/hull.h): its vertices
+// when some soft row needs them (else 0). A mesh m is a convex hull (kernels/hull.h): its vertices
 // mesh_vertex[mesh_vertex_start[m] .. mesh_vertex_start[m + 1]) in the frame of the shapes that use it (centred on the
 // vertices' mean), its faces [mesh_face_start[m] .. mesh_face_start[m + 1]), each with its plane (outward unit normal,
 // offset) and its corners mesh_corner[mesh_corner_start[f] .. mesh_corner_start[f + 1]) (vertex indices within the
