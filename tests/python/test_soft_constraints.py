@@ -64,7 +64,7 @@ LIMIT_KICK = """<mujoco><compiler angle="radian"/><option gravity="0 0 0"/>
 @pytest.mark.parametrize("soft", ["", 'solreflimit="0.05 0.7" solimplimit="0.5 0.9 0.1 0.5 2"'])
 def test_a_start_past_a_limit_is_pushed_back_at_mujocos_rate(tmp_path, route, batch, soft):
     expected, got = trajectories(LIMIT_KICK.format(soft=soft), tmp_path, 100, route, batch=batch)
-    # the push-out over 0.2 s (MuJoCo's default: ~1 rad/s at the first step, where a hard row's erp gives 26)
+    # the push-out over 0.2 s (MuJoCo's default: 3.8 rad/s after the first step, where a hard row's erp gives 26)
     assert np.max(np.abs(got - expected)) < 1e-6, np.max(np.abs(got - expected))
     assert expected[0, 0] < 0.76 - 1e-4 and expected[-1, 0] < 0.55
 
@@ -76,15 +76,17 @@ def test_hard_rows_kick_a_start_past_a_limit_out_at_the_erp_rate(tmp_path):
     assert (0.76 - got[0, 0]) > 10 * (0.76 - expected[0, 0])
 
 
-# a horizontal rod on a hinge about y under gravity, its frictionloss below the weight's torque (0.3 kg at 0.15 m:
-# 0.44 N m): it falls through the soft dry friction in both; at 0.6 N m a hard row holds it still, MuJoCo's creeps
+# a horizontal rod on a hinge about y under gravity (0.3 kg at 0.15 m: 0.44 N m) against dry friction of 0.3 N m (it
+# falls) or 0.6 N m (a hard row holds it still, MuJoCo's soft one lets it creep)
 FRICTION = """<mujoco><worldbody><body><joint name="j" type="hinge" axis="0 1 0" frictionloss="{loss}" {soft}/>
     <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02" mass="0.3" contype="0" conaffinity="0"/></body>
   </worldbody><keyframe><key qpos="0"/></keyframe></mujoco>"""
 
 
 @pytest.mark.parametrize("route, batch", ROUTES)
-@pytest.mark.parametrize("loss, soft", [(0.6, ""), (0.3, ""), (0.6, 'solreffriction="0.1 1" solimpfriction="0.5 0.8 0.01"')])
+@pytest.mark.parametrize(
+    "loss, soft", [(0.6, ""), (0.3, ""), (0.6, 'solreffriction="0.1 1" solimpfriction="0.5 0.8 0.01"')]
+)
 def test_dry_friction_creeps_as_mujocos(tmp_path, route, batch, loss, soft):
     expected, got = trajectories(FRICTION.format(loss=loss, soft=soft), tmp_path, 500, route, batch=batch)
     assert np.max(np.abs(got - expected)) < 1e-6 * max(1, np.max(np.abs(expected))), np.max(np.abs(got - expected))
@@ -96,7 +98,7 @@ def test_hard_dry_friction_holds_what_mujocos_lets_creep(tmp_path):
     assert abs(got[-1, 0]) < 1e-9 < 1e-4 < abs(expected[-1, 0])
 
 
-# a pendulum of two links whose tip a connect holds on a point of the world 1.5 mm from where the keyframe puts it (as
+# a pendulum of two links whose tip a connect holds on a point of the world 2 mm from where the keyframe puts it (as
 # Cassie's keyframe leaves its loops open): the loop closes at MuJoCo's rate
 LOOP = """<mujoco><option gravity="0 0 -9.81"/>
   <worldbody><body name="a"><joint name="j1" type="hinge" axis="0 1 0"/>
@@ -257,8 +259,9 @@ def test_allegros_thumb_is_pushed_into_its_range_at_mujocos_rate():
 # a box welded to the world at MuJoCo's default softness, its weld's anchor the world's origin 2.2 m away (MuJoCo's
 # default anchor): the soft weld sags and swings the box down and out, as MuJoCo's
 WELD = """<mujoco><worldbody>
-  <body name="hung" pos="1 0 2"><freejoint/><geom type="box" size="0.05 0.05 0.05" mass="1" contype="0" conaffinity="0"/>
-  </body></worldbody><equality><weld body1="hung"/></equality><keyframe><key qpos="1 0 2 1 0 0 0"/></keyframe></mujoco>"""
+  <body name="hung" pos="1 0 2"><freejoint/>
+    <geom type="box" size="0.05 0.05 0.05" mass="1" contype="0" conaffinity="0"/></body></worldbody>
+  <equality><weld body1="hung"/></equality><keyframe><key qpos="1 0 2 1 0 0 0"/></keyframe></mujoco>"""
 
 
 def test_a_soft_weld_to_the_world_swings_as_mujocos(tmp_path, monkeypatch):
@@ -278,7 +281,10 @@ TENDON_FRICTION = COUPLING.replace('<key qpos="0.1 0"/>', '<key qpos="0 0" qvel=
 @pytest.mark.parametrize("route, batch", ROUTES)
 @pytest.mark.parametrize("soft", ["", 'solreffriction="0.05 1" solimpfriction="0.5 0.8 0.01"'])
 def test_a_tendons_dry_friction_slows_it_as_mujocos(tmp_path, route, batch, soft):
-    element = f'<tendon><fixed name="t" frictionloss="0.002" {soft}><joint joint="j1" coef="1"/><joint joint="j2" coef="-1"/></fixed></tendon>'
+    element = (
+        f'<tendon><fixed name="t" frictionloss="0.002" {soft}><joint joint="j1" coef="1"/>'
+        '<joint joint="j2" coef="-1"/></fixed></tendon>'
+    )
     expected, got = trajectories(TENDON_FRICTION.format(element=element), tmp_path, 200, route, batch=batch)
     assert np.max(np.abs(got - expected)) < 1e-6, np.max(np.abs(got - expected))
     no_friction, _ = trajectories(TENDON_FRICTION.format(element=""), tmp_path, 200, route, batch=batch)
@@ -287,7 +293,10 @@ def test_a_tendons_dry_friction_slows_it_as_mujocos(tmp_path, route, batch, soft
 
 @pytest.mark.parametrize(
     "keywords, message",
-    [({"frictionloss": -1.0}, "frictionloss must be finite and >= 0"), ({"friction_solref": [1, -1]}, "friction_solref")],
+    [
+        ({"frictionloss": -1.0}, "frictionloss must be finite and >= 0"),
+        ({"friction_solref": [1, -1]}, "friction_solref"),
+    ],
 )
 def test_a_bad_tendon_friction_is_refused_naming_the_tendon(keywords, message):
     b = novaphy.ModelBuilder()
