@@ -20,13 +20,13 @@ SCENES = {
 }
 
 RUN = r"""
-import json, statistics, sys, time
+import ast, json, statistics, sys, time
 from replicated import replicated
 scene, precision, threads, worlds, steps, reps = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
 model, state, control, solver, pipeline, contacts = replicated(scene, precision, threads, worlds)
 for setting in filter(None, sys.argv[7].split(",")):
     name, value = setting.split("=")
-    setattr(solver.settings, name, type(getattr(solver.settings, name))(eval(value)))
+    setattr(solver.settings, name, type(getattr(solver.settings, name))(ast.literal_eval(value)))
 dt = 0.002
 for _ in range(50):
     pipeline.collide(state, contacts)
