@@ -452,7 +452,7 @@ void SolverFeatherstone::pass(const StepContext& step, Stage first, Stage last) 
 }
 
 void SolverFeatherstone::solve_islands(const StepContext& step) {
-  islands_->begin(route_, step);
+  islands_->begin(route_);
   islands_->add_limit_rows(step, island_articulations_);
   islands_->add_friction_rows(step, island_articulations_);
   lap(stage_seconds_.limit_rows);

@@ -24,9 +24,8 @@ IslandRows::IslandRows(const Model& model, const std::vector<ArticulationView>& 
   tendon_row_.assign(3 * static_cast<size_t>(model.tendon_count), -1);
 }
 
-void IslandRows::begin(const std::vector<StepRoute*>& route, const StepContext& step) {
+void IslandRows::begin(const std::vector<StepRoute*>& route) {
   route_ = &route;
-  soft_ = step.settings.soft_constraints;
   row_count_ = 0;
   pool_size_ = 0;
 }
@@ -102,7 +101,7 @@ void IslandRows::add_limit_rows(const StepContext& step, const std::vector<int>&
         const Scalar gap = LimitRow::gap(q, limit, side);
         const Softness soft = softness_of(&model_.joint_limit_solref[2 * g], &model_.joint_limit_solimp[5 * g],
                                           model_.joint_invweight0[g]);
-        const bool softened = soft_ && soft.soft();
+        const bool softened = step.settings.soft_constraints && soft.soft();
         if (!LimitRow::on(limit, gap, step.qd[g], side, dt, softened)) continue;
         const int r = begin_row(a, -1, LimitRow::kKind, LimitRow::target(gap, step.settings, dt));
         row_jacobian(r, a)[g - art_[a].qd_begin()] = LimitRow::sign(side);
@@ -124,7 +123,8 @@ void IslandRows::add_friction_rows(const StepContext& step, const std::vector<in
       rows_[r].bound = FrictionLossRow::bound(loss, step.dt);
       const Softness soft = softness_of(&model_.joint_friction_solref[2 * g], &model_.joint_friction_solimp[5 * g],
                                         model_.joint_invweight0[g]);
-      if (soft_ && soft.soft()) soften(r, FrictionLossRow::soft(step.in->joint_qd[g], soft, step.dt));
+      if (step.settings.soft_constraints && soft.soft())
+        soften(r, FrictionLossRow::soft(step.in->joint_qd[g], soft, step.dt));
       rows_[r].lambda = FrictionLossRow::warm(step.friction_impulse[g], warm_share_of(r, step));
       friction_row_[g] = r;
     }
@@ -192,7 +192,7 @@ void IslandRows::add_body_rows(const StepContext& step, int e) {
   BodyEquality::of(model_, e).errors(body_pose(*step.in, b1), body_pose(*step.in, b2), &mid, &error[0],
                                      weld ? &error[1] : nullptr);
   equality_row_[e] = row_count_;
-  const bool soft = soft_ && is_soft(&model_.equality_solref[2 * e]);
+  const bool soft = step.settings.soft_constraints && is_soft(&model_.equality_solref[2 * e]);
   // a soft weld's rotation rows read MuJoCo's error (EqualityRow::soft_turn), its impedance MuJoCo's whole error
   const Vec3 turn = soft && weld ? EqualityRow::soft_turn(error[1]) : error[1];
   const Scalar whole = std::sqrt(error[0].squaredNorm() + turn.squaredNorm() / 4);
@@ -223,7 +223,7 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   if (d2 >= 0) row_jacobian(r, a2)[d2 - art_[a2].qd_begin()] -= slope;
   rows_[r].bound = EqualityRow::bound();
   rows_[r].lambda = EqualityRow::warm(step.equality_impulse[6 * e], warm_share_of(r, step));
-  if (soft_ && is_soft(&model_.equality_solref[2 * e]))
+  if (step.settings.soft_constraints && is_soft(&model_.equality_solref[2 * e]))
     soften(r, EqualityRow::soft(error, std::abs(error), row_velocity(rows_[r], J_, step.in->joint_qd.data()),
                                 EqualityRow::softness(model_, e, false), step.dt));
   equality_row_[e] = r;
@@ -248,7 +248,7 @@ void IslandRows::add_tendon_rows(const StepContext& step, int t) {
     const Scalar gap = LimitRow::gap(length, limit, side);
     const Softness soft = softness_of(&model_.tendon_limit_solref[2 * t], &model_.tendon_limit_solimp[5 * t],
                                       model_.tendon_invweight0[t]);
-    const bool softened = soft_ && soft.soft();
+    const bool softened = step.settings.soft_constraints && soft.soft();
     if (!LimitRow::on(limit, gap, velocity, side, step.dt, softened)) continue;
     const int r = tendon_row(LimitRow::kKind, LimitRow::target(gap, step.settings, step.dt), LimitRow::sign(side));
     rows_[r].lambda = LimitRow::warm(step.tendon_impulse[3 * t + side], warm_share_of(r, step));
@@ -263,7 +263,7 @@ void IslandRows::add_tendon_rows(const StepContext& step, int t) {
   rows_[r].lambda = FrictionLossRow::warm(step.tendon_impulse[3 * t + 2], warm_share_of(r, step));
   const Softness soft = softness_of(&model_.tendon_friction_solref[2 * t], &model_.tendon_friction_solimp[5 * t],
                                     model_.tendon_invweight0[t]);
-  if (soft_ && soft.soft()) soften(r, FrictionLossRow::soft(start_velocity, soft, step.dt));
+  if (step.settings.soft_constraints && soft.soft()) soften(r, FrictionLossRow::soft(start_velocity, soft, step.dt));
   tendon_row_[3 * t + 2] = r;
 }
 

@@ -23,7 +23,7 @@ class IslandRows {
              const std::vector<int>& limit_cell);
 
   // this step's rows afresh; route[a]: the route stepping articulation a
-  void begin(const std::vector<StepRoute*>& route, const StepContext& step);
+  void begin(const std::vector<StepRoute*>& route);
   // the limit rows and then the friction-loss rows of `articulations`, then the rows of `contacts`
   void add_limit_rows(const StepContext& step, const std::vector<int>& articulations);
   void add_friction_rows(const StepContext& step, const std::vector<int>& articulations);
@@ -59,7 +59,6 @@ class IslandRows {
   const std::vector<int>& limited_start_;
   const std::vector<int>& limit_cell_;
   const std::vector<StepRoute*>* route_ = nullptr;
-  bool soft_ = true;  // this step's settings.soft_constraints
   std::vector<PgsRow> rows_;
   int row_count_ = 0;
   std::vector<Scalar> J_, MinvJT_;  // the rows' pools

@@ -38,7 +38,7 @@ inline ContactSoftness<Scalar> contact_softness(const ContactPair& pair, Scalar 
   const Scalar x = -depth - s.active_margin;  // pos - margin: < 0 where active
   if (x >= 0) return s;
   const Scalar imp = impedance(pair.solimp, x);
-  s.cfm_normal = std::max(Scalar(1e-15), (1 - imp) / imp * (weight_a + weight_b));
+  s.cfm_normal = soft_cfm(imp, weight_a + weight_b);
   s.cfm_friction = s.cfm_normal / impratio;
   s.damping = pair.damping;
   s.spring = pair.stiffness * imp * x;

@@ -28,7 +28,7 @@ struct FrictionLossRow : KeptImpulseRow {
   // a soft row's cfm and target (MuJoCo's: no stiffness, the impedance at 0), v the dof's velocity at the step's
   // start
   static SoftRow soft(Scalar v, const Softness& s, Scalar dt) {
-    return soft_friction_row(s.solref, s.solimp, s.weight, v, dt);
+    return soft_row(s.solref, s.solimp, s.weight, 0, 0, v, dt);
   }
 };
 

@@ -48,23 +48,22 @@ inline SoftReference soft_reference(const Scalar* solref, const Scalar* solimp, 
   return {-solref[0] / std::max(Scalar(1e-15), dmax * dmax), -solref[1] / std::max(Scalar(1e-15), dmax)};
 }
 
+// a soft row's cfm R = (1 - imp) / imp * weight at impedance imp (a contact's too, contact_softness.h)
+inline Scalar soft_cfm(Scalar imp, Scalar weight) { return std::max(Scalar(1e-15), (1 - imp) / imp * weight); }
+
 // a soft row's cfm and target
 struct SoftRow {
   Scalar cfm = 0, target = 0;
 };
 
-// the soft row of a constraint violated by `pos` along the row (< 0 past a limit; an equality's error), its
-// impedance read at `violation` (the constraint's: an equality's whole error), its weight, its velocity v at the
-// step's start; a dry friction's row has no stiffness (MuJoCo's K = 0) and reads its impedance at 0
+// the soft row of a constraint violated by `pos` along the row (< 0 past a limit; an equality's error, 0 for dry
+// friction: its row has no stiffness, MuJoCo's K = 0), its impedance read at `violation` (the constraint's: an
+// equality's whole error; 0 for dry friction), its weight, its velocity v at the step's start
 inline SoftRow soft_row(const Scalar* solref, const Scalar* solimp, Scalar weight, Scalar violation, Scalar pos,
                         Scalar v, Scalar dt) {
   const SoftReference k = soft_reference(solref, solimp, dt);
   const Scalar imp = impedance(solimp, violation);
-  return {std::max(Scalar(1e-15), (1 - imp) / imp * weight), v - dt * (k.damping * v + k.stiffness * imp * pos)};
-}
-inline SoftRow soft_friction_row(const Scalar* solref, const Scalar* solimp, Scalar weight, Scalar v, Scalar dt) {
-  const Scalar imp = impedance(solimp, 0);
-  return {std::max(Scalar(1e-15), (1 - imp) / imp * weight), v - dt * soft_reference(solref, solimp, dt).damping * v};
+  return {soft_cfm(imp, weight), v - dt * (k.damping * v + k.stiffness * imp * pos)};
 }
 
 // a soft row's numbers as the model keeps them per element: solref, solimp and weight (invweight0)
