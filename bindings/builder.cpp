@@ -142,6 +142,19 @@ void bind_builder(py::module_& m) {
       .def_static("from_capsule", &RigidBody::from_capsule, py::arg("mass"), py::arg("radius"), py::arg("half_height"),
                   "Solid capsule along local Y: radius and half height of the cylinder part.");
 
+  py::class_<TendonPathElement>(m, "TendonPathElement",
+                                "An element of a spatial tendon's path (ModelBuilder.add_spatial_tendon): its kind, "
+                                "body (-1: the world), frame in the body's frame (a site's point; a sphere's centre, "
+                                "a cylinder's pose with its axis along z) and size (a radius, a pulley's divisor).")
+      .def(py::init([](TendonPathKind kind, int body, const Transform& frame, Scalar size) {
+             return TendonPathElement{kind, body, frame, size};
+           }),
+           py::arg("kind"), py::arg("body"), py::arg("frame") = Transform::identity(), py::arg("size") = 0.0)
+      .def_readwrite("kind", &TendonPathElement::kind)
+      .def_readwrite("body", &TendonPathElement::body)
+      .def_readwrite("frame", &TendonPathElement::frame)
+      .def_readwrite("size", &TendonPathElement::size);
+
   py::class_<JointDofConfig>(m, "JointDofConfig", "Axis, limits, armature, damping and spring of a joint's dofs.")
       .def(py::init<>())
       .def_readwrite("axis", &JointDofConfig::axis)
@@ -258,6 +271,27 @@ void bind_builder(py::module_& m) {
           "finalize() joins its joints' articulations into one where they have a fixed base and "
           "follow one another (a gripper's fingers on a static palm); a floating one or one given by "
           "add_articulation is an error.")
+      .def(
+          "add_spatial_tendon",
+          [](ModelBuilder& self, const std::vector<TendonPathElement>& path, Scalar stiffness, Scalar damping,
+             Scalar rest_length, Scalar limit_lower, Scalar limit_upper, const std::string& name,
+             const std::array<Scalar, 2>& limit_solref, const std::array<Scalar, 5>& limit_solimp, Scalar frictionloss,
+             const std::array<Scalar, 2>& friction_solref, const std::array<Scalar, 5>& friction_solimp) {
+            return self.add_spatial_tendon(
+                path, {stiffness, damping, rest_length, limit_lower, limit_upper, name, limit_solref, limit_solimp,
+                       frictionloss, friction_solref, friction_solimp});
+          },
+          py::arg("path"), py::kw_only(), py::arg("stiffness") = 0.0, py::arg("damping") = 0.0,
+          py::arg("rest_length") = NAN, py::arg("limit_lower") = -INFINITY, py::arg("limit_upper") = INFINITY,
+          py::arg("name") = "", py::arg("limit_solref") = std::array<Scalar, 2>{0, 0},
+          py::arg("limit_solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2}, py::arg("frictionloss") = 0.0,
+          py::arg("friction_solref") = std::array<Scalar, 2>{0, 0},
+          py::arg("friction_solimp") = std::array<Scalar, 5>{0.9, 0.95, 0.001, 0.5, 2},
+          "Spatial tendon (MuJoCo's spatial tendon): its length is its path's (TendonPathElement list), site to "
+          "site, around each sphere or cylinder between two sites the straight piece would pass through (on its "
+          "side site's side where one follows it), the pieces after a pulley divided by its divisor; spring, damper, "
+          "limits and dry friction as add_tendon's, its forces pulling the sites and wraps. The path starts and ends "
+          "at a site; its bodies are in at most two articulations.")
       .def(
           "add_tendon_actuator",
           [](ModelBuilder& self, int tendon, Scalar gear, Scalar gain, const Vec3& bias, Scalar ctrl_lower,

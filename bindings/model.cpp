@@ -146,6 +146,15 @@ void bind_model(py::module_& m) {
       .value("D6", JointType::D6)
       .value("Cable", JointType::Cable);
 
+  py::enum_<TendonPathKind>(m, "TendonPathKind",
+                            "An element of a spatial tendon's path: a site, a sphere or cylinder it wraps around, "
+                            "the side site of the wrap before it, a pulley.")
+      .value("Site", TendonPathKind::Site)
+      .value("Sphere", TendonPathKind::Sphere)
+      .value("Cylinder", TendonPathKind::Cylinder)
+      .value("SideSite", TendonPathKind::SideSite)
+      .value("Pulley", TendonPathKind::Pulley);
+
   py::enum_<Precision>(m, "Precision",
                        "The precision the solver's batched kernels step a model in; a Float32 model's State and "
                        "Control arrays are float32 (its Model arrays stay float64).")

@@ -13,6 +13,7 @@
 #include "engine/model/body_kinematics.h"
 #include "engine/model/error.h"
 #include "engine/model/finite_checks.h"
+#include "engine/model/spatial_tendon.h"
 #include "engine/model/tendon.h"
 #include "engine/solver/blocks/blocks.h"
 #include "kernels/aba.h"
@@ -123,8 +124,10 @@ void control_force(const Model& model, const Control& control, const State* stat
     const Scalar q = state ? state->joint_q[model.joint_q_start[j]] : 0, qd = state ? state->joint_qd[dof] : 0;
     tau[dof] += actuator_joint_force(model, u, control.actuator_ctrl[u], q, qd);
   }
-  // tendons (engine/model/tendon.h): their springs and dampers with the state, the actuators on them
+  // fixed tendons (engine/model/tendon.h): their springs and dampers with the state, the actuators on them (a spatial
+  // tendon's forces are wrenches on its bodies: applied_wrenches)
   for (int t = 0; t < model.tendon_count; ++t) {
+    if (is_spatial(model, t)) continue;
     const Scalar length = state ? tendon_length(model, t, state->joint_q.data()) : 0;
     const Scalar velocity = state ? tendon_velocity(model, t, state->joint_qd.data()) : 0;
     Scalar force = state ? tendon_passive_force(model, t, length, velocity) : 0;

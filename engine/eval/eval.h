@@ -36,8 +36,9 @@ Scalar eval_energy(const Model& model, const State& state);
 VecX eval_inverse_dynamics(const Model& model, const State& state, const VecX& qdd);
 
 // tau = control.joint_f plus every actuator's joint force (engine/model/actuator.h) at the state's coordinates
-// and velocities, and with a state every tendon's spring and damper (engine/model/tendon.h); without a state
-// (nullptr) every actuator must be free of position and velocity bias
+// and velocities, and with a state every fixed tendon's spring and damper (engine/model/tendon.h); without a state
+// (nullptr) every actuator must be free of position and velocity bias. A spatial tendon's spring, damper and
+// actuators pull its bodies (wrenches, engine/solver/parts/applied_wrenches.h): not in tau, in the dynamics' body_f
 VecX eval_control_force(const Model& model, const Control& control, const State* state = nullptr);
 void control_force(const Model& model, const Control& control, const State* state, Scalar* tau);  // joint_dof_count
 

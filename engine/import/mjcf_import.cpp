@@ -1,6 +1,7 @@
 #include "engine/import/mjcf_import.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -362,22 +363,60 @@ class MjcfImporter {
     }
   }
 
-  // a fixed tendon over hinges and slides (model.h); a spatial one, or one over other joints, is reported
+  // a fixed tendon over hinges and slides, or a spatial one through sites around spheres and cylinders (model.h); a
+  // fixed one over other joints is reported
   void add_tendon(int t) {
     const std::string name = m_.name(MjKind::Tendon, t);
+    const TendonOptions options = tendon_options(t, name);
+    const int begin = m_.tendon_adr[t], end = begin + m_.tendon_num[t];
+    if (begin < end && m_.wrap_type[begin] != mjWRAP_JOINT) {
+      tendon_index_[t] = builder_.add_spatial_tendon(tendon_path(begin, end), options);
+      return;
+    }
     std::vector<int> joints;
     std::vector<Scalar> coefs;
-    for (int w = m_.tendon_adr[t]; w < m_.tendon_adr[t] + m_.tendon_num[t]; ++w) {
+    for (int w = begin; w < end; ++w) {
       const int j = m_.wrap_objid[w];
-      if (m_.wrap_type[w] != mjWRAP_JOINT || (m_.jnt_type[j] != mjJNT_HINGE && m_.jnt_type[j] != mjJNT_SLIDE)) {
+      if (m_.jnt_type[j] != mjJNT_HINGE && m_.jnt_type[j] != mjJNT_SLIDE) {
         warn_motion("tendon '" + name +
-                    "' is spatial or spans a ball or free joint (fixed tendons over hinges and "
-                    "slides only): not modelled");
+                    "' spans a ball or free joint (fixed tendons over hinges and slides only): " + "not modelled");
         return;
       }
       joints.push_back(joint_index_[j]);
       coefs.push_back(m_.wrap_prm[w]);
     }
+    tendon_index_[t] = builder_.add_tendon(joints, coefs, options);
+  }
+
+  // a spatial tendon's path: its sites, the geoms it wraps around (with their side sites) and its pulleys, each on
+  // its body (a static body's in the world)
+  std::vector<TendonPathElement> tendon_path(int begin, int end) const {
+    std::vector<TendonPathElement> path;
+    auto on = [&](TendonPathKind kind, int body, const Transform& local, Scalar size) {
+      path.push_back({kind, is_static(body) ? -1 : out_.body_map[body],
+                      is_static(body) ? static_pose_[body] * local : local, size});
+    };
+    auto site = [&](TendonPathKind kind, int i) {
+      on(kind, m_.site_bodyid[i], pose(m_.site_pos + 3 * i, m_.site_quat + 4 * i), 0);
+    };
+    for (int w = begin; w < end; ++w) {
+      const int id = m_.wrap_objid[w];
+      switch (m_.wrap_type[w]) {
+        case mjWRAP_SITE: site(TendonPathKind::Site, id); break;
+        case mjWRAP_PULLEY: path.push_back({TendonPathKind::Pulley, -1, Transform::identity(), m_.wrap_prm[w]}); break;
+        default: {  // (a sphere or a cylinder: a joint's wrap is a fixed tendon's)
+          const auto kind = m_.wrap_type[w] == mjWRAP_SPHERE ? TendonPathKind::Sphere : TendonPathKind::Cylinder;
+          on(kind, m_.geom_bodyid[id], pose(m_.geom_pos + 3 * id, m_.geom_quat + 4 * id), m_.geom_size[3 * id]);
+          const int side = static_cast<int>(std::lround(m_.wrap_prm[w]));
+          if (side >= 0) site(TendonPathKind::SideSite, side);
+        }
+      }
+    }
+    return path;
+  }
+
+  // a tendon's spring, damper, limits and dry friction, as MuJoCo's (what is not modelled reported)
+  TendonOptions tendon_options(int t, const std::string& name) {
     TendonOptions options;
     options.stiffness = m_.tendon_stiffness[t];
     options.damping = m_.tendon_damping[t];
@@ -398,7 +437,7 @@ class MjcfImporter {
     options.friction_solref = solref(m_.tendon_solref_fri + mjNREF * t, "tendon '" + name + "' solreffriction");
     std::copy_n(m_.tendon_solimp_fri + mjNIMP * t, mjNIMP, options.friction_solimp.begin());
     options.name = name;
-    tendon_index_[t] = builder_.add_tendon(joints, coefs, options);
+    return options;
   }
 
   // MuJoCo's affine actuators (motor, position, velocity, general of fixed gain and affine or no bias) on a

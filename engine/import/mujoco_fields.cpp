@@ -188,7 +188,13 @@ class FieldCheck {
       range("tendon_num", t, tendon, m_.tendon_num[t], 0, m_.nwrap - m_.tendon_adr[t] + 1);
       for (int w = m_.tendon_adr[t]; w < m_.tendon_adr[t] + m_.tendon_num[t]; ++w) {
         range("wrap_type", w, tendon, m_.wrap_type[w], 0, kWrapTypes);
-        if (m_.wrap_type[w] == mjWRAP_JOINT) range("wrap_objid", w, tendon, m_.wrap_objid[w], 0, m_.njnt);
+        const int type = m_.wrap_type[w];
+        if (type == mjWRAP_JOINT) range("wrap_objid", w, tendon, m_.wrap_objid[w], 0, m_.njnt);
+        if (type == mjWRAP_SITE) range("wrap_objid", w, tendon, m_.wrap_objid[w], 0, m_.nsite);
+        if (type == mjWRAP_SPHERE || type == mjWRAP_CYLINDER) {
+          range("wrap_objid", w, tendon, m_.wrap_objid[w], 0, m_.ngeom);
+          range("wrap_prm", w, tendon + " (a side site)", static_cast<int>(std::lround(m_.wrap_prm[w])), -1, m_.nsite);
+        }
       }
     }
   }

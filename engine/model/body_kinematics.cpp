@@ -6,6 +6,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "engine/model/spatial_tendon.h"
 #include "kernels/aba.h"
 #include "kernels/fk.h"
 #include "kernels/osim.h"
@@ -106,18 +107,43 @@ void dof_invweight0(Model& model, const ArticulationView& art, ArticulationScrat
   }
 }
 
-// the invweight0 J M^-1 J^T of art's tendons (those over its dofs), with s as dof_invweight0's
-void tendon_invweight0(Model& model, const ArticulationView& art, ArticulationScratch& s) {
+// the invweight0 J M^-1 J^T of art's tendons, with s as dof_invweight0's: a fixed one's over its dofs, a spatial
+// one's share from its pieces on art's links (spans: each spatial tendon's at joint_q0; M is block diagonal over
+// articulations, so the shares of a tendon's two articulations add)
+void tendon_invweight0(Model& model, const ArticulationView& art, ArticulationScratch& s,
+                       const std::vector<std::vector<TendonSpan>>& spans) {
   const int begin = art.qd_begin(), n = art.dof_count();
   VecX J(n), x(n);
+  std::vector<int> link_of(model.body_count, -1);
+  for (int i = 0; i < art.link_count(); ++i) link_of[art.body(i)] = i;
+  for (int i = 0; i < art.link_count(); ++i)
+    s.S_world.middleCols(art.qd_start(i), art.dof(i)) =
+        motion_xform(s.X_world[i].inverse()) * s.S.middleCols(art.qd_start(i), art.dof(i));
   for (int t = 0; t < model.tendon_count; ++t) {
-    const int first = model.tendon_start[t], end = model.tendon_start[t + 1];
-    if (first == end || model.tendon_dof[first] < begin || model.tendon_dof[first] >= begin + n) continue;
     J.setZero();
-    for (int e = first; e < end; ++e) J[model.tendon_dof[e] - begin] += model.tendon_coef[e];
+    bool on = false;
+    if (is_spatial(model, t)) {
+      for (const TendonSpan& span : spans[t])
+        for (int k = 0; k < 2; ++k) {
+          const int b = span.body[k];
+          if (b < 0 || link_of[b] < 0) continue;
+          on = true;
+          const Vec3 d = (k == 1 ? 1 : -1) * span.scale * span.unit;
+          for (int i = link_of[b]; i >= 0; i = art.parent(i))
+            for (int m = art.qd_start(i); m < art.qd_start(i) + art.dof(i); ++m) {
+              const Vec6 S = s.S_world.col(m);  // [w; v] in the world
+              J[m] += d.dot(S.tail<3>() + S.head<3>().cross(span.point[k]));
+            }
+        }
+    } else {
+      const int first = model.tendon_start[t], end = model.tendon_start[t + 1];
+      on = model.tendon_dof[first] >= begin && model.tendon_dof[first] < begin + n;
+      for (int e = first; e < end && on; ++e) J[model.tendon_dof[e] - begin] += model.tendon_coef[e];
+    }
+    if (!on) continue;
     x = J;
     aba_solve(art, s, x.data());
-    model.tendon_invweight0[t] = J.dot(x);
+    model.tendon_invweight0[t] += J.dot(x);
   }
 }
 
@@ -130,6 +156,13 @@ void set_invweight0(Model& model) {
   model.joint_invweight0.assign(model.joint_dof_count, 0);
   model.tendon_invweight0.assign(model.tendon_count, 0);
   const bool joints = weighs_joints(model);
+  // the spatial tendons' pieces at joint_q0, where a soft row weighs them
+  std::vector<std::vector<TendonSpan>> spans(model.tendon_count);
+  if (joints && model.tendon_path_count > 0) {
+    const State q0 = model.state();
+    for (int t = 0; t < model.tendon_count; ++t)
+      if (is_spatial(model, t)) spatial_tendon(model, t, q0.body_q.data(), spans[t]);
+  }
   ArticulationScratch s;
   std::vector<Mat6> Omega;
   std::unordered_map<std::string, int> computed;  // an articulation's defining data -> the first that has it
@@ -151,7 +184,7 @@ void set_invweight0(Model& model) {
     forward_kinematics(art, model.joint_q0.data() + art.q_begin(), s);
     if (joints && aba_factor(art, nullptr, s) < 0) {
       if (inserted) dof_invweight0(model, art, s);
-      tendon_invweight0(model, art, s);
+      tendon_invweight0(model, art, s, spans);
     }
     if (!inserted || osim_inverse(art, s, Omega) >= 0) continue;
     for (int i = 0; i < art.link_count(); ++i) {

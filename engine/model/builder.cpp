@@ -7,6 +7,7 @@
 #include "engine/model/body_kinematics.h"
 #include "engine/model/builder_checks.h"
 #include "engine/model/error.h"
+#include "engine/model/spatial_tendon.h"
 
 namespace novaphy {
 
@@ -391,6 +392,10 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   const int tendon0 = tendon_count();
   for (TendonRecord tendon : other.tendons_) {
     for (int& j : tendon.joints) j += joint0;
+    for (TendonPathElement& x : tendon.path) {
+      if (x.body >= 0) x.body += body0;
+      if (x.body < 0) x.frame = place * x.frame;
+    }
     tendons_.push_back(std::move(tendon));
   }
   for (SensorRecord sensor : other.sensors_) {
@@ -583,6 +588,7 @@ Model ModelBuilder::finalize() const {
   lay_out_equalities(model);
   lay_out_sensors(model);
   model.check_sizes();
+  set_spatial_rest_lengths(model);
   set_invweight0(model);
   model.set_model_id();
   model.index_parameters();

@@ -86,7 +86,7 @@ struct ActuatorOptions {
   }
 };
 
-// a fixed tendon's parameters (add_tendon): a spring and damper along it, its range and its dry friction
+// a tendon's parameters (add_tendon, add_spatial_tendon): a spring and damper along it, its range and its dry friction
 struct TendonOptions {
   Scalar stiffness = 0, damping = 0;
   Scalar rest_length = std::numeric_limits<Scalar>::quiet_NaN();  // NaN: its length at the initial coordinates
@@ -99,6 +99,16 @@ struct TendonOptions {
   Scalar frictionloss = 0;
   std::array<Scalar, 2> friction_solref = {0, 0};
   std::array<Scalar, 5> friction_solimp = {0.9, 0.95, 0.001, 0.5, 2};
+};
+
+// an element of a spatial tendon's path (add_spatial_tendon; model.h's TendonPathKind): its kind, its body (-1: the
+// world), its frame in the body's frame (a site's point; a sphere's centre, a cylinder's pose, its axis the frame's
+// z) and its size (a sphere's or cylinder's radius, a pulley's divisor; a site's unused)
+struct TendonPathElement {
+  TendonPathKind kind = TendonPathKind::Site;
+  int body = -1;
+  Transform frame;
+  Scalar size = 0;
 };
 
 // a sensor's options (add_sensor): its frame on its body, Touch's zone, a cutoff and a name
@@ -221,6 +231,12 @@ class ModelBuilder {
   // become one at finalize where they are of fixed base and one after another (a gripper's fingers hanging from a
   // static palm); articulations given by add_articulation and floating ones are not joined (an error)
   int add_tendon(const std::vector<int>& joints, const std::vector<Scalar>& coefs, const TendonOptions& options = {});
+  // a spatial tendon (MuJoCo's <spatial>, model.h): its length is its path's, from site to site, around each sphere or
+  // cylinder between two sites where the straight piece would pass through it (on its side site's side where one
+  // follows it), each piece after a pulley divided by its divisor; with the options' spring, damper, limits and dry
+  // friction as a fixed tendon's, its forces pulling the sites and wraps. The path starts and ends at a site, a wrap
+  // and a pulley stand between two sites; its bodies are in at most two articulations, one of them moving
+  int add_spatial_tendon(const std::vector<TendonPathElement>& path, const TendonOptions& options = {});
   // an actuator on tendon `tendon`: add_actuator's force with the tendon's length and velocity in place of a
   // joint's, pulling along the tendon; taken explicitly
   int add_tendon_actuator(int tendon, const ActuatorOptions& options = {});
@@ -351,6 +367,10 @@ class ModelBuilder {
   void lay_out_meshes(Model& model) const;
   // the Model's actuator table
   void lay_out_actuators(Model& model) const;
+  // the world of tendon t (its first joint's, its path's first moving body's)
+  int tendon_world(int t) const;
+  // a tendon's options checked (add_tendon, add_spatial_tendon), errors naming `item`
+  void check_tendon_options(const std::string& item, const TendonOptions& options) const;
   // the Model's tendon and equality tables (builder_constraints.cpp; equalities after the other tables)
   void lay_out_tendons(Model& model) const;
   void lay_out_equalities(Model& model) const;
@@ -396,9 +416,10 @@ class ModelBuilder {
     std::array<Scalar, 6> wrench = {};  // a site's: of a unit force, in the body frame (model.h)
   };
   struct TendonRecord {
-    std::vector<int> joints;
+    std::vector<int> joints;  // (a fixed tendon's)
     std::vector<Scalar> coefs;
     TendonOptions options;
+    std::vector<TendonPathElement> path;  // (a spatial tendon's)
   };
   std::vector<TendonRecord> tendons_;
   struct EqualityRecord {

@@ -1,4 +1,5 @@
-// ModelBuilder's fixed tendons, the actuators on them and equality constraints (model.h).
+// ModelBuilder's fixed and spatial tendons, the actuators on them and equality constraints (model.h).
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -18,6 +19,63 @@ int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<S
     check_scalar_joint(item, "a fixed tendon spans Revolute or Prismatic joints", joints[i]);
     check_finite(item, "coefficient", coefs[i]);
   }
+  check_tendon_options(item, options);
+  tendons_.push_back({joints, coefs, options, {}});
+  return tendon_count() - 1;
+}
+
+int ModelBuilder::add_spatial_tendon(const std::vector<TendonPathElement>& path, const TendonOptions& options) {
+  const std::string item = label("tendon", tendon_count(), options.name) + " (spatial)";
+  const int n = static_cast<int>(path.size());
+  auto is = [&](int e, TendonPathKind kind) { return e >= 0 && e < n && path[e].kind == kind; };
+  auto refuse = [&](int e, const char* why) { fail(item, ": path element ", e, " ", why); };
+  if (n < 2 || !is(0, TendonPathKind::Site) || !is(n - 1, TendonPathKind::Site))
+    fail(item, ": a path starts and ends at a site (", n, " elements given)");
+  for (int e = 0; e < n; ++e) {
+    const TendonPathElement& x = path[e];
+    if (x.body < -1 || x.body >= body_count())
+      refuse(
+          e,
+          ("has body " + std::to_string(x.body) + ", out of range [-1, " + std::to_string(body_count()) + ")").c_str());
+    checked_transform(item, "path frame", x.frame);
+    switch (x.kind) {
+      case TendonPathKind::Site: break;
+      case TendonPathKind::Sphere:
+      case TendonPathKind::Cylinder: {
+        if (!(x.size > 0) || !std::isfinite(x.size)) refuse(e, "wraps around a geom whose radius is not > 0");
+        const int after = is(e + 1, TendonPathKind::SideSite) ? e + 2 : e + 1;
+        if (!is(e - 1, TendonPathKind::Site) || !is(after, TendonPathKind::Site))
+          refuse(e, "wraps around a geom that is not between two sites (its side site right after it)");
+        break;
+      }
+      case TendonPathKind::SideSite:
+        if (!is(e - 1, TendonPathKind::Sphere) && !is(e - 1, TendonPathKind::Cylinder))
+          refuse(e, "is a side site that does not follow a sphere or cylinder");
+        break;
+      case TendonPathKind::Pulley:
+        if (!(x.size > 0) || !std::isfinite(x.size)) refuse(e, "is a pulley whose divisor is not > 0");
+        if (!is(e - 1, TendonPathKind::Site) || !is(e + 1, TendonPathKind::Site))
+          refuse(e, "is a pulley that is not between two sites");
+        break;
+      default: refuse(e, "is of no TendonPathKind");
+    }
+  }
+  if (std::none_of(path.begin(), path.end(), [](const TendonPathElement& x) { return x.body >= 0; }))
+    fail(item, ": its path rides on the world alone (nothing it could move)");
+  check_tendon_options(item, options);
+  tendons_.push_back({{}, {}, options, path});
+  return tendon_count() - 1;
+}
+
+int ModelBuilder::tendon_world(int t) const {
+  const TendonRecord& tendon = tendons_[t];
+  if (!tendon.joints.empty()) return body_world_[joints_[tendon.joints[0]].child];
+  for (const TendonPathElement& x : tendon.path)
+    if (x.body >= 0) return body_world_[x.body];
+  return 0;  // (not reached: add_spatial_tendon refuses a path on the world alone)
+}
+
+void ModelBuilder::check_tendon_options(const std::string& item, const TendonOptions& options) const {
   check_nonnegative(item, "stiffness", options.stiffness);
   check_nonnegative(item, "damping", options.damping);
   if (std::isinf(options.rest_length)) fail(item, ": rest_length is not finite: ", options.rest_length);
@@ -27,8 +85,6 @@ int ModelBuilder::add_tendon(const std::vector<int>& joints, const std::vector<S
   check_nonnegative(item, "frictionloss", options.frictionloss);
   check_solref(item, "friction_solref", options.friction_solref);
   check_solimp(item, "friction_solimp", options.friction_solimp);
-  tendons_.push_back({joints, coefs, options});
-  return tendon_count() - 1;
 }
 
 int ModelBuilder::add_tendon_actuator(int tendon, const ActuatorOptions& options) {
@@ -77,6 +133,7 @@ void ModelBuilder::join_tendon_articulations(std::vector<JointRecord>& joints, i
   bool joined = false;
   for (int t = 0; t < tendon_count(); ++t) {
     const TendonRecord& tendon = tendons_[t];
+    if (tendon.joints.empty()) continue;  // (a spatial tendon's rows join its articulations)
     const int j0 = tendon.joints[0];
     for (const int j : tendon.joints) {
       const int a = find(joints[j0].articulation), b = find(joints[j].articulation);
@@ -117,9 +174,28 @@ void ModelBuilder::join_tendon_articulations(std::vector<JointRecord>& joints, i
 
 void ModelBuilder::lay_out_tendons(Model& model) const {
   model.tendon_start.assign(1, 0);
+  model.tendon_path_start.assign(1, 0);
+  std::vector<int> body_articulation(model.body_count, -1);
+  for (int j = 0; j < model.joint_count; ++j) body_articulation[model.joint_child[j]] = model.joint_articulation[j];
   for (const TendonRecord& tendon : tendons_) {
     const int t = static_cast<int>(model.tendon_name.size());
-    const std::string item = label("tendon", t, tendon.options.name);
+    // a spatial tendon's path; its bodies in at most two articulations (a row of the step spans two)
+    std::vector<int> articulations;
+    for (const TendonPathElement& x : tendon.path) {
+      model.tendon_path_kind.push_back(static_cast<int>(x.kind));
+      model.tendon_path_body.push_back(x.body);
+      model.tendon_path_frame.resize(model.tendon_path_frame.size() + 7);
+      x.frame.to_array(&model.tendon_path_frame[model.tendon_path_frame.size() - 7]);
+      model.tendon_path_size.push_back(x.size);
+      const int a = x.body < 0 ? -1 : body_articulation[x.body];
+      if (a >= 0 && std::find(articulations.begin(), articulations.end(), a) == articulations.end())
+        articulations.push_back(a);
+    }
+    if (articulations.size() > 2)
+      fail(label("tendon", t, tendon.options.name), " (spatial): its path rides on bodies of ", articulations.size(),
+           " articulations (", articulations[0], ", ", articulations[1], ", ", articulations[2],
+           "...); a spatial tendon joins at most two");
+    model.tendon_path_start.push_back(static_cast<int>(model.tendon_path_kind.size()));
     Scalar length = 0;
     for (size_t i = 0; i < tendon.joints.size(); ++i) {
       const int j = tendon.joints[i];
@@ -132,7 +208,8 @@ void ModelBuilder::lay_out_tendons(Model& model) const {
     const TendonOptions& o = tendon.options;
     model.tendon_stiffness.push_back(o.stiffness);
     model.tendon_damping.push_back(o.damping);
-    model.tendon_rest_length.push_back(std::isnan(o.rest_length) ? length : o.rest_length);
+    // (a spatial tendon's length at joint_q0: set_spatial_rest_lengths, once the bodies are laid out)
+    model.tendon_rest_length.push_back(std::isnan(o.rest_length) && tendon.path.empty() ? length : o.rest_length);
     model.tendon_limit_lower.push_back(o.limit_lower);
     model.tendon_limit_upper.push_back(o.limit_upper);
     model.tendon_limit_solref.insert(model.tendon_limit_solref.end(), o.limit_solref.begin(), o.limit_solref.end());
@@ -147,6 +224,7 @@ void ModelBuilder::lay_out_tendons(Model& model) const {
   }
   model.tendon_count = tendon_count();
   model.tendon_entry_count = static_cast<int>(model.tendon_coef.size());
+  model.tendon_path_count = static_cast<int>(model.tendon_path_kind.size());
 }
 
 int ModelBuilder::add_connect(int body1, int body2, const Vec3& anchor, const std::string& name, const Vec3& anchor2) {

@@ -59,7 +59,7 @@ int ModelBuilder::add_sensor(SensorType type, int object, const SensorOptions& o
   int world = 0;
   switch (sensor_object_kind(type)) {
     case SensorObject::Joint: world = body_world_[joints_[object].child]; break;
-    case SensorObject::Tendon: world = body_world_[joints_[tendons_[object].joints[0]].child]; break;
+    case SensorObject::Tendon: world = tendon_world(object); break;
     case SensorObject::Body: world = object >= 0 ? body_world_[object] : 0; break;
   }
   sensors_.push_back({type, object, o, world});

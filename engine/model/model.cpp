@@ -275,6 +275,16 @@ State state_at(const Model& model, const Scalar* q, const Scalar* qd) {
 
 }  // namespace
 
+int Model::tendon_world(int t) const {
+  for (int e = tendon_path_start[t]; e < tendon_path_start[t + 1]; ++e)
+    if (tendon_path_body[e] >= 0) return body_world[tendon_path_body[e]];
+  const int dof = tendon_dof[tendon_start[t]];
+  const int j =
+      static_cast<int>(std::upper_bound(joint_qd_start.begin(), joint_qd_start.end(), dof) - joint_qd_start.begin()) -
+      1;
+  return body_world[joint_child[j]];
+}
+
 State Model::state() const { return state_at(*this, joint_q0.data(), nullptr); }
 
 namespace {

@@ -19,6 +19,11 @@ enum class ShapeType : int { Plane = 0, Sphere = 1, Box = 2, Capsule = 3, Cylind
 
 enum class EqualityType : int { Connect = 0, JointCoupling = 1, Weld = 2 };
 
+// an element of a spatial tendon's path (model.h, engine/model/spatial_tendon.h): a Site (a point riding on a body),
+// a Sphere or Cylinder it wraps around (radius; a cylinder's axis its frame's z), the SideSite of the wrap before it
+// (the side it passes on), a Pulley (its size the divisor of the path after it)
+enum class TendonPathKind : int { Site = 0, Sphere = 1, Cylinder = 2, SideSite = 3, Pulley = 4 };
+
 // the precision the batched kernels step a model in; with Float32 the stepped state is rounded to float each
 // step, and its State and Control also hold their arrays as float32 (State::float32, Control::float32)
 enum class Precision : int { Float64 = 0, Float32 = 1 };
@@ -34,7 +39,7 @@ enum class Precision : int { Float64 = 0, Float32 = 1 };
 // normal forces of the body's contacts whose ray (from the contact point, away from the body) meets the zone
 // (sensor_zone; a zone of type -1 is the whole body); ContactForce (3): the force the body's contacts exert on it,
 // in the world (both of the body's contacts, or of one of its shapes: sensor_shape, -1 for all); ProjectedGravity (3):
-// the world's gravity direction in the frame; TendonPos, TendonVel (1): a fixed tendon's length and velocity
+// the world's gravity direction in the frame; TendonPos, TendonVel (1): a tendon's length and velocity
 enum class SensorType : int {
   JointPos = 0,
   JointVel,
@@ -90,7 +95,10 @@ const char* shape_type_name(ShapeType type);
 // X(type, name, count, width): `count` is an expression over the Model's counts.
 // A fixed tendon t is a linear combination of Revolute and Prismatic coordinates of one articulation:
 // length = sum of tendon_coef[e] joint_q[tendon_coord[e]] over its entries e in [tendon_start[t],
-// tendon_start[t + 1]); a force f along it is tendon_coef[e] f on dof tendon_dof[e]. An actuator drives
+// tendon_start[t + 1]); a force f along it is tendon_coef[e] f on dof tendon_dof[e]. A spatial tendon has no joint
+// entries but a path [tendon_path_start[t], tendon_path_start[t + 1]) (a fixed one none): each element's kind
+// (TendonPathKind), body (-1: the world), frame in the body's frame ([p, q]: a site's point, a wrapped geom's pose)
+// and size (a radius, a pulley's divisor); its length is its path's (engine/model/spatial_tendon.h). An actuator drives
 // joint actuator_joint, or tendon actuator_tendon where actuator_joint is -1, or (both -1) pushes body
 // actuator_body at a site, MuJoCo's site transmission: its force f is the wrench f actuator_wrench, in the body's
 // frame (force, then torque about the body's origin: the gear's force and torque in the site frame, at the site).
@@ -198,6 +206,11 @@ const char* shape_type_name(ShapeType type);
   X(Scalar, tendon_friction_solref, tendon_count, 2)       \
   X(Scalar, tendon_friction_solimp, tendon_count, 5)       \
   X(Scalar, tendon_invweight0, tendon_count, 1)            \
+  X(int, tendon_path_start, tendon_count + 1, 1)           \
+  X(int, tendon_path_kind, tendon_path_count, 1)           \
+  X(int, tendon_path_body, tendon_path_count, 1)           \
+  X(Scalar, tendon_path_frame, tendon_path_count, 7)       \
+  X(Scalar, tendon_path_size, tendon_path_count, 1)        \
   X(int, equality_type, equality_count, 1)                 \
   X(int, equality_object, equality_count, 2)               \
   X(Scalar, equality_data, equality_count, 10)             \
@@ -269,6 +282,7 @@ struct ModelCounts {
   int exclude_count = 0;
   int tendon_count = 0;
   int tendon_entry_count = 0;  // a tendon's joints, all tendons together
+  int tendon_path_count = 0;   // the spatial tendons' path elements, all together
   int equality_count = 0;
   int mesh_count = 0;
   int mesh_vertex_count = 0;  // all meshes' hull vertices together
@@ -349,6 +363,8 @@ struct Model : ModelCounts {
   void check_sizes() const;
 
   ArticulationView articulation(int a) const;
+  // the world of tendon t (its first joint's; a spatial one's: its path's first moving body's)
+  int tendon_world(int t) const;
   // the world of articulation a (its root body's; -1: none)
   int articulation_world(int a) const { return body_world[joint_child[articulation_start[a]]]; }
   // a state at the initial coordinates joint_q0 (or keyframe `keyframe`'s coordinates and velocities), with

@@ -106,8 +106,7 @@ std::vector<int> entry_worlds(const Model& model, Over over) {
         } else if (model.actuator_body[u] >= 0) {
           world[u] = model.body_world[model.actuator_body[u]];
         } else {
-          // a tendon's world: its first joint's
-          world[u] = joint_world(dof_joint(model, model.tendon_dof[model.tendon_start[t]]));
+          world[u] = model.tendon_world(t);
         }
       }
       return world;

@@ -67,7 +67,7 @@ WorldLayout world_layout(const Model& model) {
     const int j = model.actuator_joint[m], body = model.actuator_body[m];
     actuators.push_back(j >= 0      ? joint_world(j)
                         : body >= 0 ? model.body_world[body]
-                                    : dofs[model.tendon_dof[model.tendon_start[model.actuator_tendon[m]]]]);
+                                    : model.tendon_world(model.actuator_tendon[m]));
   }
   layout.body_count = per_world("bodies", model.body_world, model.world_count);
   layout.joint_coord_count = per_world("coordinates", coords, model.world_count);

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/model/group_by_key.h"
+#include "engine/model/spatial_tendon.h"
 #include "engine/sensors/zone.h"
 #include "engine/threads/parallel.h"
 #include "kernels/fk.h"
@@ -102,8 +103,16 @@ void Sensors::read_world_start(int w, const State& start) {
         break;
       }
       case SensorObject::Tendon:
-        out[0] =
-            type == SensorType::TendonPos ? tendon_sum(q, m.tendon_coord.data()) : tendon_sum(qd, m.tendon_dof.data());
+        if (is_spatial(m, object)) {
+          thread_local std::vector<TendonSpan> spans;  // (the thread's, kept from step to step)
+          const Scalar length = spatial_tendon(m, object, start.body_q.data(), spans);
+          out[0] = type == SensorType::TendonPos
+                       ? length
+                       : spatial_tendon_velocity(m, spans, start.body_q.data(), start.body_qd.data());
+        } else {
+          out[0] = type == SensorType::TendonPos ? tendon_sum(q, m.tendon_coord.data())
+                                                 : tendon_sum(qd, m.tendon_dof.data());
+        }
         break;
       case SensorObject::Body: {
         // the frame F on the body (the world for a sensor of the world): its pose X in the world, and the world

@@ -142,8 +142,9 @@ void SolverFeatherstone::raise_bad_input(const StepContext& step) {
   auto actuator_world = [&](int u) {
     const int joint = model_.actuator_joint[u], tendon = model_.actuator_tendon[u], body = model_.actuator_body[u];
     if (body >= 0) return model_.body_world[body];
-    if (joint < 0 && tendon < 0) return -1;  // (on nothing: check_step checked it)
-    return dof_world(joint >= 0 ? model_.joint_qd_start[joint] : model_.tendon_dof[model_.tendon_start[tendon]]);
+    if (joint >= 0) return dof_world(model_.joint_qd_start[joint]);
+    if (tendon < 0 || built_.tendon_articulation[tendon] < 0) return -1;  // (on nothing: check_step checked it)
+    return model_.articulation_world(built_.tendon_articulation[tendon]);
   };
   bool drives = false;
   for (const Scalar* gains : {control.joint_target_ke.data(), control.joint_target_kd.data()})

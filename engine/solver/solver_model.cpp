@@ -7,6 +7,7 @@
 #include <map>
 
 #include "engine/collision/shape_filter.h"
+#include "engine/model/spatial_tendon.h"
 #include "engine/threads/parallel.h"
 #include "kernels/crba.h"
 #include "kernels/fk.h"
@@ -157,7 +158,7 @@ void SolverModel::index_inputs(const Model& model) {
         const int joint = model.actuator_joint[u], tendon = model.actuator_tendon[u], body = model.actuator_body[u];
         if (joint >= 0) return index.dof_articulation[model.joint_qd_start[joint]];
         if (body >= 0) return index.body_articulation[body];
-        return tendon >= 0 ? index.dof_articulation[model.tendon_dof[model.tendon_start[tendon]]] : -1;
+        return tendon >= 0 ? tendon_home(model, tendon) : -1;
       },
       art_actuator_start, art_actuator_runs, loose_actuators);
   // the bodies and actuators as runs of consecutive indices (a robot's are one run each): [begin, count] pairs
@@ -179,11 +180,19 @@ void SolverModel::index_inputs(const Model& model) {
   };
   to_runs(art_body_start, art_body_runs);
   to_runs(art_actuator_start, art_actuator_runs);
-  // (a tendon's dofs are one articulation's: the builder's rule)
-  std::vector<int> none;
+  // the fixed tendons (a tendon's dofs are one articulation's: the builder's rule; a spatial tendon's forces are
+  // wrenches on its bodies)
+  std::vector<int> spatial;
   group(
-      model.tendon_count, [&](int t) { return index.dof_articulation[model.tendon_dof[model.tendon_start[t]]]; },
-      art_tendon_start, art_tendons, none);
+      model.tendon_count, [&](int t) { return is_spatial(model, t) ? -1 : tendon_home(model, t); }, art_tendon_start,
+      art_tendons, spatial);
+}
+
+int SolverModel::tendon_home(const Model& model, int t) const {
+  if (!is_spatial(model, t)) return index.dof_articulation[model.tendon_dof[model.tendon_start[t]]];
+  for (int e = model.tendon_path_start[t]; e < model.tendon_path_start[t + 1]; ++e)
+    if (index.moving(model.tendon_path_body[e]) >= 0) return index.moving(model.tendon_path_body[e]);
+  return -1;
 }
 
 void SolverModel::index_contacts(const Model& model) {
@@ -231,12 +240,15 @@ void SolverModel::mark_constrained(const Model& model) {
     }
   }
   for (int t = 0; t < model.tendon_count; ++t) {
-    if (model.tendon_start[t] == model.tendon_start[t + 1]) continue;  // (no joints: no rows)
-    const int a = index.dof_articulation[model.tendon_dof[model.tendon_start[t]]];
-    tendon_articulation[t] = a;
-    if (std::isfinite(model.tendon_limit_lower[t]) || std::isfinite(model.tendon_limit_upper[t]) ||
-        model.tendon_frictionloss[t] > 0)
-      constrained[a] = 1;
+    tendon_articulation[t] = tendon_home(model, t);
+    if (!std::isfinite(model.tendon_limit_lower[t]) && !std::isfinite(model.tendon_limit_upper[t]) &&
+        !(model.tendon_frictionloss[t] > 0))
+      continue;
+    if (!is_spatial(model, t)) constrained[tendon_articulation[t]] = 1;
+    for (int e = model.tendon_path_start[t]; e < model.tendon_path_start[t + 1]; ++e) {
+      const int a = index.moving(model.tendon_path_body[e]);
+      if (a >= 0) constrained[a] = 1;
+    }
   }
 }
 

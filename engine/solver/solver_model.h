@@ -55,6 +55,8 @@ struct SolverModel {
   std::vector<std::uint8_t> constrained;
   // per equality and tendon the articulation whose world it is in (the first it acts on that moves, -1: none)
   std::vector<int> equality_articulation, tendon_articulation;
+  // tendon t's articulation: its dofs' (fixed), its path's first moving body's (spatial; -1: none moves)
+  int tendon_home(const Model& model, int t) const;
   std::vector<Scalar> energy_weight;  // [dof] the guard's (engine/solver/parts/guard.h)
   // per articulation its bodies and actuators as runs ([begin, count] pairs from *_start[a]) and its tendons; the
   // bodies and actuators of none

@@ -88,7 +88,7 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
                         fuzz::number(data));
       break;
     case 6: builder.set_gravity(fuzz::vec3(data)); break;
-    case 7: {  // a fixed tendon over a few joints (of one articulation or several, fixed or floating), an actuator
+    case 7: {  // a fixed tendon over a few joints (of one articulation or several, fixed or floating), an actuator;
       std::vector<int> list;
       std::vector<Scalar> coefs;
       for (int k = 0, n = data.ConsumeIntegralInRange(0, 3); k < n; ++k) {
@@ -99,7 +99,13 @@ void build_step(FuzzedDataProvider& data, ModelBuilder& builder) {
       if (data.ConsumeBool()) options.stiffness = fuzz::number(data), options.damping = fuzz::number(data);
       if (data.ConsumeBool()) options.limit_lower = fuzz::number(data), options.limit_upper = fuzz::number(data);
       if (data.ConsumeBool()) options.limit_solref = {fuzz::number(data), fuzz::number(data)};
-      const int tendon = builder.add_tendon(list, coefs, options);
+      // or a spatial one: a path of any elements on any bodies, any frames and sizes
+      std::vector<TendonPathElement> path;
+      for (int k = 0, n = data.ConsumeIntegralInRange(0, 5); k < n; ++k)
+        path.push_back({static_cast<TendonPathKind>(data.ConsumeIntegralInRange(0, 5)),
+                        data.ConsumeIntegralInRange(-2, bodies), fuzz::transform(data), fuzz::number(data)});
+      const int tendon =
+          path.empty() ? builder.add_tendon(list, coefs, options) : builder.add_spatial_tendon(path, options);
       if (data.ConsumeBool()) builder.add_tendon_actuator(tendon);
       break;
     }

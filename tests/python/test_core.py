@@ -172,10 +172,11 @@ def test_unmodelled_mjcf_content_warns_by_name(tmp_path):
         '<mujoco><worldbody><body name="a"><joint name="ja" type="hinge"/><geom size="0.1"/><site name="s"/>'
         '<site name="t" pos="0 0 1"/></body></worldbody>'
         '<tendon><spatial name="coupling"><site site="s"/><site site="t"/></spatial></tendon>'
+        '<equality><tendon name="lock" tendon1="coupling"/></equality>'
         "</mujoco>"
     )
     builder = novaphy.ModelBuilder()
-    with pytest.warns(UserWarning, match="novaphy: tendon 'coupling' is spatial"):
+    with pytest.warns(UserWarning, match="novaphy: equality constraint 'lock'"):
         reported = builder.add_mjcf(str(path))
     assert len(reported) == 1 and reported[0].endswith("not modelled (affects motion)")
 

@@ -1,8 +1,10 @@
 #include "engine/solver/islands/rows.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
+#include "engine/model/spatial_tendon.h"
 #include "engine/model/tendon.h"
 #include "engine/solver/parts/rows.h"
 #include "engine/threads/parallel.h"
@@ -51,6 +53,11 @@ int IslandRows::begin_row(int art_a, int art_b, RowKind kind, Scalar target) {
   }
   for (int s = 0; s < row.side_count; ++s) std::fill_n(J_.begin() + row.pool[s], row.dof_count[s], 0);
   return row_count_++;
+}
+
+void IslandRows::drop_last_row() {
+  --row_count_;
+  if (rows_[row_count_].side_count > 0) pool_size_ = rows_[row_count_].pool[0];
 }
 
 Scalar* IslandRows::row_jacobian(int r, int art) {
@@ -229,21 +236,53 @@ void IslandRows::add_coupling_row(const StepContext& step, int e) {
   equality_row_[e] = r;
 }
 
-void IslandRows::add_tendon_rows(const StepContext& step, int t) {
-  // as a joint's limit rows and dry friction, over the tendon's length and velocity: J its coefficients
-  const Scalar length = tendon_length(model_, t, step.in->joint_q.data());
-  const Scalar velocity = tendon_velocity(model_, t, step.qd);
-  const Scalar start_velocity = tendon_velocity(model_, t, step.in->joint_qd.data());  // (the step's start)
-  const int first = model_.tendon_start[t], a = index_.dof_articulation[model_.tendon_dof[first]];
-  auto tendon_row = [&](RowKind kind, Scalar target, Scalar sign) {
-    const int r = begin_row(a, -1, kind, target);
+void IslandRows::tendon_jacobian(int r, int t, Scalar sign) {
+  if (!is_spatial(model_, t)) {
+    const int first = model_.tendon_start[t], a = index_.dof_articulation[model_.tendon_dof[first]];
     Scalar* J = row_jacobian(r, a);
     for (int e = first; e < model_.tendon_start[t + 1]; ++e)
       J[model_.tendon_dof[e] - art_[a].qd_begin()] += sign * model_.tendon_coef[e];
+    return;
+  }
+  // each piece: its far end's velocity along it less its near end's (spans_: the tendon's pieces this step)
+  for (const TendonSpan& span : spans_)
+    for (int k = 0; k < 2; ++k) {
+      const int body = span.body[k], a = index_.moving(body);
+      if (a >= 0)
+        (*route_)[a]->point_jacobian(a, index_.body_link[body], &span.point[k], span.unit,
+                                     (k == 1 ? sign : -sign) * span.scale, row_jacobian(r, a));
+    }
+}
+
+void IslandRows::add_tendon_rows(const StepContext& step, int t) {
+  // as a joint's limit rows and dry friction, over the tendon's length and velocity (J: a fixed tendon's
+  // coefficients, a spatial one's pieces at the step's body poses)
+  for (int k = 0; k < 3; ++k) tendon_row_[3 * t + k] = -1;
+  if (!std::isfinite(model_.tendon_limit_lower[t]) && !std::isfinite(model_.tendon_limit_upper[t]) &&
+      !FrictionLossRow::on(model_.tendon_frictionloss[t]))
+    return;
+  const bool spatial = is_spatial(model_, t);
+  const Scalar length = spatial ? spatial_tendon(model_, t, step.in->body_q.data(), spans_)
+                                : tendon_length(model_, t, step.in->joint_q.data());
+  // the articulations it acts on (a spatial tendon's: at most two, the builder's rule)
+  int arts[2] = {-1, -1};
+  if (!spatial) arts[0] = index_.dof_articulation[model_.tendon_dof[model_.tendon_start[t]]];
+  for (int e = model_.tendon_path_start[t]; e < model_.tendon_path_start[t + 1]; ++e) {
+    const int a = index_.moving(model_.tendon_path_body[e]);
+    if (a >= 0 && a != arts[0] && a != arts[1]) arts[arts[0] < 0 ? 0 : 1] = a;
+  }
+  if (arts[0] < 0) return;  // (nothing it pulls moves)
+  auto tendon_row = [&](RowKind kind, Scalar target, Scalar sign) {
+    const int r = begin_row(arts[0], arts[1], kind, target);
+    tendon_jacobian(r, t, sign);
     return r;
   };
+  // its velocity at the step's velocities and at its start, from a row dropped once read
+  const int probe = tendon_row(LimitRow::kKind, 0, 1);
+  const Scalar velocity = row_velocity(rows_[probe], J_, step.qd);
+  const Scalar start_velocity = row_velocity(rows_[probe], J_, step.in->joint_qd.data());
+  drop_last_row();
   for (int side = 0; side < 2; ++side) {
-    tendon_row_[3 * t + side] = -1;
     const Scalar limit = side == 0 ? model_.tendon_limit_lower[t] : model_.tendon_limit_upper[t];
     const Scalar gap = LimitRow::gap(length, limit, side);
     const Softness soft = softness_of(&model_.tendon_limit_solref[2 * t], &model_.tendon_limit_solimp[5 * t],
@@ -255,7 +294,6 @@ void IslandRows::add_tendon_rows(const StepContext& step, int t) {
     if (softened) soften(r, LimitRow::soft(gap, LimitRow::sign(side) * start_velocity, soft, step.dt));
     tendon_row_[3 * t + side] = r;
   }
-  tendon_row_[3 * t + 2] = -1;
   const Scalar loss = model_.tendon_frictionloss[t];
   if (!FrictionLossRow::on(loss)) return;
   const int r = tendon_row(FrictionLossRow::kKind, 0, 1);

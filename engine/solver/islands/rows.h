@@ -8,6 +8,7 @@
 
 #include <vector>
 
+#include "engine/model/spatial_tendon.h"
 #include "engine/solver/parts/soft_row.h"
 #include "engine/solver/route.h"
 #include "kernels/pgs.h"
@@ -39,6 +40,8 @@ class IslandRows {
  private:
   // a row over the dofs of up to two articulations (-1: none), J zeroed
   int begin_row(int art_a, int art_b, RowKind kind, Scalar target);
+  // the last row begun taken back, its pool with it
+  void drop_last_row();
   Scalar* row_jacobian(int row, int art);
   // a contact-type row: relative velocity of body b's point p minus body a's along d (-1: the world), or with
   // p null their relative angular velocity
@@ -74,6 +77,9 @@ class IslandRows {
   void add_body_rows(const StepContext& step, int e);
   void add_coupling_row(const StepContext& step, int e);
   void add_tendon_rows(const StepContext& step, int t);
+  // J of row r += sign * tendon t's length's Jacobian (a spatial tendon's from spans_)
+  void tendon_jacobian(int r, int t, Scalar sign);
+  std::vector<TendonSpan> spans_;  // the spatial tendon whose rows are being added: its pieces
   void keep_constraint_impulses(const StepContext& step) const;
   // islands (articulations joined by rows, named by their lowest articulation): island i's rows are
   // island_rows_[island_start_[i] .. island_start_[i + 1])

@@ -96,7 +96,7 @@ Quat turned_slightly(const Quat& q, const Vec3& r) {
 
 MaximalConstraints MaximalConstraints::of(const Model& model, const std::string& solver) {
   if (model.tendon_count > 0)
-    fail(solver, " does not model fixed tendons (tendon 0 '", model.tendon_name[0], "'): use SolverFeatherstone");
+    fail(solver, " does not model tendons (tendon 0 '", model.tendon_name[0], "'): use SolverFeatherstone");
   if (model.sensor_count > 0)
     fail(solver, " does not compute sensors (sensor 0 '", model.sensor_name[0], "'): use SolverFeatherstone");
   MaximalConstraints out;

@@ -6,6 +6,7 @@
 
 #include "engine/model/actuator.h"
 #include "engine/model/body_kinematics.h"
+#include "engine/model/tendon.h"
 
 namespace novaphy {
 
@@ -25,14 +26,31 @@ ModelWrenches ModelWrenches::of(const Model& model) {
   for (int u = 0; u < model.actuator_count; ++u)
     if (model.actuator_body[u] >= 0) {
       w.site_actuators.push_back(u);
-      w.site_articulations.push_back(link_articulation[model.actuator_body[u]]);
+      w.moved_articulations.push_back(link_articulation[model.actuator_body[u]]);
     }
   for (int b = 0; b < model.body_count && w.fluid; ++b)
     if (model.body_mass[b] >= kMinMass && link_articulation[b] >= 0)
       w.fluid_articulations.push_back(link_articulation[b]);
-  for (std::vector<int>* list : {&w.site_articulations, &w.fluid_articulations}) {
+  std::vector<std::vector<int>> on_tendon(model.tendon_count);
+  for (int u = 0; u < model.actuator_count; ++u)
+    if (model.actuator_joint[u] < 0 && model.actuator_tendon[u] >= 0) on_tendon[model.actuator_tendon[u]].push_back(u);
+  w.tendon_actuator_start.push_back(0);
+  for (int t = 0; t < model.tendon_count; ++t) {
+    if (!is_spatial(model, t)) continue;
+    w.spatial_tendons.push_back(t);
+    w.tendon_actuators.insert(w.tendon_actuators.end(), on_tendon[t].begin(), on_tendon[t].end());
+    w.tendon_actuator_start.push_back(static_cast<int>(w.tendon_actuators.size()));
+    for (int e = model.tendon_path_start[t]; e < model.tendon_path_start[t + 1]; ++e)
+      if (model.tendon_path_body[e] >= 0) w.moved_articulations.push_back(link_articulation[model.tendon_path_body[e]]);
+  }
+  w.moved_articulations.insert(w.moved_articulations.end(), w.fluid_articulations.begin(), w.fluid_articulations.end());
+  for (std::vector<int>* list : {&w.moved_articulations, &w.fluid_articulations}) {
     std::sort(list->begin(), list->end());
     list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  if (!w.moved_articulations.empty()) {
+    w.bodies.body_q.assign(7 * static_cast<size_t>(model.body_count), 0);
+    w.bodies.body_qd.assign(6 * static_cast<size_t>(model.body_count), 0);
   }
   return w;
 }
@@ -99,36 +117,43 @@ void applied_wrenches(const Model& model, ModelWrenches& wrenches, const State& 
         const Vec3 f = gravity_compensation(model, b);
         for (int m = 0; m < 3; ++m) out[6 * static_cast<size_t>(b) + m] += f[m];
       }
+  // the bodies where the state's coordinates and velocities put them: their articulations' kinematics
   ArticulationScratch& s = wrenches.scratch;
-  std::vector<Transform>& frame = wrenches.frame;
-  frame.resize(model.body_count);
-  // the fluid's, on each body at its pose and velocity (its articulation's kinematics)
-  for (int a : wrenches.fluid_articulations) {
-    const ArticulationView art = kinematics(model, state, a, s);
+  State& bodies = wrenches.bodies;
+  for (const int a : wrenches.moved_articulations) store_body_state(kinematics(model, state, a, s), s, bodies);
+  const Scalar* body_q = bodies.body_q.data();
+  auto add = [&](int b, const Scalar wrench[6]) {
+    for (int m = 0; m < 6; ++m) out[6 * static_cast<size_t>(b) + m] += wrench[m];
+  };
+  // the fluid's, on each body at its pose and velocity
+  for (const int a : wrenches.fluid_articulations) {
+    const ArticulationView art = model.articulation(a);
     for (int i = 0; i < art.link_count(); ++i) {
       const int b = art.body(i);
-      const Transform& X = s.X_world[i];
-      frame[b] = X;
-      const Vec3 w_link = s.v[i].head<3>();
-      const Vec3 com(model.body_com[3 * b], model.body_com[3 * b + 1], model.body_com[3 * b + 2]);
-      const Vec3 v = X.q * Vec3(s.v[i].tail<3>() + w_link.cross(com)), w = X.q * w_link;
+      const Scalar* qd = &bodies.body_qd[6 * static_cast<size_t>(b)];
       Scalar wrench[6];
-      fluid_wrench(model, b, X, v, w, wrench);
-      for (int m = 0; m < 6; ++m) out[6 * static_cast<size_t>(b) + m] += wrench[m];
+      fluid_wrench(model, b, pose_in(body_q, b), Vec3(qd[0], qd[1], qd[2]), Vec3(qd[3], qd[4], qd[5]), wrench);
+      add(b, wrench);
     }
   }
-  if (!control || wrenches.site_actuators.empty()) return;
-  // the site actuators' bodies where joint_q puts them: their articulations' forward kinematics
-  for (int a : wrenches.site_articulations) {
-    if (std::binary_search(wrenches.fluid_articulations.begin(), wrenches.fluid_articulations.end(), a)) continue;
-    const ArticulationView art = kinematics(model, state, a, s);
-    for (int i = 0; i < art.link_count(); ++i) frame[art.body(i)] = s.X_world[i];
+  // the spatial tendons' springs and dampers, and the actuators on them
+  for (size_t k = 0; k < wrenches.spatial_tendons.size(); ++k) {
+    const int t = wrenches.spatial_tendons[k];
+    const Scalar length = spatial_tendon(model, t, body_q, wrenches.spans);
+    const Scalar velocity = spatial_tendon_velocity(model, wrenches.spans, body_q, bodies.body_qd.data());
+    Scalar force = tendon_passive_force(model, t, length, velocity);
+    for (int i = wrenches.tendon_actuator_start[k]; i < wrenches.tendon_actuator_start[k + 1] && control; ++i) {
+      const int u = wrenches.tendon_actuators[i];
+      force += actuator_joint_force(model, u, control->actuator_ctrl[u], length, velocity);
+    }
+    add_spatial_tendon_force(model, wrenches.spans, body_q, force, out.data());
   }
-  for (int u : wrenches.site_actuators) {
+  if (!control) return;
+  for (const int u : wrenches.site_actuators) {
     Scalar wrench[6];
     const int b = model.actuator_body[u];
-    site_actuator_wrench(model, u, control->actuator_ctrl[u], frame[b], wrench);
-    for (int m = 0; m < 6; ++m) out[6 * static_cast<size_t>(b) + m] += wrench[m];
+    site_actuator_wrench(model, u, control->actuator_ctrl[u], pose_in(body_q, b), wrench);
+    add(b, wrench);
   }
 }
 

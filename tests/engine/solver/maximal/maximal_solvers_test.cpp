@@ -352,7 +352,7 @@ TEST(MaximalSolvers, ModelsTheyDoNotModelAreRefused) {
   ModelBuilder b = revolute_rod();
   b.add_tendon({0}, {1.0});
   const Model model = b.finalize();
-  EXPECT_NOVAPHY_ERROR(SolverXPBD{model}, "SolverXPBD does not model fixed tendons");
+  EXPECT_NOVAPHY_ERROR(SolverXPBD{model}, "SolverXPBD does not model tendons");
 }
 
 // SolverSemiImplicit's position passes take out of the positions the drift its rows leave: a chain of hinged links
