@@ -206,6 +206,25 @@ void bind_builder(py::module_& m) {
            py::arg("wind") = Vec3::Zero(),
            "The medium the bodies move through (MuJoCo's <option density viscosity wind>, its inertia-box fluid "
            "forces): density kg/m^3 and viscosity Pa s >= 0, wind m/s.")
+      .def(
+          "add_fluid_ellipsoid",
+          [](ModelBuilder& self, int body, const Transform& frame, const Vec3& semi_axes, Scalar blunt_drag,
+             Scalar slender_drag, Scalar angular_drag, Scalar kutta_lift, Scalar magnus_lift,
+             std::optional<Vec3> added_mass, std::optional<Vec3> added_inertia) {
+            FluidEllipsoidOptions o;
+            o.blunt_drag = blunt_drag, o.slender_drag = slender_drag, o.angular_drag = angular_drag;
+            o.kutta_lift = kutta_lift, o.magnus_lift = magnus_lift;
+            if (added_mass) o.added_mass = *added_mass;
+            if (added_inertia) o.added_inertia = *added_inertia;
+            return self.add_fluid_ellipsoid(body, frame, semi_axes, o);
+          },
+          py::arg("body"), py::arg("frame"), py::arg("semi_axes"), py::kw_only(), py::arg("blunt_drag") = 0.5,
+          py::arg("slender_drag") = 0.25, py::arg("angular_drag") = 1.5, py::arg("kutta_lift") = 1.0,
+          py::arg("magnus_lift") = 1.0, py::arg("added_mass") = std::nullopt, py::arg("added_inertia") = std::nullopt,
+          "The body feels the fluid (set_fluid) as MuJoCo's ellipsoid model of an ellipsoid at `frame` (in the "
+          "body's frame) with these semi-axes, in place of the box of its inertia: added mass, viscous and quadratic "
+          "drag, Kutta and Magnus lift (MuJoCo's fluidcoef and defaults); added_mass and added_inertia are the "
+          "fluid's virtual mass and moments of inertia per unit density (None: the ellipsoid's own).")
       .def("set_body_gravcomp", &ModelBuilder::set_body_gravcomp, py::arg("body"), py::arg("gravcomp"),
            "The share of the body's weight a force through its centre of mass carries (MuJoCo's gravcomp: 0 none, "
            "1 it floats).")

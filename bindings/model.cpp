@@ -91,7 +91,9 @@ void bind_counts(Class& c) {
       .def_readonly("shape_count", &ModelCounts::shape_count)
       .def_readonly("actuator_count", &ModelCounts::actuator_count)
       .def_readonly("tendon_count", &ModelCounts::tendon_count)
+      .def_readonly("tendon_path_count", &ModelCounts::tendon_path_count)
       .def_readonly("equality_count", &ModelCounts::equality_count)
+      .def_readonly("fluid_ellipsoid_count", &ModelCounts::fluid_ellipsoid_count)
       .def_readonly("sensor_count", &ModelCounts::sensor_count)
       .def_readonly("sensor_value_count", &ModelCounts::sensor_value_count,
                     "The sensors' values together (State.sensor_data's length).");

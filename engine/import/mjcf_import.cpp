@@ -112,6 +112,7 @@ class MjcfImporter {
     builder_.set_fluid(m_.density, m_.viscosity, vec3(m_.wind));
     geom_shape_.assign(m_.ngeom, -1);
     for (int g = 0; g < m_.ngeom; ++g) add_geom(g);
+    for (int g = 0; g < m_.ngeom && m_.geom_fluid; ++g) add_fluid_ellipsoid(g);
     add_exclusions();
     tendon_index_.assign(m_.ntendon, -1);
     for (int t = 0; t < m_.ntendon; ++t) add_tendon(t);
@@ -361,6 +362,25 @@ class MjcfImporter {
           if (m_.geom_bodyid[a] == body1 && m_.geom_bodyid[b] == body2 && geom_shape_[a] >= 0 && geom_shape_[b] >= 0)
             builder_.exclude_shapes(geom_shape_[a], geom_shape_[b]);
     }
+  }
+
+  // a geom of fluidshape "ellipsoid" on a moving body: MuJoCo's ellipsoid fluid model, its compiled coefficients
+  // (geom_fluid: interaction, blunt, slender and angular drag, Kutta and Magnus lift, virtual mass and inertia)
+  void add_fluid_ellipsoid(int g) {
+    const double* fluid = m_.geom_fluid + 12 * g;
+    const int b = m_.geom_bodyid[g];
+    if (!(fluid[0] > 0) || is_static(b)) return;
+    const double* size = m_.geom_size + 3 * g;
+    Vec3 semi_axes(size[0], size[1], size[2]);
+    if (m_.geom_type[g] == mjGEOM_SPHERE) semi_axes = Vec3::Constant(size[0]);
+    if (m_.geom_type[g] == mjGEOM_CAPSULE) semi_axes = Vec3(size[0], size[0], size[1] + size[0]);
+    if (m_.geom_type[g] == mjGEOM_CYLINDER) semi_axes = Vec3(size[0], size[0], size[1]);
+    FluidEllipsoidOptions options;
+    options.blunt_drag = fluid[1], options.slender_drag = fluid[2], options.angular_drag = fluid[3];
+    options.kutta_lift = fluid[4], options.magnus_lift = fluid[5];
+    options.added_mass = vec3(fluid + 6);
+    options.added_inertia = vec3(fluid + 9);
+    builder_.add_fluid_ellipsoid(out_.body_map[b], pose(m_.geom_pos + 3 * g, m_.geom_quat + 4 * g), semi_axes, options);
   }
 
   // a fixed tendon over hinges and slides, or a spatial one through sites around spheres and cylinders (model.h); a
@@ -701,10 +721,10 @@ class MjcfImporter {
     if (!m_.filter_parent)
       warn_motion("the contact filter's parent rule is disabled (<flag filterparent=\"disable\">): NovaPhy keeps it");
     if (m_.npair > 0) warn_motion(std::to_string(m_.npair) + " explicit contact pair(s) are not modelled");
-    for (int g = 0; g < m_.ngeom && m_.geom_fluid && (m_.density > 0 || m_.viscosity > 0); ++g)
-      if (m_.geom_fluid[12 * g] > 0)
-        warn_motion("geom '" + m_.name(MjKind::Geom, g) +
-                    "': the ellipsoid fluid model (fluidshape) is not modelled, its body feels the inertia-box one");
+    for (int g = 0; g < m_.ngeom && m_.geom_fluid; ++g)
+      if (m_.geom_fluid[12 * g] > 0 && m_.geom_fluid[12 * g] != 1)
+        warn_motion("geom '" + m_.name(MjKind::Geom, g) + "': an ellipsoid fluid interaction scaled by " +
+                    std::to_string(m_.geom_fluid[12 * g]) + " is modelled unscaled");
   }
 
   // a report entry for something left out that changes the motion

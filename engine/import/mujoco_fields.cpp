@@ -312,6 +312,7 @@ MujocoFields mujoco_fields(const mjModel* m) {
   f.geom_condim = m->geom_condim, f.geom_bodyid = m->geom_bodyid, f.geom_dataid = m->geom_dataid;
   f.geom_priority = m->geom_priority, f.geom_solmix = m->geom_solmix, f.geom_solref = m->geom_solref;
   f.geom_solimp = m->geom_solimp, f.geom_size = m->geom_size, f.geom_pos = m->geom_pos, f.geom_quat = m->geom_quat;
+  f.geom_fluid = m->geom_fluid;
   f.geom_friction = m->geom_friction, f.geom_margin = m->geom_margin, f.geom_gap = m->geom_gap;
   f.mesh_vertadr = m->mesh_vertadr, f.mesh_vertnum = m->mesh_vertnum, f.mesh_vert = m->mesh_vert;
   f.exclude_signature = m->exclude_signature;

@@ -371,6 +371,10 @@ void ModelBuilder::add_builder(const ModelBuilder& other, const Transform& xform
   if (other.impratio_ != 1) impratio_ = other.impratio_;
   if (other.fluid_density_ != 0 || other.fluid_viscosity_ != 0 || !other.wind_.isZero())
     fluid_density_ = other.fluid_density_, fluid_viscosity_ = other.fluid_viscosity_, wind_ = other.wind_;
+  for (FluidEllipsoidRecord e : other.fluid_ellipsoids_) {
+    e.body += body0;
+    fluid_ellipsoids_.push_back(e);
+  }
   for (KeyframeRecord key : other.keyframes_) {
     key.joint_begin += joint0;
     key.joint_end += joint0;
@@ -580,6 +584,7 @@ Model ModelBuilder::finalize() const {
   model.friction_rule = friction_rule_;
   model.impratio = impratio_;
   model.fluid_density = fluid_density_;
+  lay_out_fluid_ellipsoids(model);
   model.fluid_viscosity = fluid_viscosity_;
   model.wind = wind_;
   model.exclude_count = static_cast<int>(excluded_.size());

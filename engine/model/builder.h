@@ -101,6 +101,15 @@ struct TendonOptions {
   std::array<Scalar, 5> friction_solimp = {0.9, 0.95, 0.001, 0.5, 2};
 };
 
+// a body's ellipsoid in MuJoCo's ellipsoid fluid model (add_fluid_ellipsoid, a geom's fluidshape): its drag and lift
+// coefficients (MuJoCo's fluidcoef, its defaults) and the fluid's virtual mass and moments of inertia per unit
+// density (m^3, m^5) along its axes, NaN: the ellipsoid's own (Tuckerman's coefficients from its semi-axes)
+struct FluidEllipsoidOptions {
+  Scalar blunt_drag = 0.5, slender_drag = 0.25, angular_drag = 1.5, kutta_lift = 1, magnus_lift = 1;
+  Vec3 added_mass = Vec3::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+  Vec3 added_inertia = Vec3::Constant(std::numeric_limits<Scalar>::quiet_NaN());
+};
+
 // an element of a spatial tendon's path (add_spatial_tendon; model.h's TendonPathKind): its kind, its body (-1: the
 // world), its frame in the body's frame (a site's point; a sphere's centre, a cylinder's pose, its axis the frame's
 // z) and its size (a sphere's or cylinder's radius, a pulley's divisor; a site's unused)
@@ -279,6 +288,11 @@ class ModelBuilder {
   // the medium the bodies move through, MuJoCo's <option density viscosity wind> (model.fluid_*: its inertia-box
   // model, engine/solver/parts/applied_wrenches.h): density (kg/m^3) and viscosity (Pa s) >= 0, the wind (m/s)
   void set_fluid(Scalar density, Scalar viscosity, const Vec3& wind = Vec3::Zero());
+  // body `body` feels the fluid (set_fluid) as MuJoCo's ellipsoid model of an ellipsoid at `frame` (in the body's
+  // frame) with semi-axes `semi_axes` along the frame's axes, in place of the box of its inertia: added mass,
+  // viscous and quadratic drag, Kutta and Magnus lift (model.h; one body may have several)
+  int add_fluid_ellipsoid(int body, const Transform& frame, const Vec3& semi_axes,
+                          const FluidEllipsoidOptions& options = {});
   FrictionRule friction_rule() const { return friction_rule_; }
   CollisionFilter collision_filter() const { return collision_filter_; }
   // shapes a and b never collide (MuJoCo's <exclude>, by shape)
@@ -373,6 +387,8 @@ class ModelBuilder {
   void check_tendon_options(const std::string& item, const TendonOptions& options) const;
   // the Model's tendon and equality tables (builder_constraints.cpp; equalities after the other tables)
   void lay_out_tendons(Model& model) const;
+  // the Model's fluid ellipsoids (builder_shapes.cpp)
+  void lay_out_fluid_ellipsoids(Model& model) const;
   void lay_out_equalities(Model& model) const;
   // the Model's keyframes, by name in the order first added
   void lay_out_keyframes(Model& model) const;
@@ -452,6 +468,13 @@ class ModelBuilder {
   Scalar impratio_ = 1;
   Scalar fluid_density_ = 0, fluid_viscosity_ = 0;
   Vec3 wind_ = Vec3::Zero();
+  struct FluidEllipsoidRecord {
+    int body;
+    Transform frame;
+    Vec3 semi_axes;
+    FluidEllipsoidOptions options;  // (added mass and inertia filled in)
+  };
+  std::vector<FluidEllipsoidRecord> fluid_ellipsoids_;
   int articulation_count_ = 0;
 };
 

@@ -1,8 +1,10 @@
 // The builder's shapes: primitives, planes and convex meshes (their hulls, kernels/hull.h), and their tables in
 // the Model.
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
+#include <numeric>
 
 #include "engine/model/builder.h"
 #include "engine/model/builder_checks.h"
@@ -20,6 +22,86 @@ void ModelBuilder::set_fluid(Scalar density, Scalar viscosity, const Vec3& wind)
   check_nonnegative("set_fluid", "viscosity", viscosity);
   check_finite("set_fluid", "wind", wind);
   fluid_density_ = density, fluid_viscosity_ = viscosity, wind_ = wind;
+}
+
+namespace {
+
+// Tuckerman's coefficient of an ellipsoid of semi-axes (a, b, c) along a: the integral over l in [0, inf) of
+// a b c / sqrt((a^2 + l)^3 (b^2 + l) (c^2 + l)), with l = s^2 w^2 / (1 - w)^2 (s the semi-axes' geometric mean) on
+// w in [0, 1), by adaptive Simpson
+Scalar tuckerman_kappa(Scalar a, Scalar b, Scalar c) {
+  const Scalar s2 = std::cbrt(a * b * c) * std::cbrt(a * b * c);
+  auto f = [&](Scalar w) {
+    if (w >= 1) return Scalar(0);
+    const Scalar l = s2 * w * w / ((1 - w) * (1 - w)), dl = s2 * 2 * w / ((1 - w) * (1 - w) * (1 - w));
+    return a * b * c / std::sqrt((a * a + l) * (a * a + l) * (a * a + l) * (b * b + l) * (c * c + l)) * dl;
+  };
+  auto simpson = [&](auto&& self, Scalar x0, Scalar x1, Scalar f0, Scalar fm, Scalar f1, Scalar whole,
+                     int depth) -> Scalar {
+    const Scalar m = (x0 + x1) / 2, fl = f((x0 + m) / 2), fr = f((m + x1) / 2);
+    const Scalar left = (m - x0) / 6 * (f0 + 4 * fl + fm), right = (x1 - m) / 6 * (fm + 4 * fr + f1);
+    if (depth <= 0 || std::abs(left + right - whole) < 1e-13) return left + right + (left + right - whole) / 15;
+    return self(self, x0, m, f0, fl, fm, left, depth - 1) + self(self, m, x1, fm, fr, f1, right, depth - 1);
+  };
+  const Scalar f0 = f(0), fm = f(0.5), f1 = f(1);
+  return simpson(simpson, 0, 1, f0, fm, f1, (f0 + 4 * fm + f1) / 6, 40);
+}
+
+}  // namespace
+
+int ModelBuilder::add_fluid_ellipsoid(int body, const Transform& frame, const Vec3& semi_axes,
+                                      const FluidEllipsoidOptions& options) {
+  const std::string item = "fluid ellipsoid " + std::to_string(fluid_ellipsoids_.size());
+  if (body < 0 || body >= body_count()) fail(item, ": body index ", body, " out of range [0, ", body_count(), ")");
+  const Transform placed = checked_transform(item, "frame", frame);
+  for (int k = 0; k < 3; ++k) check_positive(item, "semi-axis", semi_axes[k]);
+  for (const Scalar x :
+       {options.blunt_drag, options.slender_drag, options.angular_drag, options.kutta_lift, options.magnus_lift})
+    check_finite(item, "coefficient", x);
+  FluidEllipsoidOptions o = options;
+  // the fluid's virtual mass and inertia per unit density (Tuckerman's, MuJoCo's formulas), where not given
+  const Scalar x = semi_axes[0], y = semi_axes[1], z = semi_axes[2];
+  const Vec3 kappa(tuckerman_kappa(x, y, z), tuckerman_kappa(y, z, x), tuckerman_kappa(z, x, y));
+  const Scalar volume = 4.0 / 3.0 * M_PI * x * y * z;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    const Scalar rj = semi_axes[j] * semi_axes[j], rk = semi_axes[k] * semi_axes[k];
+    const Scalar inertia = (rj - rk) * (rj - rk) * std::abs(kappa[k] - kappa[j]) /
+                           std::max(Scalar(1e-15), std::abs(2 * (rj - rk) + (rj + rk) * (kappa[j] - kappa[k])));
+    if (std::isnan(o.added_mass[i])) o.added_mass[i] = volume * kappa[i] / (2 - kappa[i]);
+    if (std::isnan(o.added_inertia[i])) o.added_inertia[i] = volume * inertia / 5;
+  }
+  for (int k = 0; k < 3; ++k) {
+    check_nonnegative(item, "added mass", o.added_mass[k]);
+    check_nonnegative(item, "added inertia", o.added_inertia[k]);
+  }
+  fluid_ellipsoids_.push_back({body, placed, semi_axes, o});
+  return static_cast<int>(fluid_ellipsoids_.size()) - 1;
+}
+
+void ModelBuilder::lay_out_fluid_ellipsoids(Model& model) const {
+  model.fluid_ellipsoid_count = static_cast<int>(fluid_ellipsoids_.size());
+  model.fluid_ellipsoid_body.clear();
+  // by body (a body's ellipsoids together: Model::fluid_ellipsoid_body ascending), in the order added within one
+  std::vector<int> order(fluid_ellipsoids_.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return fluid_ellipsoids_[a].body < fluid_ellipsoids_[b].body; });
+  for (const int k : order) {
+    const FluidEllipsoidRecord& e = fluid_ellipsoids_[k];
+    const FluidEllipsoidOptions& o = e.options;
+    auto put = [](std::vector<Scalar>& field, std::initializer_list<Scalar> values) {
+      field.insert(field.end(), values.begin(), values.end());
+    };
+    model.fluid_ellipsoid_body.push_back(e.body);
+    model.fluid_ellipsoid_frame.resize(model.fluid_ellipsoid_frame.size() + 7);
+    e.frame.to_array(&model.fluid_ellipsoid_frame[model.fluid_ellipsoid_frame.size() - 7]);
+    put(model.fluid_ellipsoid_size, {e.semi_axes[0], e.semi_axes[1], e.semi_axes[2]});
+    put(model.fluid_ellipsoid_drag, {o.blunt_drag, o.slender_drag, o.angular_drag});
+    put(model.fluid_ellipsoid_lift, {o.kutta_lift, o.magnus_lift});
+    put(model.fluid_ellipsoid_added_mass, {o.added_mass[0], o.added_mass[1], o.added_mass[2]});
+    put(model.fluid_ellipsoid_added_inertia, {o.added_inertia[0], o.added_inertia[1], o.added_inertia[2]});
+  }
 }
 
 int ModelBuilder::add_shape(ShapeType type, int body, const Vec3& scale, const ShapeOptions& options, int mesh) {

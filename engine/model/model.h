@@ -126,118 +126,129 @@ const char* shape_type_name(ShapeType type);
 // mesh, counterclockwise seen from outside). A shape's shape_mesh is its mesh, -1 for other types. world_gravity: each
 // world's gravity (the builder's gravity in every world at finalize). body_gravcomp: the share of a body's weight
 // carried by a force through its centre of mass, MuJoCo's gravcomp (engine/solver/parts/gravity_compensation.h; 0:
-// none, 1: it floats).
-// joint_compliance: a maximal-coordinate joint's linear and angular compliance (builder.h: add_joint_distance, d6,
-// cable; 0 rigid), read by the solvers in maximal coordinates.
-// The parameters learning randomises may change per world after finalize, through Model::set_parameter only
+// none, 1: it floats). A fluid ellipsoid e (MuJoCo's ellipsoid fluid model, a geom's fluidshape) rides on body
+// fluid_ellipsoid_body[e] (ascending: a body's together) at fluid_ellipsoid_frame[e] ([p, q] in the body's frame) with
+// semi-axes fluid_ellipsoid_size along the frame's axes, its drag coefficients (blunt, slender, angular), lift
+// coefficients (Kutta, Magnus) and the fluid's virtual mass and moments of inertia per unit density (m^3, m^5) along
+// the axes; a body with one feels the fluid through its ellipsoids, not through the box of its inertia
+// (engine/solver/parts/applied_wrenches.h). joint_compliance: a maximal-coordinate joint's linear and angular
+// compliance (builder.h: add_joint_distance, d6, cable; 0 rigid), read by the solvers in maximal coordinates. The
+// parameters learning randomises may change per world after finalize, through Model::set_parameter only
 // (engine/model/parameters.cpp lists them); every other field is the model's structure and stays as finalized.
-#define NOVAPHY_MODEL_FIELDS(X)                            \
-  X(Scalar, body_mass, body_count, 1)                      \
-  X(Scalar, body_com, body_count, 3)                       \
-  X(Scalar, body_inertia, body_count, 9)                   \
-  X(int, body_world, body_count, 1)                        \
-  X(Scalar, body_invweight0, body_count, 2)                \
-  X(Scalar, body_gravcomp, body_count, 1)                  \
-  X(int, joint_type, joint_count, 1)                       \
-  X(int, joint_parent, joint_count, 1)                     \
-  X(int, joint_child, joint_count, 1)                      \
-  X(int, joint_ancestor, joint_count, 1)                   \
-  X(int, joint_articulation, joint_count, 1)               \
-  X(int, joint_q_start, joint_count + 1, 1)                \
-  X(int, joint_qd_start, joint_count + 1, 1)               \
-  X(Scalar, joint_X_p, joint_count, 7)                     \
-  X(Scalar, joint_X_c, joint_count, 7)                     \
-  X(Scalar, joint_axis, joint_count, 3)                    \
-  X(Scalar, joint_compliance, joint_count, 2)              \
-  X(Scalar, joint_q0, joint_coord_count, 1)                \
-  X(Scalar, joint_q_ref, joint_coord_count, 1)             \
-  X(Scalar, joint_armature, joint_dof_count, 1)            \
-  X(Scalar, joint_damping, joint_dof_count, 1)             \
-  X(Scalar, joint_frictionloss, joint_dof_count, 1)        \
-  X(Scalar, joint_stiffness, joint_dof_count, 1)           \
-  X(Scalar, joint_limit_lower, joint_dof_count, 1)         \
-  X(Scalar, joint_limit_upper, joint_dof_count, 1)         \
-  X(Scalar, joint_target_ke, joint_dof_count, 1)           \
-  X(Scalar, joint_target_kd, joint_dof_count, 1)           \
-  X(Scalar, joint_limit_solref, joint_dof_count, 2)        \
-  X(Scalar, joint_limit_solimp, joint_dof_count, 5)        \
-  X(Scalar, joint_friction_solref, joint_dof_count, 2)     \
-  X(Scalar, joint_friction_solimp, joint_dof_count, 5)     \
-  X(Scalar, joint_invweight0, joint_dof_count, 1)          \
-  X(int, articulation_start, articulation_count + 1, 1)    \
-  X(int, shape_type, shape_count, 1)                       \
-  X(int, shape_body, shape_count, 1)                       \
-  X(Scalar, shape_transform, shape_count, 7)               \
-  X(Scalar, shape_scale, shape_count, 3)                   \
-  X(Scalar, shape_mu, shape_count, 1)                      \
-  X(Scalar, shape_mu_torsion, shape_count, 1)              \
-  X(Scalar, shape_mu_rolling, shape_count, 1)              \
-  X(Scalar, shape_restitution, shape_count, 1)             \
-  X(int, shape_collision_group, shape_count, 1)            \
-  X(int, shape_collision_mask, shape_count, 1)             \
-  X(int, shape_priority, shape_count, 1)                   \
-  X(int, shape_condim, shape_count, 1)                     \
-  X(Scalar, shape_solref, shape_count, 2)                  \
-  X(Scalar, shape_solimp, shape_count, 5)                  \
-  X(Scalar, shape_solmix, shape_count, 1)                  \
-  X(Scalar, shape_margin, shape_count, 1)                  \
-  X(Scalar, shape_gap, shape_count, 1)                     \
-  X(int, shape_world, shape_count, 1)                      \
-  X(int, shape_mesh, shape_count, 1)                       \
-  X(int, mesh_vertex_start, mesh_count + 1, 1)             \
-  X(Scalar, mesh_vertex, mesh_vertex_count, 3)             \
-  X(int, mesh_face_start, mesh_count + 1, 1)               \
-  X(Scalar, mesh_face_plane, mesh_face_count, 4)           \
-  X(int, mesh_corner_start, mesh_face_count + 1, 1)        \
-  X(int, mesh_corner, mesh_corner_count, 1)                \
-  X(int, exclude_shape, exclude_count, 2)                  \
-  X(int, tendon_start, tendon_count + 1, 1)                \
-  X(int, tendon_coord, tendon_entry_count, 1)              \
-  X(int, tendon_dof, tendon_entry_count, 1)                \
-  X(Scalar, tendon_coef, tendon_entry_count, 1)            \
-  X(Scalar, tendon_stiffness, tendon_count, 1)             \
-  X(Scalar, tendon_damping, tendon_count, 1)               \
-  X(Scalar, tendon_rest_length, tendon_count, 1)           \
-  X(Scalar, tendon_limit_lower, tendon_count, 1)           \
-  X(Scalar, tendon_limit_upper, tendon_count, 1)           \
-  X(Scalar, tendon_limit_solref, tendon_count, 2)          \
-  X(Scalar, tendon_limit_solimp, tendon_count, 5)          \
-  X(Scalar, tendon_frictionloss, tendon_count, 1)          \
-  X(Scalar, tendon_friction_solref, tendon_count, 2)       \
-  X(Scalar, tendon_friction_solimp, tendon_count, 5)       \
-  X(Scalar, tendon_invweight0, tendon_count, 1)            \
-  X(int, tendon_path_start, tendon_count + 1, 1)           \
-  X(int, tendon_path_kind, tendon_path_count, 1)           \
-  X(int, tendon_path_body, tendon_path_count, 1)           \
-  X(Scalar, tendon_path_frame, tendon_path_count, 7)       \
-  X(Scalar, tendon_path_size, tendon_path_count, 1)        \
-  X(int, equality_type, equality_count, 1)                 \
-  X(int, equality_object, equality_count, 2)               \
-  X(Scalar, equality_data, equality_count, 10)             \
-  X(Scalar, equality_solref, equality_count, 2)            \
-  X(Scalar, equality_solimp, equality_count, 5)            \
-  X(int, actuator_joint, actuator_count, 1)                \
-  X(int, actuator_tendon, actuator_count, 1)               \
-  X(int, actuator_body, actuator_count, 1)                 \
-  X(Scalar, actuator_wrench, actuator_count, 6)            \
-  X(Scalar, actuator_gear, actuator_count, 1)              \
-  X(Scalar, actuator_gain, actuator_count, 1)              \
-  X(Scalar, actuator_bias, actuator_count, 3)              \
-  X(Scalar, actuator_ctrl_lower, actuator_count, 1)        \
-  X(Scalar, actuator_ctrl_upper, actuator_count, 1)        \
-  X(Scalar, actuator_force_lower, actuator_count, 1)       \
-  X(Scalar, actuator_force_upper, actuator_count, 1)       \
-  X(Scalar, world_gravity, world_count, 3)                 \
-  X(Scalar, keyframe_q, keyframe_count, joint_coord_count) \
-  X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)  \
-  X(Scalar, keyframe_ctrl, keyframe_count, actuator_count) \
-  X(int, sensor_type, sensor_count, 1)                     \
-  X(int, sensor_object, sensor_count, 1)                   \
-  X(Scalar, sensor_frame, sensor_count, 7)                 \
-  X(Scalar, sensor_zone, sensor_count, 4)                  \
-  X(Scalar, sensor_cutoff, sensor_count, 1)                \
-  X(int, sensor_shape, sensor_count, 1)                    \
-  X(int, sensor_world, sensor_count, 1)                    \
+#define NOVAPHY_MODEL_FIELDS(X)                                      \
+  X(Scalar, body_mass, body_count, 1)                                \
+  X(Scalar, body_com, body_count, 3)                                 \
+  X(Scalar, body_inertia, body_count, 9)                             \
+  X(int, body_world, body_count, 1)                                  \
+  X(Scalar, body_invweight0, body_count, 2)                          \
+  X(Scalar, body_gravcomp, body_count, 1)                            \
+  X(int, joint_type, joint_count, 1)                                 \
+  X(int, joint_parent, joint_count, 1)                               \
+  X(int, joint_child, joint_count, 1)                                \
+  X(int, joint_ancestor, joint_count, 1)                             \
+  X(int, joint_articulation, joint_count, 1)                         \
+  X(int, joint_q_start, joint_count + 1, 1)                          \
+  X(int, joint_qd_start, joint_count + 1, 1)                         \
+  X(Scalar, joint_X_p, joint_count, 7)                               \
+  X(Scalar, joint_X_c, joint_count, 7)                               \
+  X(Scalar, joint_axis, joint_count, 3)                              \
+  X(Scalar, joint_compliance, joint_count, 2)                        \
+  X(Scalar, joint_q0, joint_coord_count, 1)                          \
+  X(Scalar, joint_q_ref, joint_coord_count, 1)                       \
+  X(Scalar, joint_armature, joint_dof_count, 1)                      \
+  X(Scalar, joint_damping, joint_dof_count, 1)                       \
+  X(Scalar, joint_frictionloss, joint_dof_count, 1)                  \
+  X(Scalar, joint_stiffness, joint_dof_count, 1)                     \
+  X(Scalar, joint_limit_lower, joint_dof_count, 1)                   \
+  X(Scalar, joint_limit_upper, joint_dof_count, 1)                   \
+  X(Scalar, joint_target_ke, joint_dof_count, 1)                     \
+  X(Scalar, joint_target_kd, joint_dof_count, 1)                     \
+  X(Scalar, joint_limit_solref, joint_dof_count, 2)                  \
+  X(Scalar, joint_limit_solimp, joint_dof_count, 5)                  \
+  X(Scalar, joint_friction_solref, joint_dof_count, 2)               \
+  X(Scalar, joint_friction_solimp, joint_dof_count, 5)               \
+  X(Scalar, joint_invweight0, joint_dof_count, 1)                    \
+  X(int, articulation_start, articulation_count + 1, 1)              \
+  X(int, shape_type, shape_count, 1)                                 \
+  X(int, shape_body, shape_count, 1)                                 \
+  X(Scalar, shape_transform, shape_count, 7)                         \
+  X(Scalar, shape_scale, shape_count, 3)                             \
+  X(Scalar, shape_mu, shape_count, 1)                                \
+  X(Scalar, shape_mu_torsion, shape_count, 1)                        \
+  X(Scalar, shape_mu_rolling, shape_count, 1)                        \
+  X(Scalar, shape_restitution, shape_count, 1)                       \
+  X(int, shape_collision_group, shape_count, 1)                      \
+  X(int, shape_collision_mask, shape_count, 1)                       \
+  X(int, shape_priority, shape_count, 1)                             \
+  X(int, shape_condim, shape_count, 1)                               \
+  X(Scalar, shape_solref, shape_count, 2)                            \
+  X(Scalar, shape_solimp, shape_count, 5)                            \
+  X(Scalar, shape_solmix, shape_count, 1)                            \
+  X(Scalar, shape_margin, shape_count, 1)                            \
+  X(Scalar, shape_gap, shape_count, 1)                               \
+  X(int, shape_world, shape_count, 1)                                \
+  X(int, shape_mesh, shape_count, 1)                                 \
+  X(int, mesh_vertex_start, mesh_count + 1, 1)                       \
+  X(Scalar, mesh_vertex, mesh_vertex_count, 3)                       \
+  X(int, mesh_face_start, mesh_count + 1, 1)                         \
+  X(Scalar, mesh_face_plane, mesh_face_count, 4)                     \
+  X(int, mesh_corner_start, mesh_face_count + 1, 1)                  \
+  X(int, mesh_corner, mesh_corner_count, 1)                          \
+  X(int, exclude_shape, exclude_count, 2)                            \
+  X(int, tendon_start, tendon_count + 1, 1)                          \
+  X(int, tendon_coord, tendon_entry_count, 1)                        \
+  X(int, tendon_dof, tendon_entry_count, 1)                          \
+  X(Scalar, tendon_coef, tendon_entry_count, 1)                      \
+  X(Scalar, tendon_stiffness, tendon_count, 1)                       \
+  X(Scalar, tendon_damping, tendon_count, 1)                         \
+  X(Scalar, tendon_rest_length, tendon_count, 1)                     \
+  X(Scalar, tendon_limit_lower, tendon_count, 1)                     \
+  X(Scalar, tendon_limit_upper, tendon_count, 1)                     \
+  X(Scalar, tendon_limit_solref, tendon_count, 2)                    \
+  X(Scalar, tendon_limit_solimp, tendon_count, 5)                    \
+  X(Scalar, tendon_frictionloss, tendon_count, 1)                    \
+  X(Scalar, tendon_friction_solref, tendon_count, 2)                 \
+  X(Scalar, tendon_friction_solimp, tendon_count, 5)                 \
+  X(Scalar, tendon_invweight0, tendon_count, 1)                      \
+  X(int, tendon_path_start, tendon_count + 1, 1)                     \
+  X(int, tendon_path_kind, tendon_path_count, 1)                     \
+  X(int, tendon_path_body, tendon_path_count, 1)                     \
+  X(Scalar, tendon_path_frame, tendon_path_count, 7)                 \
+  X(Scalar, tendon_path_size, tendon_path_count, 1)                  \
+  X(int, equality_type, equality_count, 1)                           \
+  X(int, equality_object, equality_count, 2)                         \
+  X(Scalar, equality_data, equality_count, 10)                       \
+  X(Scalar, equality_solref, equality_count, 2)                      \
+  X(Scalar, equality_solimp, equality_count, 5)                      \
+  X(int, actuator_joint, actuator_count, 1)                          \
+  X(int, actuator_tendon, actuator_count, 1)                         \
+  X(int, actuator_body, actuator_count, 1)                           \
+  X(Scalar, actuator_wrench, actuator_count, 6)                      \
+  X(Scalar, actuator_gear, actuator_count, 1)                        \
+  X(Scalar, actuator_gain, actuator_count, 1)                        \
+  X(Scalar, actuator_bias, actuator_count, 3)                        \
+  X(Scalar, actuator_ctrl_lower, actuator_count, 1)                  \
+  X(Scalar, actuator_ctrl_upper, actuator_count, 1)                  \
+  X(Scalar, actuator_force_lower, actuator_count, 1)                 \
+  X(Scalar, actuator_force_upper, actuator_count, 1)                 \
+  X(Scalar, world_gravity, world_count, 3)                           \
+  X(int, fluid_ellipsoid_body, fluid_ellipsoid_count, 1)             \
+  X(Scalar, fluid_ellipsoid_frame, fluid_ellipsoid_count, 7)         \
+  X(Scalar, fluid_ellipsoid_size, fluid_ellipsoid_count, 3)          \
+  X(Scalar, fluid_ellipsoid_drag, fluid_ellipsoid_count, 3)          \
+  X(Scalar, fluid_ellipsoid_lift, fluid_ellipsoid_count, 2)          \
+  X(Scalar, fluid_ellipsoid_added_mass, fluid_ellipsoid_count, 3)    \
+  X(Scalar, fluid_ellipsoid_added_inertia, fluid_ellipsoid_count, 3) \
+  X(Scalar, keyframe_q, keyframe_count, joint_coord_count)           \
+  X(Scalar, keyframe_qd, keyframe_count, joint_dof_count)            \
+  X(Scalar, keyframe_ctrl, keyframe_count, actuator_count)           \
+  X(int, sensor_type, sensor_count, 1)                               \
+  X(int, sensor_object, sensor_count, 1)                             \
+  X(Scalar, sensor_frame, sensor_count, 7)                           \
+  X(Scalar, sensor_zone, sensor_count, 4)                            \
+  X(Scalar, sensor_cutoff, sensor_count, 1)                          \
+  X(int, sensor_shape, sensor_count, 1)                              \
+  X(int, sensor_world, sensor_count, 1)                              \
   X(int, sensor_start, sensor_count + 1, 1)
 
 // world_reset: 1 where Model::reset_worlds or restart_worlds reset the world, or a step's divergence guard restarted
@@ -283,6 +294,7 @@ struct ModelCounts {
   int tendon_count = 0;
   int tendon_entry_count = 0;  // a tendon's joints, all tendons together
   int tendon_path_count = 0;   // the spatial tendons' path elements, all together
+  int fluid_ellipsoid_count = 0;
   int equality_count = 0;
   int mesh_count = 0;
   int mesh_vertex_count = 0;  // all meshes' hull vertices together

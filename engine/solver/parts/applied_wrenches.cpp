@@ -73,11 +73,12 @@ void site_actuator_wrench(const Model& model, int u, Scalar ctrl, const Transfor
   for (int k = 0; k < 3; ++k) wrench[k] = force[k], wrench[3 + k] = torque[k];
 }
 
-void fluid_wrench(const Model& model, int b, const Transform& body_frame, const Vec3& v, const Vec3& w,
-                  Scalar wrench[6]) {
-  std::fill_n(wrench, 6, Scalar(0));
+namespace {
+
+// MuJoCo's inertia-box model: viscous and quadratic drag on the box of body b's inertia (into wrench, zeroed)
+void inertia_box_wrench(const Model& model, int b, const Transform& body_frame, const Vec3& v, const Vec3& w,
+                        Scalar wrench[6]) {
   const Scalar mass = model.body_mass[b];
-  if (!(mass >= kMinMass)) return;
   // the body's principal axes (world frame) and the box of its inertia: side k from the moments about the others
   const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> inertia(&model.body_inertia[9 * b]);
   Eigen::SelfAdjointEigenSolver<Mat3> principal;
@@ -106,6 +107,78 @@ void fluid_wrench(const Model& model, int b, const Transform& body_frame, const 
   }
   const Vec3 f = R * force, t = R * torque;
   for (int k = 0; k < 3; ++k) wrench[k] = f[k], wrench[3 + k] = t[k];
+}
+
+// MuJoCo's ellipsoid model: fluid ellipsoid e of its body at the world frame `frame`, its centre moving at v (through
+// the wind) and turning at w (world frame): the fluid's force and torque about its centre (world frame)
+void ellipsoid_wrench(const Model& model, int e, const Transform& frame, const Vec3& v, const Vec3& w, Vec3& force,
+                      Vec3& torque) {
+  constexpr Scalar kPi = 3.14159265358979323846;
+  const Scalar rho = model.fluid_density, mu = model.fluid_viscosity;
+  const Vec3 r = Eigen::Map<const Vec3>(&model.fluid_ellipsoid_size[3 * e]);
+  const Scalar* drag = &model.fluid_ellipsoid_drag[3 * e];  // blunt, slender, angular
+  const Scalar* lift = &model.fluid_ellipsoid_lift[2 * e];  // Kutta, Magnus
+  const Vec3 added_mass = Eigen::Map<const Vec3>(&model.fluid_ellipsoid_added_mass[3 * e]);
+  const Vec3 added_inertia = Eigen::Map<const Vec3>(&model.fluid_ellipsoid_added_inertia[3 * e]);
+  // the motion in the ellipsoid's frame
+  const Mat3 R = frame.rotation();
+  const Vec3 lin = R.transpose() * (v - model.wind), ang = R.transpose() * w;
+  const Scalar speed = lin.norm();
+  // added mass: the fluid's virtual momenta turned by the motion (their rates, which need the acceleration, left
+  // out as MuJoCo leaves them)
+  const Vec3 p_lin = rho * added_mass.cwiseProduct(lin), p_ang = rho * added_inertia.cwiseProduct(ang);
+  Vec3 f = p_lin.cross(ang), t = p_lin.cross(lin) + p_ang.cross(ang);
+  // Magnus lift of the spin through the flow
+  const Scalar volume = 4.0 / 3.0 * kPi * r.prod();
+  f += lift[1] * rho * volume * ang.cross(lin);
+  // the area the ellipsoid shows the flow, and Kutta lift from the circulation about its projected section
+  const Vec3 cross_areas(r[1] * r[2], r[2] * r[0], r[0] * r[1]);  // (each axis' section over pi)
+  const Vec3 a2 = cross_areas.cwiseProduct(cross_areas);
+  const Scalar shown = a2.cwiseProduct(a2).dot(lin.cwiseProduct(lin));  // sum (r_j r_k)^4 lin_i^2
+  const Scalar along = a2.dot(lin.cwiseProduct(lin));                   // sum (r_j r_k lin_i)^2
+  const Scalar A_proj = kPi * std::sqrt(shown / std::max(kMinMass, along));
+  const Vec3 normal = a2.cwiseProduct(lin);
+  const Scalar cos_alpha = along / std::max(kMinMass, speed * shown);
+  const Vec3 circulation = lift[0] * rho * cos_alpha * A_proj * normal.cross(lin);
+  f += circulation.cross(lin);
+  // drag: Stokes' on the sphere of the semi-axes' mean diameter, and quadratic on the shown and the largest areas
+  // (linear) and on each axis' swept moment (angular)
+  const Scalar r_max = r.maxCoeff(), r_min = r.minCoeff(), r_mid = r.sum() - r_max - r_min;
+  const Scalar diameter = 2.0 / 3.0 * r.sum(), A_max = kPi * r_max * r_mid;
+  const Scalar I_max = 8.0 / 15.0 * kPi * r_mid * std::pow(r_max, 4);
+  Vec3 swept;
+  for (int i = 0; i < 3; ++i) {
+    const Scalar I_i = 8.0 / 15.0 * kPi * r[i] * std::pow(std::max(r[(i + 1) % 3], r[(i + 2) % 3]), 4);
+    swept[i] = ang[i] * (drag[2] * I_i + drag[1] * (I_max - I_i));
+  }
+  const Scalar linear = mu * 3 * kPi * diameter + rho * speed * (A_proj * drag[0] + drag[1] * (A_max - A_proj));
+  const Scalar angular = mu * kPi * diameter * diameter * diameter + rho * swept.norm();
+  f -= linear * lin;
+  t -= angular * ang;
+  force = R * f;
+  torque = R * t;
+}
+
+}  // namespace
+
+void fluid_wrench(const Model& model, int b, const Transform& body_frame, const Vec3& v, const Vec3& w,
+                  Scalar wrench[6]) {
+  std::fill_n(wrench, 6, Scalar(0));
+  if (!(model.body_mass[b] >= kMinMass)) return;
+  // the body's fluid ellipsoids (laid out by body), else the box of its inertia
+  const auto [first, last] = std::equal_range(model.fluid_ellipsoid_body.begin(), model.fluid_ellipsoid_body.end(), b);
+  if (first == last) return inertia_box_wrench(model, b, body_frame, v, w, wrench);
+  const Vec3 com = body_frame.apply(Vec3(model.body_com[3 * b], model.body_com[3 * b + 1], model.body_com[3 * b + 2]));
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+  for (auto e = first; e != last; ++e) {
+    const int k = static_cast<int>(e - model.fluid_ellipsoid_body.begin());
+    const Transform frame = body_frame * Transform::from_array(&model.fluid_ellipsoid_frame[7 * k]);
+    Vec3 f, t;
+    ellipsoid_wrench(model, k, frame, v + w.cross(frame.p - com), w, f, t);
+    force += f;
+    torque += t + (frame.p - com).cross(f);
+  }
+  for (int k = 0; k < 3; ++k) wrench[k] = force[k], wrench[3 + k] = torque[k];
 }
 
 void applied_wrenches(const Model& model, ModelWrenches& wrenches, const State& state, const Control* control,

@@ -1,7 +1,8 @@
 // The wrenches a model applies to its bodies itself, beside the state's body_f: gravity compensation (MuJoCo's body
 // gravcomp: a force -gravcomp m g through a body's centre of mass, g its world's gravity), the actuators on sites
 // (MuJoCo's site transmission: a thruster's force and torque, fixed in its body's frame), the fluid's forces
-// (MuJoCo's inertia-box model: viscous and quadratic drag on the box of the body's inertia) and the forces along
+// (MuJoCo's inertia-box model: viscous and quadratic drag on the box of the body's inertia, or its ellipsoid model on a
+// body's fluid ellipsoids: added mass, drag, Kutta and Magnus lift) and the forces along
 // spatial tendons (their springs, dampers and actuators, pulling their paths' sites and wraps:
 // engine/model/spatial_tendon.h). Written once here: SolverFeatherstone and the evaluations apply body_f with them
 // added (applied_wrenches, at the state's coordinates and velocities), the solvers in maximal coordinates add them
@@ -51,7 +52,8 @@ Vec3 gravity_compensation(const Model& model, int b);
 void site_actuator_wrench(const Model& model, int u, Scalar ctrl, const Transform& body_frame, Scalar wrench[6]);
 
 // the fluid's wrench [force; torque] (world frame, about its centre of mass) on body b at the pose `body_frame`, its
-// centre of mass moving at v and turning at w (world frame); zero for a body of no mass
+// centre of mass moving at v and turning at w (world frame): its fluid ellipsoids', else its inertia box's; zero for
+// a body of no mass
 void fluid_wrench(const Model& model, int b, const Transform& body_frame, const Vec3& v, const Vec3& w,
                   Scalar wrench[6]);
 
