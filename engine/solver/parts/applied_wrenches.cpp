@@ -13,6 +13,7 @@ namespace novaphy {
 namespace {
 
 constexpr Scalar kMinMass = 1e-15;  // (MuJoCo's mjMINVAL: a body lighter than this feels no fluid)
+constexpr Scalar kPi = 3.14159265358979323846;
 
 }  // namespace
 
@@ -94,7 +95,6 @@ void inertia_box_wrench(const Model& model, int b, const Transform& body_frame, 
   const Scalar rho = model.fluid_density, mu = model.fluid_viscosity;
   if (mu > 0) {  // Stokes drag on the sphere of the box's mean side
     const Scalar diameter = box.sum() / 3;
-    constexpr Scalar kPi = 3.14159265358979323846;
     torque -= (kPi * diameter * diameter * diameter * mu) * ang;
     force -= (3 * kPi * diameter * mu) * lin;
   }
@@ -113,11 +113,11 @@ void inertia_box_wrench(const Model& model, int b, const Transform& body_frame, 
 // the wind) and turning at w (world frame): the fluid's force and torque about its centre (world frame)
 void ellipsoid_wrench(const Model& model, int e, const Transform& frame, const Vec3& v, const Vec3& w, Vec3& force,
                       Vec3& torque) {
-  constexpr Scalar kPi = 3.14159265358979323846;
   const Scalar rho = model.fluid_density, mu = model.fluid_viscosity;
   const Vec3 r = Eigen::Map<const Vec3>(&model.fluid_ellipsoid_size[3 * e]);
-  const Scalar* drag = &model.fluid_ellipsoid_drag[3 * e];  // blunt, slender, angular
-  const Scalar* lift = &model.fluid_ellipsoid_lift[2 * e];  // Kutta, Magnus
+  const Scalar blunt = model.fluid_ellipsoid_drag[3 * e], slender = model.fluid_ellipsoid_drag[3 * e + 1],
+               angular_drag = model.fluid_ellipsoid_drag[3 * e + 2];
+  const Scalar kutta = model.fluid_ellipsoid_lift[2 * e], magnus = model.fluid_ellipsoid_lift[2 * e + 1];
   const Vec3 added_mass = Eigen::Map<const Vec3>(&model.fluid_ellipsoid_added_mass[3 * e]);
   const Vec3 added_inertia = Eigen::Map<const Vec3>(&model.fluid_ellipsoid_added_inertia[3 * e]);
   // the motion in the ellipsoid's frame
@@ -130,7 +130,7 @@ void ellipsoid_wrench(const Model& model, int e, const Transform& frame, const V
   Vec3 f = p_lin.cross(ang), t = p_lin.cross(lin) + p_ang.cross(ang);
   // Magnus lift of the spin through the flow
   const Scalar volume = 4.0 / 3.0 * kPi * r.prod();
-  f += lift[1] * rho * volume * ang.cross(lin);
+  f += magnus * rho * volume * ang.cross(lin);
   // the area the ellipsoid shows the flow, and Kutta lift from the circulation about its projected section
   const Vec3 cross_areas(r[1] * r[2], r[2] * r[0], r[0] * r[1]);  // (each axis' section over pi)
   const Vec3 a2 = cross_areas.cwiseProduct(cross_areas);
@@ -139,7 +139,7 @@ void ellipsoid_wrench(const Model& model, int e, const Transform& frame, const V
   const Scalar A_proj = kPi * std::sqrt(shown / std::max(kMinMass, along));
   const Vec3 normal = a2.cwiseProduct(lin);
   const Scalar cos_alpha = along / std::max(kMinMass, speed * shown);
-  const Vec3 circulation = lift[0] * rho * cos_alpha * A_proj * normal.cross(lin);
+  const Vec3 circulation = kutta * rho * cos_alpha * A_proj * normal.cross(lin);
   f += circulation.cross(lin);
   // drag: Stokes' on the sphere of the semi-axes' mean diameter, and quadratic on the shown and the largest areas
   // (linear) and on each axis' swept moment (angular)
@@ -149,9 +149,9 @@ void ellipsoid_wrench(const Model& model, int e, const Transform& frame, const V
   Vec3 swept;
   for (int i = 0; i < 3; ++i) {
     const Scalar I_i = 8.0 / 15.0 * kPi * r[i] * std::pow(std::max(r[(i + 1) % 3], r[(i + 2) % 3]), 4);
-    swept[i] = ang[i] * (drag[2] * I_i + drag[1] * (I_max - I_i));
+    swept[i] = ang[i] * (angular_drag * I_i + slender * (I_max - I_i));
   }
-  const Scalar linear = mu * 3 * kPi * diameter + rho * speed * (A_proj * drag[0] + drag[1] * (A_max - A_proj));
+  const Scalar linear = mu * 3 * kPi * diameter + rho * speed * (A_proj * blunt + slender * (A_max - A_proj));
   const Scalar angular = mu * kPi * diameter * diameter * diameter + rho * swept.norm();
   f -= linear * lin;
   t -= angular * ang;
