@@ -28,15 +28,13 @@ int ModelBuilder::add_spatial_tendon(const std::vector<TendonPathElement>& path,
   const std::string item = label("tendon", tendon_count(), options.name) + " (spatial)";
   const int n = static_cast<int>(path.size());
   auto is = [&](int e, TendonPathKind kind) { return e >= 0 && e < n && path[e].kind == kind; };
-  auto refuse = [&](int e, const char* why) { fail(item, ": path element ", e, " ", why); };
+  auto refuse = [&](int e, const auto&... why) { fail(item, ": path element ", e, " ", why...); };
   if (n < 2 || !is(0, TendonPathKind::Site) || !is(n - 1, TendonPathKind::Site))
     fail(item, ": a path starts and ends at a site (", n, " elements given)");
   for (int e = 0; e < n; ++e) {
     const TendonPathElement& x = path[e];
     if (x.body < -1 || x.body >= body_count())
-      refuse(
-          e,
-          ("has body " + std::to_string(x.body) + ", out of range [-1, " + std::to_string(body_count()) + ")").c_str());
+      refuse(e, "has body ", x.body, ", out of range [-1, ", body_count(), ")");
     checked_transform(item, "path frame", x.frame);
     switch (x.kind) {
       case TendonPathKind::Site: break;
