@@ -70,6 +70,15 @@ inline M but_not(const M& a, const M& b) {
     return a & ~b;
 }
 
+// whether any lane of m is set
+template <typename V>
+inline bool any_set(const Mask<V>& m) {
+  if constexpr (std::is_same_v<Mask<V>, bool>)
+    return m;
+  else
+    return any_lane<Element<V>>(m);
+}
+
 // |x|; a NaN stays a NaN
 template <typename V>
 inline V magnitude(const V& x) {

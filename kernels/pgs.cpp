@@ -26,6 +26,16 @@ Scalar row_velocity(const PgsRow& row, const std::vector<Scalar>& J, const Scala
   return v;
 }
 
+Scalar row_coupling(const PgsRow& a, const PgsRow& b, const std::vector<Scalar>& J, const std::vector<Scalar>& MinvJT) {
+  Scalar v = 0;
+  for (int s = 0; s < a.side_count; ++s) {
+    const Scalar* j = J.data() + a.pool[s];
+    const Scalar* z = MinvJT.data() + b.pool[s];
+    for (int k = 0; k < a.dof_count[s]; ++k) v += j[k] * z[k];
+  }
+  return v;
+}
+
 void apply_impulse(const PgsRow& row, const std::vector<Scalar>& MinvJT, Scalar impulse, Scalar* qd) {
   for (int s = 0; s < row.side_count; ++s) {
     const Scalar* m = MinvJT.data() + row.pool[s];
@@ -52,6 +62,39 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
     for (int k = 0; k < count; ++k) {
       const int r = order[k];
       PgsRow& row = rows[r];
+      if (row.kind == RowKind::Unilateral && k + 1 < count && rows[order[k + 1]].kind == RowKind::FrictionCone &&
+          rows[order[k + 1]].normal == r) {
+        // a contact's normal and friction cone rows: one block update
+        const int n = 1 + cone_rows(k + 1, count, [&](int i) {
+                        const PgsRow& x = rows[order[i]];
+                        return x.kind == RowKind::FrictionCone && x.normal == r;
+                      });
+        ConeBlock<Scalar> block;
+        Scalar* A = block.A;
+        Scalar lambda[kMaxContact], residual[kMaxContact], mu[kMaxContact], p[kMaxContact];
+        for (int i = 0; i < n; ++i) {
+          const PgsRow& x = rows[order[k + i]];
+          const bool massive = x.inv_mass > 0;
+          lambda[i] = x.lambda;
+          mu[i] = x.mu;
+          residual[i] = massive ? row_velocity(x, J, qd) - x.target + (settings.cfm + x.cfm) * x.lambda : 0;
+          A[i * kMaxContact + i] = massive ? 1 / x.inv_mass : 1;
+          for (int j = 0; j < i; ++j)
+            A[i * kMaxContact + j] = A[j * kMaxContact + i] = row_coupling(x, rows[order[k + j]], J, MinvJT);
+        }
+        block.prepare(n - 1);
+        solve_contact_cone(block, lambda, residual, mu + 1, settings.friction_smoothing, p);
+        for (int i = 0; i < n; ++i) {
+          PgsRow& x = rows[order[k + i]];
+          if (!std::isfinite(p[i]) || p[i] == x.lambda) continue;
+          apply_impulse(x, MinvJT, p[i] - x.lambda, qd);
+          moving |= moved(x, p[i] - x.lambda);
+          x.lambda = p[i];
+        }
+        k += n - 1;
+        continue;
+      }
+      if (row.kind == RowKind::FrictionCone) continue;  // (updated with its normal row only)
       // a row touching a diverged articulation yields no impulse, so NaN does not spread through contacts
       if (row.kind != RowKind::FrictionPair) {
         const Scalar unclamped = row.lambda + step(row);

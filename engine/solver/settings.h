@@ -45,7 +45,8 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
     "4 and 6), 4 no rolling rows, 3 neither; fewer rows, a faster step (docs/step.md, Condim).")                      \
   X(Scalar, friction_smoothing, 1.0, 0, 1, "",                                                                        \
     "0: box friction per tangent (the direction snaps to the tangent axes); 1: circular cone (friction opposes the "  \
-    "slip smoothly); between: a blend.")                                                                              \
+    "slip smoothly; with condim 4 or 6 in the model, MuJoCo's elliptic cone over each contact's friction rows, "      \
+    "docs/step.md); between: a blend.")                                                                               \
   X(bool, use_tile_gemm, false, 0, 0, "", "H as the tiled product sum J_i^T I_i J_i instead of CRBA.")                \
   X(bool, fuse_cholesky, true, 0, 0, "", "Factor H and forward-substitute in one pass.")                              \
   X(int, aba_min_dofs, 32, 0, kIntUnbounded, "",                                                                      \
@@ -122,7 +123,8 @@ inline constexpr int kIntUnbounded = std::numeric_limits<int>::max();
   X(Scalar, angular_damping, 0.05, 0, kUnbounded, "1/s",                                                               \
     "Each body's angular velocity is scaled by (1 - angular_damping dt) each step.")                                   \
   X(int, max_condim, 6, 3, 6, "", "The most friction a contact gets of its shapes' condim (as SolverFeatherstone's).") \
-  X(Scalar, friction_smoothing, 1.0, 0, 1, "", "0: box friction per tangent; 1: circular cone; between: a blend.")     \
+  X(Scalar, friction_smoothing, 1.0, 0, 1, "",                                                                         \
+    "0: box friction per tangent; 1: circular cone (condim 4, 6: elliptic over the friction rows); between: a blend.") \
   NOVAPHY_MAXIMAL_STEP_SETTINGS(X)
 
 // SolverXPBD (engine/solver/xpbd/solver_xpbd.h); names as Newton's SolverXPBD's where the meaning is the same

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <vector>
 
 namespace novaphy {
 
@@ -93,11 +94,58 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   // row that changed no lane's impulse is not applied
   const T tolerance = static_cast<T>(settings.tolerance);
   auto moved = [&](int r, const V<T>& change) { return lane_abs<T>(change) > tolerance * rows.inv_mass[r]; };
+  // the friction rows of the contact whose normal is row r, where they are a FrictionCone (0: none)
+  auto cone_after = [&](int r) {
+    if (rows.kind[r] != RowKind::Unilateral || r + 1 >= rows.count || rows.kind[r + 1] != RowKind::FrictionCone ||
+        rows.normal[r + 1] != r)
+      return 0;
+    return cone_rows(r + 1, rows.count,
+                     [&](int i) { return rows.kind[i] == RowKind::FrictionCone && rows.normal[i] == r; });
+  };
+  // each such contact's block of J_i M^-1 J_j^T over its rows (its cfm on the diagonal; 1 where a lane has no
+  // row), once for all sweeps
+  thread_local std::vector<ConeBlock<V<T>>> blocks;
+  blocks.clear();
+  for (int r = 0; r < rows.count; ++r) {
+    const int g = cone_after(r);
+    if (g == 0) continue;
+    const int begin = rows.nonzero_begin[r], end = rows.nonzero_end[r];
+    V<T>* A = blocks.emplace_back().A;
+    for (int i = 0; i <= g; ++i) {
+      A[i * kMaxContact + i] = rows.inv_mass[r + i] > 0 ? 1 / rows.inv_mass[r + i] : splat<V<T>>(1);
+      for (int j = 0; j < i; ++j)
+        A[i * kMaxContact + j] = A[j * kMaxContact + i] = dot<T>(J(r + i) + begin, z(r + j) + begin, end - begin);
+    }
+    blocks.back().prepare(g);
+    r += g;
+  }
   M<T> live = ~M<T>{};
   int it = 0;
   for (; it < settings.iterations && any_lane<T>(live); ++it) {
     M<T> moving{};
+    int cone = 0;  // the contacts of a FrictionCone swept so far
     for (int r = 0; r < rows.count; ++r) {
+      if (const int g = cone_after(r)) {
+        // a contact's normal and friction cone rows: one block update
+        const ConeBlock<V<T>>& block = blocks[cone++];
+        V<T> residual[kMaxContact], p[kMaxContact];
+        for (int i = 0; i <= g; ++i) {
+          const int x = r + i;
+          residual[i] = rows.inv_mass[x] > 0 ? velocity(x) - rows.target[x] + (cfm + rows.cfm[x]) * lambda[x] : V<T>{};
+        }
+        solve_contact_cone(block, lambda + r, residual, rows.mu + r + 1, s, p);
+        for (int i = 0; i <= g; ++i) {
+          const int x = r + i;
+          const M<T> on = live & rows.active[x] & finite<T>(p[i]) & (p[i] != lambda[x]);
+          if (!any_lane<T>(on)) continue;
+          apply<T>(z(x), p[i] - lambda[x], on, n, qd);
+          moving |= on & moved(x, p[i] - lambda[x]);
+          lambda[x] = on ? p[i] : lambda[x];
+        }
+        r += g;
+        continue;
+      }
+      if (rows.kind[r] == RowKind::FrictionCone) continue;  // (updated with its normal row only)
       // a lane gone non-finite keeps its impulse, so NaN does not spread through the rows
       if (rows.kind[r] != RowKind::FrictionPair) {
         const V<T> sum = lambda[r] + step(r);

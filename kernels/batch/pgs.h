@@ -15,7 +15,7 @@ struct BatchRows {
   int count = 0;                  // rows
   int dofs = 0;                   // the length of each row of J and M^-1 J^T
   const RowKind* kind = nullptr;  // [row] a FrictionPair row is followed by its second tangent
-  const int* normal = nullptr;    // [row] FrictionPair, FrictionOne: the row holding the normal impulse
+  const int* normal = nullptr;    // [row] FrictionPair, FrictionOne, FrictionCone: the row holding the normal impulse
   const Lanes<T>* J = nullptr;    // [row][dof]
   // [row]: J is +-0 in every lane outside dofs nonzero_begin[r] .. nonzero_end[r] - 1, which J qd skips
   const int* nonzero_begin = nullptr;
@@ -27,7 +27,7 @@ struct BatchRows {
   const Lanes<T>* MinvJT = nullptr;     // [row][dof]
   const Lanes<T>* target = nullptr;     // [row] the velocity J qd the row drives towards
   const Lanes<T>* cfm = nullptr;        // [row] its own constraint force mixing, beyond the settings' cfm
-  const Lanes<T>* mu = nullptr;         // [row] FrictionPair, FrictionOne: friction coefficient
+  const Lanes<T>* mu = nullptr;         // [row] FrictionPair, FrictionOne, FrictionCone: friction coefficient
   const Lanes<T>* bound = nullptr;      // [row] Bounded: the largest |impulse|
   const IntLanes<T>* active = nullptr;  // [row] -1 in the lanes that have the row, 0 elsewhere
   Lanes<T>* inv_mass = nullptr;         // [row] out: 1 / (J M^-1 J^T + settings' cfm + cfm), 0 for a row of no mass

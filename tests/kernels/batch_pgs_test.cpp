@@ -4,9 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "kernels/batch/pgs.h"
@@ -18,11 +21,25 @@ template <typename T>
 constexpr double kEps = std::numeric_limits<T>::epsilon();
 
 constexpr int kDofs = 11;
+
+// the rows of a block: their kinds and the row of each friction row's normal
+struct Layout {
+  int count;
+  const RowKind* kind;
+  const int* normal;
+};
 // two limit-like rows, then two contacts (a normal row, then its friction pair)
-const RowKind kKind[] = {RowKind::Unilateral,   RowKind::Unilateral, RowKind::Unilateral,   RowKind::FrictionPair,
-                         RowKind::FrictionPair, RowKind::Unilateral, RowKind::FrictionPair, RowKind::FrictionPair};
-const int kNormal[] = {-1, -1, 2, 2, 2, 5, 5, 5};
+const RowKind kPairKind[] = {RowKind::Unilateral,   RowKind::Unilateral, RowKind::Unilateral,   RowKind::FrictionPair,
+                             RowKind::FrictionPair, RowKind::Unilateral, RowKind::FrictionPair, RowKind::FrictionPair};
+const int kPairNormal[] = {-1, -1, 2, 2, 2, 5, 5, 5};
+constexpr Layout kPairs{8, kPairKind, kPairNormal};
 constexpr int kRows = 8;
+// a limit-like row, a contact of condim 6 (a normal, five rows in one cone), one of condim 3 in a cone (as the
+// blocks lay it out where another contact has condim 6), a limit-like row
+constexpr RowKind U = RowKind::Unilateral, C = RowKind::FrictionCone;
+const RowKind kConeKind[] = {U, U, C, C, C, C, C, U, C, C, U};
+const int kConeNormal[] = {-1, -1, 1, 1, 1, 1, 1, -1, 7, 7, -1};
+constexpr Layout kCones{11, kConeKind, kConeNormal};
 
 // a block of random rows: per lane an SPD mass matrix, J, M^-1 J^T, targets, warm starts and
 // friction; lane l lacks row r where absent(l, r)
@@ -36,18 +53,21 @@ struct Problem {
   // quads 4 .. 7 between them skipped
   std::vector<int> nonzero_begin, nonzero_end, zero_begin, zero_end;
 
-  Problem(std::mt19937& rng, bool (*absent)(int lane, int row))
-      : J(kRows * kDofs),
-        z(kRows * kDofs),
-        target(kRows),
-        cfm(kRows),
-        mu(kRows),
-        inv_mass(kRows),
-        lambda(kRows),
+  Layout layout;
+
+  Problem(std::mt19937& rng, bool (*absent)(int lane, int row), const Layout& layout = kPairs)
+      : J(layout.count * kDofs),
+        z(layout.count * kDofs),
+        target(layout.count),
+        cfm(layout.count),
+        mu(layout.count),
+        inv_mass(layout.count),
+        lambda(layout.count),
         qd(kDofs),
-        active(kRows) {
+        active(layout.count),
+        layout(layout) {
     std::uniform_real_distribution<double> u(-1, 1);
-    for (int r = 0; r < kRows; ++r) {
+    for (int r = 0; r < layout.count; ++r) {
       const bool skips = r == 0 || (r >= 2 && r <= 4);
       nonzero_begin.push_back(r == 0 ? 2 : 0);
       nonzero_end.push_back(r == 0 ? 10 : kDofs);
@@ -64,7 +84,7 @@ struct Problem {
       const Eigen::MatrixXd M = A * A.transpose() + Eigen::MatrixXd::Identity(kDofs, kDofs);
       const Eigen::LLT<Eigen::MatrixXd> llt(M);
       for (int k = 0; k < kDofs; ++k) qd[k][l] = static_cast<T>(u(rng));
-      for (int r = 0; r < kRows; ++r) {
+      for (int r = 0; r < layout.count; ++r) {
         const bool on = !absent(l, r);
         active[r][l] = on ? -1 : 0;
         Eigen::VectorXd j(kDofs);
@@ -76,7 +96,8 @@ struct Problem {
         }
         target[r][l] = on ? static_cast<T>(u(rng)) : 0;
         cfm[r][l] = on && r % 2 == 1 ? static_cast<T>(0.2 * (1 + u(rng))) : 0;
-        lambda[r][l] = on ? static_cast<T>(kKind[r] == RowKind::Unilateral ? 0.5 + 0.5 * u(rng) : 0.2 * u(rng)) : 0;
+        lambda[r][l] =
+            on ? static_cast<T>(layout.kind[r] == RowKind::Unilateral ? 0.5 + 0.5 * u(rng) : 0.2 * u(rng)) : 0;
         mu[r][l] = on ? static_cast<T>(0.6 + 0.4 * u(rng)) : 0;
       }
     }
@@ -86,8 +107,8 @@ struct Problem {
     BatchRows<T> b;
     b.count = count;
     b.dofs = kDofs;
-    b.kind = kKind;
-    b.normal = kNormal;
+    b.kind = layout.kind;
+    b.normal = layout.normal;
     b.J = J.data();
     b.nonzero_begin = nonzero_begin.data();
     b.nonzero_end = nonzero_end.data();
@@ -114,9 +135,11 @@ bool some_absent(int lane, int row) {
 // with a tolerance, each lane stops after the sweep where the scalar solve of its rows stops, converged where that
 // converged
 template <typename T>
-void expect_lanes_match_the_scalar_solve(double friction_smoothing, double tolerance = 0) {
+void expect_lanes_match_the_scalar_solve(double friction_smoothing, double tolerance = 0, const Layout& layout = kPairs,
+                                         bool (*absent)(int lane, int row) = some_absent) {
   std::mt19937 rng(11);
-  Problem<T> p(rng, some_absent);
+  Problem<T> p(rng, absent, layout);
+  const int count = layout.count;
   PgsSettings settings;
   settings.iterations = tolerance > 0 ? 200 : 15;
   settings.cfm = 1e-6;
@@ -125,18 +148,18 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
   std::vector<Lanes<T>> qd = p.qd, lambda = p.lambda;
   p.lambda = lambda;
   IntLanes<T> converged;
-  const int sweeps = batch_pgs_solve(p.rows(kRows), settings, qd.data(), &converged);
+  const int sweeps = batch_pgs_solve(p.rows(count), settings, qd.data(), &converged);
   int most = 0, fewest = settings.iterations;
 
   for (int l = 0; l < kLanes<T>; ++l) {
     // the lane's rows as the solver's scalar path builds them: the rows it has, in order
     std::vector<PgsRow> rows;
     std::vector<Scalar> Jp, zp;
-    std::vector<int> index(kRows, -1);
-    for (int r = 0; r < kRows; ++r) {
+    std::vector<int> index(count, -1);
+    for (int r = 0; r < count; ++r) {
       if (!p.active[r][l]) continue;
       PgsRow row;
-      row.kind = kKind[r];
+      row.kind = layout.kind[r];
       row.dof_count[0] = kDofs;
       row.pool[0] = static_cast<int>(Jp.size());
       Scalar W = 0;
@@ -153,8 +176,8 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
       index[r] = static_cast<int>(rows.size());
       rows.push_back(row);
     }
-    for (int r = 0; r < kRows; ++r)
-      if (index[r] >= 0 && kNormal[r] >= 0) rows[index[r]].normal = index[kNormal[r]];
+    for (int r = 0; r < count; ++r)
+      if (index[r] >= 0 && layout.normal[r] >= 0) rows[index[r]].normal = index[layout.normal[r]];
     std::vector<Scalar> v(kDofs);
     for (int k = 0; k < kDofs; ++k) v[k] = p.qd[k][l];
     std::vector<int> order(rows.size());
@@ -175,7 +198,7 @@ void expect_lanes_match_the_scalar_solve(double friction_smoothing, double toler
     double scale = 1, worst_qd = 0, worst_lambda = 0;
     for (const Scalar x : v) scale = std::max(scale, std::abs(x));
     for (int k = 0; k < kDofs; ++k) worst_qd = std::max(worst_qd, std::abs(qd[k][l] - v[k]) / scale);
-    for (int r = 0; r < kRows; ++r) {
+    for (int r = 0; r < count; ++r) {
       const double expected = index[r] >= 0 ? rows[index[r]].lambda : 0;
       worst_lambda = std::max(worst_lambda, std::abs(p.lambda[r][l] - expected) / std::max(1.0, std::abs(expected)));
     }
@@ -201,6 +224,179 @@ void expect_lanes_match_the_scalar_solve_in_every_setting() {
 
 TEST(BatchPgs, LanesMatchTheScalarSolveFloat64) { expect_lanes_match_the_scalar_solve_in_every_setting<double>(); }
 TEST(BatchPgs, LanesMatchTheScalarSolveFloat32) { expect_lanes_match_the_scalar_solve_in_every_setting<float>(); }
+
+// kCones' lanes: lane 1 lacks the condim 6 contact's rolling rows (a contact of condim 4 in a block laid out for 6),
+// lane 2 also its torsional row (condim 3), lane 3 the second contact
+bool some_cone_rows_absent(int lane, int row) {
+  if (lane == 1) return row == 5 || row == 6;
+  if (lane == 2) return row >= 4 && row <= 6;
+  return lane == 3 && row >= 7 && row <= 9;
+}
+
+// FrictionCone rows: each lane as its scalar twin solves it (in which a lane's cone has only the rows it has), in
+// every setting; with smoothing 1 every cone's impulses end within it, (l_i / mu_i) in the ball of radius the
+// normal's impulse, and the random targets press some of them against it
+template <typename T>
+void expect_cones_match_the_scalar_solve_and_bound_their_rows() {
+  for (const auto& [smoothing, tolerance] :
+       {std::pair{1.0, 0.0}, std::pair{0.0, 0.0}, std::pair{0.5, 0.0}, std::pair{1.0, 1e-3}}) {
+    SCOPED_TRACE(testing::Message() << "friction_smoothing " << smoothing << ", tolerance " << tolerance);
+    expect_lanes_match_the_scalar_solve<T>(smoothing, tolerance, kCones, some_cone_rows_absent);
+  }
+  std::mt19937 rng(11);
+  Problem<T> p(rng, some_cone_rows_absent, kCones);
+  std::vector<Lanes<T>> qd = p.qd;
+  PgsSettings settings;
+  settings.iterations = 15;
+  batch_pgs_solve(p.rows(kCones.count), settings, qd.data());
+  int pressed = 0;
+  for (int l = 0; l < kLanes<T>; ++l) {
+    for (const auto& [normal, first, last] : {std::tuple{1, 2, 6}, std::tuple{7, 8, 9}}) {
+      double sum = 0;
+      for (int r = first; r <= last; ++r)
+        if (p.active[r][l]) sum += std::pow(double(p.lambda[r][l]) / p.mu[r][l], 2);
+      const double radius = p.lambda[normal][l];
+      EXPECT_LE(std::sqrt(sum), radius * (1 + 8 * kEps<T>)) << "lane " << l << ", the cone of row " << normal;
+      pressed += radius > 0 && std::sqrt(sum) > radius * (1 - 8 * kEps<T>);
+    }
+  }
+  EXPECT_GT(pressed, 0);
+}
+
+TEST(BatchPgs, ConesMatchTheScalarSolveAndBoundTheirRowsFloat64) {
+  expect_cones_match_the_scalar_solve_and_bound_their_rows<double>();
+}
+TEST(BatchPgs, ConesMatchTheScalarSolveAndBoundTheirRowsFloat32) {
+  expect_cones_match_the_scalar_solve_and_bound_their_rows<float>();
+}
+
+// |(q_i / mu_i)| over a contact's five friction rows
+Scalar cone_radius(const Scalar* q, const Scalar* mu) {
+  Scalar sum = 0;
+  for (int i = 0; i < 5; ++i) sum += (q[i] / mu[i]) * (q[i] / mu[i]);
+  return std::sqrt(sum);
+}
+
+// solve_friction_cone against what it should give, on random blocks A = J M^-1 J^T + cfm of five rows: within the
+// cone, the unconstrained minimiser l = lambda - A^-1 r; outside, a point of the cone's surface no other point of the
+// surface beats in A's metric; smoothing 0 clamps each row of l; no normal impulse, no friction; a row of mu 0 at
+// most kMinMu times the normal's; a singular block (five rows over two dofs, no cfm) finite and within the cone
+TEST(Pgs, AFrictionConeIsMujocosBlockUpdate) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss;
+  const Scalar mu[5] = {0.8, 0.8, 0.02, 0.005, 0.005};
+  auto radius = [&](const Scalar* q) { return cone_radius(q, mu); };
+  int inside = 0, outside = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int dofs = trial % 4 == 3 ? 2 : 6;
+    const Scalar cfm = trial % 4 == 3 ? 0 : 0.01;
+    const Eigen::MatrixXd Jm = Eigen::MatrixXd::NullaryExpr(5, dofs, [&] { return gauss(rng); });
+    const Eigen::MatrixXd Am = Jm * Jm.transpose() + cfm * Eigen::MatrixXd::Identity(5, 5);
+    ConeBlock<Scalar> block;  // (its normal row apart: the friction rows' block alone)
+    Scalar lambda[5], r[5], p[5];
+    Eigen::VectorXd lam(5), res(5);
+    for (int i = 0; i < 5; ++i) {
+      for (int j = 0; j < 5; ++j) block.A[(i + 1) * kMaxContact + j + 1] = Am(i, j);
+      lam[i] = lambda[i] = 0.01 * mu[i] * gauss(rng);
+      res[i] = r[i] = 0.02 * mu[i] * gauss(rng) * std::exp(2 * gauss(rng));
+    }
+    block.prepare(5);
+    const Scalar normal = 0.5;
+    solve_friction_cone(block, lambda, r, mu, normal, 1.0, p);
+    for (int i = 0; i < 5; ++i) ASSERT_TRUE(std::isfinite(p[i])) << "trial " << trial;
+    EXPECT_LE(radius(p), normal * (1 + 1e-12)) << "trial " << trial;
+    if (dofs == 2) continue;
+    const Eigen::VectorXd l = lam - Am.ldlt().solve(res);
+    auto cost = [&](const Scalar* q) {
+      Eigen::VectorXd d(5);
+      for (int i = 0; i < 5; ++i) d[i] = q[i] - l[i];
+      return 0.5 * d.dot(Am * d);
+    };
+    if (radius(l.data()) <= normal) {
+      ++inside;
+      for (int i = 0; i < 5; ++i) EXPECT_NEAR(p[i], l[i], 1e-12 * (1 + std::abs(l[i]))) << "trial " << trial;
+      continue;
+    }
+    ++outside;
+    EXPECT_NEAR(radius(p), normal, 1e-12) << "trial " << trial;
+    for (int k = 0; k < 200; ++k) {  // other points of the surface, near p
+      Scalar q[5];
+      for (int i = 0; i < 5; ++i) q[i] = p[i] + 0.02 * mu[i] * normal * gauss(rng);
+      const Scalar scale = normal / radius(q);
+      for (Scalar& x : q) x *= scale;
+      EXPECT_GE(cost(q), cost(p) * (1 - 1e-9)) << "trial " << trial;
+    }
+    solve_friction_cone(block, lambda, r, mu, normal, 0.0, p);
+    for (int i = 0; i < 5; ++i) EXPECT_NEAR(p[i], std::clamp(l[i], -mu[i] * normal, mu[i] * normal), 1e-12);
+    solve_friction_cone(block, lambda, r, mu, Scalar(0), 1.0, p);
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(p[i], 0);
+    const Scalar no_torsion[5] = {0.8, 0.8, 0, 0.005, 0.005};
+    solve_friction_cone(block, lambda, r, no_torsion, normal, 1.0, p);
+    EXPECT_LE(std::abs(p[2]), kMinMu * normal * (1 + 1e-12));
+  }
+  EXPECT_GT(inside, 10);
+  EXPECT_GT(outside, 10);
+}
+
+// solve_contact_cone repeated on one contact's block (its residuals r = A p + c following its impulses) reaches the
+// minimum of 1/2 p^T A p + c^T p over MuJoCo's elliptic cone: no feasible point near it costs less, its friction on
+// the cone's surface where it slides (c pulling the friction rows hard), and a separating velocity left on the normal
+// row (MuJoCo's relaxed cone: the normal row's own step would leave none). From no normal impulse: the normal row's
+// own step first
+TEST(Pgs, AContactsConeBlockReachesTheConvexConesMinimum) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gauss;
+  const Scalar mu[5] = {0.5, 0.5, 0.02, 0.01, 0.01};
+  auto inside = [&](const Scalar* q) { return q[0] >= 0 && cone_radius(q + 1, mu) <= q[0] * (1 + 1e-12); };
+  int sliding = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::MatrixXd Jm = Eigen::MatrixXd::NullaryExpr(6, 6, [&] { return gauss(rng); });
+    const Eigen::MatrixXd Am = Jm * Jm.transpose() + 0.05 * Eigen::MatrixXd::Identity(6, 6);
+    Eigen::VectorXd c(6);
+    c[0] = -1;  // pressed together
+    for (int i = 1; i < 6; ++i) c[i] = 3 * mu[i - 1] * gauss(rng);
+    ConeBlock<Scalar> block;
+    Scalar p[kMaxContact] = {}, r[kMaxContact], next[kMaxContact];
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) block.A[i * kMaxContact + j] = Am(i, j);
+    block.prepare(5);
+    auto residual = [&](const Scalar* q, Scalar* out) {
+      for (int i = 0; i < 6; ++i) {
+        out[i] = c[i];
+        for (int j = 0; j < 6; ++j) out[i] += Am(i, j) * q[j];
+      }
+    };
+    auto cost = [&](const Scalar* q) {
+      Scalar x = 0;
+      for (int i = 0; i < 6; ++i) {
+        x += c[i] * q[i];
+        for (int j = 0; j < 6; ++j) x += 0.5 * q[i] * Am(i, j) * q[j];
+      }
+      return x;
+    };
+    residual(p, r);
+    solve_contact_cone(block, p, r, mu, 1.0, next);
+    EXPECT_NEAR(next[0], -c[0] / Am(0, 0), 1e-12);  // no normal impulse yet: the normal's own step
+    for (int i = 1; i < 6; ++i) EXPECT_TRUE(std::isfinite(next[i]));
+    for (int sweep = 0; sweep < 3000; ++sweep) {
+      std::copy(next, next + 6, p);
+      residual(p, r);
+      solve_contact_cone(block, p, r, mu, 1.0, next);
+    }
+    ASSERT_TRUE(inside(next)) << "trial " << trial;
+    for (int k = 0; k < 300; ++k) {
+      Scalar q[6];
+      for (int i = 0; i < 6; ++i) q[i] = next[i] + 1e-3 * (i == 0 ? 1 : mu[i - 1]) * gauss(rng);
+      if (inside(q)) EXPECT_GE(cost(q), cost(next) - 1e-12) << "trial " << trial;
+    }
+    residual(next, r);
+    if (cone_radius(next + 1, mu) > next[0] * (1 - 1e-9)) {
+      ++sliding;
+      EXPECT_GT(r[0], 1e-6) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(sliding, 5);
+}
 
 template <typename T>
 void expect_absent_rows_change_no_bit(double tolerance) {

@@ -214,7 +214,7 @@ void add_contact_rows(const BatchGroup<T>& G, int b, int t, const int* listed, c
   for (int e = 0; e < dims; ++e) {
     // the normal and sliding rows in every lane of `on`; the torsional and rolling ones where its condim has them
     const IntLanes<T> has = on & ContactRows::has(e, in.condim);
-    const int r = add_row(R, ContactRows::kind(e), has, V<T>{}, warm[e]);
+    const int r = add_row(R, ContactRows::kind(e, dims), has, V<T>{}, warm[e]);
     V<T>* J = R.J_row(r);
     const V<T>* de = ContactRows::direction(d, e);
     if (!ContactRows::turns(e)) {  // J_k = coef_k d . u_k: the velocity along d of the point p moved by dof k

@@ -148,7 +148,9 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const int ba = C.contact_body_a[c], bb = C.contact_body_b[c];
     const Vec3 p = Eigen::Map<const Vec3>(&C.contact_point[3 * c]);
     const ContactInput<Scalar> in = ContactRows::read(C, c, *step.lists.shapes, model_.impratio);
-    // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents
+    // condim 4: a torsional row about the normal; 6: and two rolling rows about the tangents. Their kinds those of
+    // the blocks' contact rows, laid out for the model's largest condim (a cone of two rows is the blocks' cone of
+    // condim 3 lanes)
     const int dims = std::min(step.lists.dims, ContactRows::count(static_cast<int>(in.condim)));
     Scalar d[9], warm[6], v[6], target[6], cfm[6], mu[6];
     contact_frame(&C.contact_normal[3 * c], d);
@@ -156,8 +158,8 @@ void IslandRows::add_contact_rows(const StepContext& step, const std::vector<int
     const int first = row_count_;
     for (int e = 0; e < dims; ++e) {
       const Scalar* axis = ContactRows::direction(d, e);
-      const int r =
-          add_row(ba, bb, ContactRows::turns(e) ? nullptr : &p, Vec3(axis[0], axis[1], axis[2]), ContactRows::kind(e));
+      const int r = add_row(ba, bb, ContactRows::turns(e) ? nullptr : &p, Vec3(axis[0], axis[1], axis[2]),
+                            ContactRows::kind(e, step.lists.dims));
       rows_[r].lambda = warm[e];
       if (e > 0) rows_[r].normal = first;
       v[e] = row_velocity(rows_[r], J_, qd);  // (at the step's start)

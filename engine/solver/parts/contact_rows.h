@@ -24,10 +24,11 @@ struct ContactInput {
 };
 
 struct ContactRows {
-  // row e's kind: the normal (e 0) Unilateral, the sliding pair (1, 2) and the rolling pair (4, 5) FrictionPair,
-  // the torsional row (3) FrictionOne
-  static RowKind kind(int e) {
-    return e == 0 ? RowKind::Unilateral : e == 3 ? RowKind::FrictionOne : RowKind::FrictionPair;
+  // row e's kind in a contact of `dims` rows: the normal (e 0) Unilateral; with three rows the sliding pair a
+  // FrictionPair (MuJoCo's elliptic cone of condim 3: a disk); with four or six, every friction row (sliding,
+  // torsional, rolling) of one FrictionCone, bounded together as MuJoCo's elliptic cone bounds them
+  static RowKind kind(int e, int dims) {
+    return e == 0 ? RowKind::Unilateral : dims > 3 ? RowKind::FrictionCone : RowKind::FrictionPair;
   }
   // the condim from which a contact has row e: the normal and sliding rows always (condim 1 has them with no
   // friction), the torsional row from 4, the rolling rows from 6

@@ -21,6 +21,14 @@ Scalar row_velocity(const BodyRow& r, const std::vector<BodyMotion>& bodies) {
   return v;
 }
 
+// J_x M^-1 J_y^T of two rows between the same bodies (a contact's)
+Scalar row_coupling(const BodyRow& x, const BodyRow& y, const std::vector<BodyMotion>& bodies) {
+  Scalar c = 0;
+  if (x.a >= 0) c += bodies[x.a].inv_mass * x.lin_a.dot(y.lin_a) + x.ang_a.dot(y.turn_a);
+  if (x.b >= 0) c += bodies[x.b].inv_mass * x.lin_b.dot(y.lin_b) + x.ang_b.dot(y.turn_b);
+  return c;
+}
+
 void apply(const BodyRow& r, Scalar impulse, std::vector<BodyMotion>& bodies) {
   if (r.a >= 0) {
     BodyMotion& A = bodies[r.a];
@@ -120,7 +128,7 @@ void SolverSemiImplicit::contact_rows(int w, const StepInput& step, Scratch& s) 
     ContactRows::warm(in, d, ContactRows::warm_share<Scalar>(settings), warm);
     for (int e = 0; e < dims; ++e) {
       BodyRow& r = s.rows[first + e];
-      r.kind = ContactRows::kind(e);
+      r.kind = ContactRows::kind(e, dims);
       r.normal = first;
       r.mu = mu[e];
       r.target = target[e];
@@ -218,16 +226,52 @@ void SolverSemiImplicit::constraint_rows(int w, const StepInput& step, Scalar sh
 bool SolverSemiImplicit::sweep(Scratch& s) const {
   std::vector<BodyRow>& rows = s.rows;
   const Scalar smoothing = settings.friction_smoothing;
+  // a row's residual J v - target + cfm lambda, and its impulse stepped to bring that to 0
+  auto residual_of = [&](const BodyRow& x) {
+    return row_velocity(x, s.bodies) - x.target + (static_cast<Scalar>(settings.cfm) + x.cfm) * x.lambda;
+  };
+  auto raw = [&](const BodyRow& x) { return x.lambda - x.inv_mass * residual_of(x); };
   for (int it = 0; it < settings.num_iterations; ++it) {
     Scalar largest = 0;  // the largest change of a row's velocity this sweep
     for (size_t i = 0; i < rows.size(); ++i) {
       BodyRow& r = rows[i];
       if (r.inv_mass == 0) continue;
-      const Scalar cfm = static_cast<Scalar>(settings.cfm) + r.cfm;
+      if (r.kind == RowKind::Unilateral && i + 1 < rows.size() && rows[i + 1].kind == RowKind::FrictionCone &&
+          rows[i + 1].normal == static_cast<int>(i)) {
+        // a contact's normal and friction cone rows: one block update (kernels/pgs.h)
+        const int n = 1 + cone_rows(static_cast<int>(i) + 1, static_cast<int>(rows.size()), [&](int k) {
+                        return rows[k].kind == RowKind::FrictionCone && rows[k].normal == static_cast<int>(i);
+                      });
+        ConeBlock<Scalar> block;
+        Scalar* A = block.A;
+        Scalar lambda[kMaxContact], residual[kMaxContact], mu[kMaxContact], p[kMaxContact];
+        for (int k = 0; k < n; ++k) {
+          const BodyRow& x = rows[i + k];
+          const bool massive = x.inv_mass > 0;
+          lambda[k] = x.lambda;
+          mu[k] = x.mu;
+          residual[k] = massive ? residual_of(x) : 0;
+          A[k * kMaxContact + k] = massive ? 1 / x.inv_mass : 1;
+          for (int j = 0; j < k; ++j)
+            A[k * kMaxContact + j] = A[j * kMaxContact + k] = row_coupling(x, rows[i + j], s.bodies);
+        }
+        block.prepare(n - 1);
+        solve_contact_cone(block, lambda, residual, mu + 1, smoothing, p);
+        for (int k = 0; k < n; ++k) {
+          BodyRow& x = rows[i + k];
+          const Scalar change = p[k] - x.lambda;
+          if (!std::isfinite(change)) continue;
+          apply(x, change, s.bodies);
+          largest = std::max(largest, std::abs(change) / std::max(x.inv_mass, 1e-300));
+          x.lambda = p[k];
+        }
+        i += n - 1;
+        continue;
+      }
+      if (r.kind == RowKind::FrictionCone) continue;  // (updated with its normal row only)
       if (r.kind == RowKind::FrictionPair) {
         BodyRow& r2 = rows[i + 1];
-        const Scalar l1 = r.lambda + r.inv_mass * (r.target - row_velocity(r, s.bodies) - cfm * r.lambda);
-        const Scalar l2 = r2.lambda + r2.inv_mass * (r2.target - row_velocity(r2, s.bodies) - cfm * r2.lambda);
+        const Scalar l1 = raw(r), l2 = raw(r2);
         Scalar p1, p2;
         project_friction_pair(l1, l2, r.mu * rows[r.normal].lambda, smoothing, &p1, &p2);
         const Scalar d1 = p1 - r.lambda, d2 = p2 - r2.lambda;
@@ -239,13 +283,14 @@ bool SolverSemiImplicit::sweep(Scratch& s) const {
         ++i;
         continue;
       }
-      const Scalar raw = r.lambda + r.inv_mass * (r.target - row_velocity(r, s.bodies) - cfm * r.lambda);
-      Scalar next = raw;
+      const Scalar stepped = raw(r);
+      Scalar next = stepped;
       switch (r.kind) {
-        case RowKind::Unilateral: next = project_unilateral(raw); break;
-        case RowKind::Bounded: next = project_bounded(raw, r.bound); break;
-        case RowKind::FrictionOne: next = project_bounded(raw, r.mu * rows[r.normal].lambda); break;
-        case RowKind::FrictionPair: break;
+        case RowKind::Unilateral: next = project_unilateral(stepped); break;
+        case RowKind::Bounded: next = project_bounded(stepped, r.bound); break;
+        case RowKind::FrictionOne: next = project_bounded(stepped, r.mu * rows[r.normal].lambda); break;
+        case RowKind::FrictionPair:
+        case RowKind::FrictionCone: break;
       }
       const Scalar change = next - r.lambda;
       if (!std::isfinite(change)) continue;

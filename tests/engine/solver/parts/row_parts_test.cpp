@@ -390,14 +390,18 @@ TYPED_TEST(RowParts, AContactKeepsItsRowsImpulsesAsWorldVectorsAndDropsOnesNotFi
     for (int m = 0; m < 6; ++m) expect_lane<T>(Pv[m], l, l == kNaNLane && m < 3 ? T(0) : P[m], "kept");
 }
 
-TEST(RowParts, AContactsRowsAreANormalASlidingPairATorsionAndARollingPair) {
-  const RowKind kinds[6] = {RowKind::Unilateral,  RowKind::FrictionPair, RowKind::FrictionPair,
-                            RowKind::FrictionOne, RowKind::FrictionPair, RowKind::FrictionPair};
+TEST(RowParts, AContactsRowsAreANormalThenItsFrictionRowsInOneCone) {
   Scalar d[9];
   for (int m = 0; m < 9; ++m) d[m] = m;
   const int direction[6] = {0, 3, 6, 0, 3, 6};
   for (int e = 0; e < 6; ++e) {
-    EXPECT_EQ(ContactRows::kind(e), kinds[e]) << "row " << e;
+    // three rows: the sliding pair as a disk; four or six: every friction row in one cone
+    if (e < 3) {
+      EXPECT_EQ(ContactRows::kind(e, 3), e == 0 ? RowKind::Unilateral : RowKind::FrictionPair) << "row " << e;
+    }
+    for (const int dims : {4, 6}) {
+      EXPECT_EQ(ContactRows::kind(e, dims), e == 0 ? RowKind::Unilateral : RowKind::FrictionCone) << "row " << e;
+    }
     EXPECT_EQ(ContactRows::turns(e), e >= 3) << "row " << e;
     EXPECT_EQ(ContactRows::direction(d, e), d + direction[e]) << "row " << e;
   }
