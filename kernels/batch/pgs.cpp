@@ -125,7 +125,7 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
     M<T> moving{};
     int cone = 0;  // the contacts of a FrictionCone swept so far
     for (int r = 0; r < rows.count; ++r) {
-      if (const int g = cone_after(r)) {
+      if (const int g = blocks.empty() ? 0 : cone_after(r)) {
         // a contact's normal and friction cone rows: one block update
         const ConeBlock<V<T>>& block = blocks[cone++];
         V<T> residual[kMaxContact], p[kMaxContact];

@@ -259,13 +259,23 @@ std::string first_difference(const State& batch, int w, const State& alone, int 
   return "";
 }
 
-void expect_each_world_equals_it_alone(Precision precision, Scalar pgs_tolerance = 0) {
+// every shape of condim 6 (each contact's rows one friction cone: kernels/pgs.h, solve_contact_cone)
+void make_cones(Model& model) {
+  for (int s = 0; s < model.shape_count; ++s) {
+    model.shape_condim[s] = 6;
+    model.shape_mu_torsion[s] = 0.02;
+    model.shape_mu_rolling[s] = 0.01;
+  }
+}
+
+void expect_each_world_equals_it_alone(Precision precision, Scalar pgs_tolerance = 0, bool cones = false) {
   // (with a pgs_tolerance each world stops its sweeps on its own, whatever its block-mates need)
   constexpr int kWorlds = 1000, kSteps = 60;
   SolverFeatherstoneSettings settings;
   settings.pgs_tolerance = pgs_tolerance;
   const ModelBuilder robot = quadruped(true);
   Model model = replicated(robot, kWorlds, precision);
+  if (cones) make_cones(model);
   const int nb = model.body_count / kWorlds, nq = model.joint_coord_count / kWorlds,
             nv = model.joint_dof_count / kWorlds;
   State state = model.state();
@@ -273,6 +283,7 @@ void expect_each_world_equals_it_alone(Precision precision, Scalar pgs_tolerance
   step(model, state, kSteps, settings);
   for (int w = 0; w < kWorlds; ++w) {
     Model alone = replicated(robot, 1, precision);
+    if (cones) make_cones(alone);
     State s = alone.state();
     randomize_world(alone, s, w, 0, nb, 0, nq);
     step(alone, s, kSteps, settings);
@@ -289,6 +300,11 @@ TEST(ArticulationBatches, EveryWorldOfAThousandEqualsItselfSteppedAloneFloat32) 
 TEST(ArticulationBatches, EveryWorldOfAThousandEqualsItselfSteppedAloneWithAPgsTolerance) {
   expect_each_world_equals_it_alone(Precision::Float32, 1e-4);
   expect_each_world_equals_it_alone(Precision::Float64, 1e-6);
+}
+// each lane's cone projection stops its Newton steps on its own too
+TEST(ArticulationBatches, EveryWorldOfAThousandEqualsItselfSteppedAloneWithFrictionCones) {
+  expect_each_world_equals_it_alone(Precision::Float32, 1e-4, true);
+  expect_each_world_equals_it_alone(Precision::Float64, 0, true);
 }
 
 // all threads, and more threads than the machine has cores: the last eighth of each parallel loop is dealt
