@@ -1,7 +1,7 @@
 // A contact's rows, over the number type (kernels/number.h: one contact, or one a lane of a SIMD block): a normal row
 // and two sliding rows along the tangents of contact_frame's (kernels/pgs.h); with condim 4 a torsional row (the
-// relative angular velocity about the normal, |impulse| <= mu_torsion normal impulse), with 6 also two rolling rows
-// (about the tangents, bounded together by mu_rolling normal impulse). Rigid or soft (contact_softness.h) by its
+// relative angular velocity about the normal), with 6 also two rolling rows (about the tangents); with either, all of
+// its friction rows bounded together in MuJoCo's elliptic cone (kind). Rigid or soft (contact_softness.h) by its
 // shapes' solref. Both row builders (the blocks' lanes, the islands) lay out the Jacobians and solve M^-1 J^T; what
 // the rows are is here.
 #pragma once
