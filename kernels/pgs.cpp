@@ -62,13 +62,10 @@ int pgs_solve(std::vector<PgsRow>& rows, const int* order, int count, const std:
     for (int k = 0; k < count; ++k) {
       const int r = order[k];
       PgsRow& row = rows[r];
-      if (row.kind == RowKind::Unilateral && k + 1 < count && rows[order[k + 1]].kind == RowKind::FrictionCone &&
-          rows[order[k + 1]].normal == r) {
+      if (const int g = cone_after(
+              k, count, r, [&](int i) { return rows[order[i]].kind; }, [&](int i) { return rows[order[i]].normal; })) {
         // a contact's normal and friction cone rows: one block update
-        const int n = 1 + cone_rows(k + 1, count, [&](int i) {
-                        const PgsRow& x = rows[order[i]];
-                        return x.kind == RowKind::FrictionCone && x.normal == r;
-                      });
+        const int n = 1 + g;
         ConeBlock<Scalar> block;
         Scalar* A = block.A;
         Scalar lambda[kMaxContact], residual[kMaxContact], mu[kMaxContact], p[kMaxContact];

@@ -262,12 +262,15 @@ inline void solve_contact_cone(const ConeBlock<V>& block, const V* lambda, const
   for (int i = 1; i < n; ++i) p[i] = select<V>(none, V{}, p[i]);
 }
 
-// the rows of the FrictionCone starting at row `first`: it and those after it, before `end`, for which
-// same(row) (of kind FrictionCone and the first's normal), at most kMaxCone
-template <typename Same>
-inline int cone_rows(int first, int end, Same same) {
-  int g = 1;
-  while (g < kMaxCone && first + g < end && same(first + g)) ++g;
+// the FrictionCone rows of the contact whose normal row is at position `at` of a sweep (0: that row is no such normal):
+// the rows after it of kind FrictionCone and its normal, at most kMaxCone, none at `end` or past it. kind(i) and
+// normal(i): the kind and normal row of the row at position i; self: the normal row's own index, as normal() gives it
+template <typename Kind, typename Normal>
+inline int cone_after(int at, int end, int self, Kind kind, Normal normal) {
+  if (kind(at) != RowKind::Unilateral) return 0;
+  int g = 0;
+  while (g < kMaxCone && at + 1 + g < end && kind(at + 1 + g) == RowKind::FrictionCone && normal(at + 1 + g) == self)
+    ++g;
   return g;
 }
 

@@ -94,20 +94,17 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
   // row that changed no lane's impulse is not applied
   const T tolerance = static_cast<T>(settings.tolerance);
   auto moved = [&](int r, const V<T>& change) { return lane_abs<T>(change) > tolerance * rows.inv_mass[r]; };
-  // the friction rows of the contact whose normal is row r, where they are a FrictionCone (0: none)
-  auto cone_after = [&](int r) {
-    if (rows.kind[r] != RowKind::Unilateral || r + 1 >= rows.count || rows.kind[r + 1] != RowKind::FrictionCone ||
-        rows.normal[r + 1] != r)
-      return 0;
-    return cone_rows(r + 1, rows.count,
-                     [&](int i) { return rows.kind[i] == RowKind::FrictionCone && rows.normal[i] == r; });
+  // the friction cone rows of the contact whose normal is row r (0: none)
+  auto cone_after_row = [&](int r) {
+    return cone_after(
+        r, rows.count, r, [&](int i) { return rows.kind[i]; }, [&](int i) { return rows.normal[i]; });
   };
   // each such contact's block of J_i M^-1 J_j^T over its rows (its cfm on the diagonal; 1 where a lane has no
   // row), once for all sweeps
   thread_local std::vector<ConeBlock<V<T>>> blocks;
   blocks.clear();
   for (int r = 0; r < rows.count; ++r) {
-    const int g = cone_after(r);
+    const int g = cone_after_row(r);
     if (g == 0) continue;
     const int begin = rows.nonzero_begin[r], end = rows.nonzero_end[r];
     V<T>* A = blocks.emplace_back().A;
@@ -125,7 +122,7 @@ int batch_pgs_solve(const BatchRows<T>& rows, const PgsSettings& settings, V<T>*
     M<T> moving{};
     int cone = 0;  // the contacts of a FrictionCone swept so far
     for (int r = 0; r < rows.count; ++r) {
-      if (const int g = blocks.empty() ? 0 : cone_after(r)) {
+      if (const int g = blocks.empty() ? 0 : cone_after_row(r)) {
         // a contact's normal and friction cone rows: one block update
         const ConeBlock<V<T>>& block = blocks[cone++];
         V<T> residual[kMaxContact], p[kMaxContact];

@@ -236,12 +236,12 @@ bool SolverSemiImplicit::sweep(Scratch& s) const {
     for (size_t i = 0; i < rows.size(); ++i) {
       BodyRow& r = rows[i];
       if (r.inv_mass == 0) continue;
-      if (r.kind == RowKind::Unilateral && i + 1 < rows.size() && rows[i + 1].kind == RowKind::FrictionCone &&
-          rows[i + 1].normal == static_cast<int>(i)) {
+      const int at = static_cast<int>(i);
+      if (const int g = cone_after(
+              at, static_cast<int>(rows.size()), at, [&](int k) { return rows[k].kind; },
+              [&](int k) { return rows[k].normal; })) {
         // a contact's normal and friction cone rows: one block update (kernels/pgs.h)
-        const int n = 1 + cone_rows(static_cast<int>(i) + 1, static_cast<int>(rows.size()), [&](int k) {
-                        return rows[k].kind == RowKind::FrictionCone && rows[k].normal == static_cast<int>(i);
-                      });
+        const int n = 1 + g;
         ConeBlock<Scalar> block;
         Scalar* A = block.A;
         Scalar lambda[kMaxContact], residual[kMaxContact], mu[kMaxContact], p[kMaxContact];
